@@ -1,0 +1,173 @@
+"""Triangle mesh of the body: one closed, tapered superellipsoid per part.
+
+Each part is tessellated on a latitude/longitude grid with a single vertex at each pole, so
+every part is a closed, consistently outward-wound mesh (needed for back-face culling and for
+occluding contours). ``resolution`` (longitudes per part) is the level of detail: the number
+of triangles is ``9 * 2 * resolution * rings`` with ``rings = resolution // 2 + 1``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+
+from mocap.body.dimensions import PART_NAMES, BodyDimensions
+from mocap.body.skeleton import PART_SEGMENT, SEGMENT_AXIS_SIGN, SEGMENT_NAMES, part_spans
+
+#: Shape of each part: (e_long, e_cross, taper). ``e_long`` < 1 flattens the ends (1 is an
+#: ellipsoid), ``e_cross`` < 1 squares the cross-section, ``taper`` is the fraction by which the
+#: width shrinks from the start to the end of the part (negative widens).
+PART_SHAPES = MappingProxyType({
+    "torso": (0.35, 0.7, -0.12),
+    "neck": (0.3, 1.0, 0.0),
+    "head": (1.0, 1.0, 0.1),
+    "r_upper_arm": (0.45, 1.0, 0.2),
+    "r_forearm": (0.45, 1.0, 0.25),
+    "r_hand": (0.6, 0.6, 0.0),
+    "l_upper_arm": (0.45, 1.0, 0.2),
+    "l_forearm": (0.45, 1.0, 0.25),
+    "l_hand": (0.6, 0.6, 0.0),
+})
+#: Smallest and largest accepted resolution (longitudes per part).
+MIN_RESOLUTION = 4
+MAX_RESOLUTION = 128
+
+
+def _signed_power(x: np.ndarray, e: float) -> np.ndarray:
+    return np.sign(x) * np.abs(x) ** e
+
+
+def part_mesh(length: float, width: float, depth: float, *, e_long: float, e_cross: float,
+              taper: float, resolution: int, start: float = 0.0, axis_sign: int = 1):
+    """Closed tapered superellipsoid along the local y axis.
+
+    Parameters
+    ----------
+    length, width, depth : float, metres
+        Extent along y (long axis), x and z.
+    start : float, metres
+        Distance along the axis where the part begins.
+    axis_sign : {1, -1}
+        The part extends towards +y (1) or -y (-1).
+
+    Returns
+    -------
+    vertices : ndarray, shape (V, 3), float64, metres
+    triangles : ndarray, shape (T, 3), int64
+        Wound counter-clockwise seen from outside (outward normals by the right-hand rule).
+    """
+    n_lon = int(resolution)
+    rings = n_lon // 2 + 1
+    eta = np.linspace(-np.pi / 2, np.pi / 2, rings + 2)[1:-1]       # latitudes, poles excluded
+    omega = np.linspace(-np.pi, np.pi, n_lon, endpoint=False)
+    u = 0.5 * (1.0 + _signed_power(np.sin(eta), e_long))             # 0..1 along the axis
+    radial = np.abs(np.cos(eta)) ** e_long
+    scale = radial * (1.0 - taper * u)
+    cx = _signed_power(np.cos(omega), e_cross)
+    cz = _signed_power(np.sin(omega), e_cross)
+    along = start + length * u
+    ring = np.stack([
+        0.5 * width * scale[:, None] * cx[None, :],
+        np.broadcast_to(along[:, None], (rings, n_lon)),
+        0.5 * depth * scale[:, None] * cz[None, :],
+    ], axis=-1).reshape(-1, 3)
+    poles = np.array([[0.0, start, 0.0], [0.0, start + length, 0.0]])
+    vertices = np.concatenate([ring, poles])
+    vertices[:, 1] *= axis_sign
+    south, north = rings * n_lon, rings * n_lon + 1
+    tris = []
+    for k in range(n_lon):
+        k1 = (k + 1) % n_lon
+        tris.append((south, k1, k))
+        for r in range(rings - 1):
+            a, b = r * n_lon + k, r * n_lon + k1
+            c, d = a + n_lon, b + n_lon
+            tris.append((a, b, d))
+            tris.append((a, d, c))
+        top = (rings - 1) * n_lon
+        tris.append((north, top + k, top + k1))
+    triangles = np.array(tris, dtype=np.int64)
+    if signed_volume(vertices, triangles) < 0:
+        triangles = triangles[:, ::-1].copy()
+    return vertices, triangles
+
+
+def signed_volume(vertices: np.ndarray, triangles: np.ndarray) -> float:
+    """Signed volume enclosed by a closed triangle mesh (positive when wound outwards), m³."""
+    a, b, c = (vertices[triangles[:, i]] for i in range(3))
+    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+
+
+@dataclass(frozen=True)
+class BodyMesh:
+    """The body's triangle mesh in segment-local coordinates.
+
+    Attributes
+    ----------
+    vertices : ndarray, shape (V, 3), float64, metres
+        Vertex positions in the frame of their segment.
+    vertex_segment : ndarray, shape (V,), int64
+        Segment index (:data:`~mocap.body.skeleton.SEGMENT_NAMES`) of each vertex.
+    triangles : ndarray, shape (T, 3), int64
+        Vertex indices, outward (counter-clockwise from outside) winding.
+    triangle_part : ndarray, shape (T,), int64
+        Part index (:data:`~mocap.body.dimensions.PART_NAMES`) of each triangle.
+    resolution : int
+        Longitudes per part (level of detail).
+    """
+
+    vertices: np.ndarray
+    vertex_segment: np.ndarray
+    triangles: np.ndarray
+    triangle_part: np.ndarray
+    resolution: int
+
+    @property
+    def n_triangles(self) -> int:
+        return int(self.triangles.shape[0])
+
+
+def build_mesh(dims: BodyDimensions, resolution: int = 12) -> BodyMesh:
+    """Tessellate every body part.
+
+    Parameters
+    ----------
+    dims : BodyDimensions
+    resolution : int
+        Longitudes per part, in [MIN_RESOLUTION, MAX_RESOLUTION]; 12 gives 1,512 triangles.
+
+    Returns
+    -------
+    BodyMesh
+    """
+    if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)):
+        raise ValueError(f"mesh resolution must be an integer, got {resolution!r}")
+    if not MIN_RESOLUTION <= resolution <= MAX_RESOLUTION:
+        raise ValueError(f"mesh resolution must be in [{MIN_RESOLUTION}, {MAX_RESOLUTION}], got {resolution}")
+    spans = part_spans(dims)
+    verts, vseg, tris, tpart = [], [], [], []
+    offset = 0
+    for p, name in enumerate(PART_NAMES):
+        size = dims[name]
+        seg = SEGMENT_NAMES.index(PART_SEGMENT[name])
+        e_long, e_cross, taper = PART_SHAPES[name]
+        v, t = part_mesh(size.length, size.width, size.depth, e_long=e_long, e_cross=e_cross,
+                         taper=taper, resolution=int(resolution), start=spans[p, 0],
+                         axis_sign=SEGMENT_AXIS_SIGN[seg])
+        verts.append(v)
+        vseg.append(np.full(len(v), seg, dtype=np.int64))
+        tris.append(t + offset)
+        tpart.append(np.full(len(t), p, dtype=np.int64))
+        offset += len(v)
+    arrays = [np.concatenate(verts), np.concatenate(vseg), np.concatenate(tris), np.concatenate(tpart)]
+    for a in arrays:
+        a.setflags(write=False)
+    return BodyMesh(*arrays, resolution=int(resolution))
+
+
+def resolution_for_image(width: int, height: int) -> int:
+    """Level of detail matched to the image size: about one mesh longitude per 13 pixels of
+    image width, clamped to [8, 24] (8 → 720 triangles at 160x120, 24 at 640x480 → 5,616... see
+    :func:`build_mesh`). Per-triangle work dominates small images, so fewer triangles there."""
+    return int(np.clip(round(width / 13.0), 8, 24))

@@ -1,0 +1,123 @@
+"""The kinematic tree: segments (rigid frames), named joints and where the parts sit.
+
+One table each, as smplx does: segments with their parents, parts with their segment and
+colour class, joints with the segment and local point that define them.
+
+Coordinates: camera frame, metres, x right, y down, z forward. With every angle zero the
+actor faces the camera (towards -z), so the actor's right is -x and up is -y. Every segment's
+long axis is its local y axis: the chest and head point up (-y), the arm segments down (+y).
+"""
+from __future__ import annotations
+
+from types import MappingProxyType
+
+import numpy as np
+
+from mocap.body.dimensions import PART_NAMES, BodyDimensions
+
+#: Rigid segments (one transform each), in an order where parents come first.
+SEGMENT_NAMES: tuple[str, ...] = (
+    "chest", "head",
+    "r_upper_arm", "r_forearm", "r_hand",
+    "l_upper_arm", "l_forearm", "l_hand",
+)
+#: Parent of each segment (-1 for the root).
+SEGMENT_PARENTS: tuple[int, ...] = (-1, 0, 0, 2, 3, 0, 5, 6)
+#: Direction of each segment's long axis in its local frame: -1 up (-y), +1 down (+y).
+SEGMENT_AXIS_SIGN: tuple[int, ...] = (-1, -1, 1, 1, 1, 1, 1, 1)
+
+#: Segment that carries each part.
+PART_SEGMENT = MappingProxyType({
+    "torso": "chest", "neck": "head", "head": "head",
+    "r_upper_arm": "r_upper_arm", "r_forearm": "r_forearm", "r_hand": "r_hand",
+    "l_upper_arm": "l_upper_arm", "l_forearm": "l_forearm", "l_hand": "l_hand",
+})
+#: Default colour class of each part (paper: skin for head and hands, clothes for the rest).
+DEFAULT_PART_CLASS = MappingProxyType({
+    "torso": "clothes", "neck": "skin", "head": "skin",
+    "r_upper_arm": "clothes", "r_forearm": "clothes", "r_hand": "skin",
+    "l_upper_arm": "clothes", "l_forearm": "clothes", "l_hand": "skin",
+})
+
+#: Named joints (DESIGN.md section 4 column order).
+JOINT_NAMES: tuple[str, ...] = (
+    "head", "neck",
+    "r_shoulder", "r_elbow", "r_wrist", "r_hand",
+    "l_shoulder", "l_elbow", "l_wrist", "l_hand",
+)
+
+#: Shoulder joint placement relative to the torso: lateral offset = SHOULDER_OUT_TORSO * torso
+#: width + SHOULDER_OUT_ARM * upper-arm width; height below the neck = SHOULDER_DROP_ARM *
+#: upper-arm width.
+SHOULDER_OUT_TORSO = 0.5
+SHOULDER_OUT_ARM = 0.1
+SHOULDER_DROP_ARM = 0.55
+#: Fraction of the neck length by which the head overlaps the neck.
+HEAD_NECK_OVERLAP = 0.3
+
+
+def segment_offsets(dims: BodyDimensions) -> np.ndarray:
+    """Origin of each segment in its parent's frame (the root's is zero), metres.
+
+    Returns
+    -------
+    ndarray, shape (8, 3), float64
+    """
+    torso, ua_r, ua_l = dims["torso"], dims["r_upper_arm"], dims["l_upper_arm"]
+    off = np.zeros((len(SEGMENT_NAMES), 3))
+    off[1] = (0.0, -torso.length, 0.0)
+    for side, ua, sign in (("r", ua_r, -1.0), ("l", ua_l, 1.0)):
+        i = SEGMENT_NAMES.index(f"{side}_upper_arm")
+        off[i] = (sign * (SHOULDER_OUT_TORSO * torso.width + SHOULDER_OUT_ARM * ua.width),
+                  -(torso.length - SHOULDER_DROP_ARM * ua.width), 0.0)
+        off[i + 1] = (0.0, ua.length, 0.0)
+        off[i + 2] = (0.0, dims[f"{side}_forearm"].length, 0.0)
+    return off
+
+
+def part_spans(dims: BodyDimensions) -> np.ndarray:
+    """Where each part lies along its segment's long axis: (start, end) distances, metres.
+
+    Returns
+    -------
+    ndarray, shape (9, 2), float64
+    """
+    spans = np.zeros((len(PART_NAMES), 2))
+    for i, name in enumerate(PART_NAMES):
+        length = dims[name].length
+        start = 0.0
+        if name == "head":
+            start = (1.0 - HEAD_NECK_OVERLAP) * dims["neck"].length
+        spans[i] = start, start + length
+    return spans
+
+
+def joint_points(dims: BodyDimensions) -> tuple[np.ndarray, np.ndarray]:
+    """Segment and local position (metres) defining each named joint.
+
+    ``head`` is the centre of the head, ``neck`` the neck joint, the hand joints the centre of
+    the hand; the others are the joint centres (segment origins).
+
+    Returns
+    -------
+    segment : ndarray, shape (10,), int64
+    local : ndarray, shape (10, 3), float64
+    """
+    spans = part_spans(dims)
+    seg = np.zeros(len(JOINT_NAMES), dtype=np.int64)
+    local = np.zeros((len(JOINT_NAMES), 3))
+    for j, name in enumerate(JOINT_NAMES):
+        if name == "head":
+            s = PART_NAMES.index("head")
+            seg[j] = SEGMENT_NAMES.index("head")
+            local[j, 1] = -0.5 * (spans[s, 0] + spans[s, 1])
+        elif name == "neck":
+            seg[j] = SEGMENT_NAMES.index("head")
+        elif name.endswith("_hand"):
+            seg[j] = SEGMENT_NAMES.index(name)
+            local[j, 1] = 0.5 * dims[name].length
+        else:
+            side, joint = name.split("_")
+            seg[j] = SEGMENT_NAMES.index({"shoulder": f"{side}_upper_arm", "elbow": f"{side}_forearm",
+                                          "wrist": f"{side}_hand"}[joint])
+    return seg, local

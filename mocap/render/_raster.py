@@ -1,0 +1,211 @@
+"""Compiled rasterizer kernels (private; see :mod:`mocap.render.rasterize` for the public API).
+
+Buffers are flat (row-major, index ``row * width + col``):
+- ``part_buf``  uint8: 0 background, else part index + 1;
+- ``depth_buf`` float32: inverse depth 1/z in 1/metres (0 = nothing; larger is nearer);
+- ``tri_buf``   int32: triangle index or -1 (optional: pass an empty array to skip);
+- ``count_buf`` int32: how many triangles covered each pixel (optional, for tests).
+
+Vertices are snapped to 1/SUBPIXEL of a pixel and edge functions are evaluated exactly in
+integer arithmetic with the top-left fill rule, so triangles that share an edge neither leave
+a crack nor both cover a pixel centre on it.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from mocap._numba import jit
+
+#: Fixed-point sub-pixel steps per pixel (4 bits, as GPUs use).
+SUBPIXEL = 16
+#: Largest |pixel coordinate| kept after projection (keeps integer edge functions in range).
+_COORD_LIMIT = 1.0e6
+
+
+@jit
+def _project_vertices(transforms, vertices, vertex_segment, cam, xs, ys, iz):
+    """Transform segment-local vertices to the camera and project them to fixed point.
+
+    ``iz`` receives 1/z, or -1 for vertices nearer than the near plane ``cam[4]``.
+    """
+    fx, fy, cx, cy, near = cam[0], cam[1], cam[2], cam[3], cam[4]
+    for i in range(vertices.shape[0]):
+        s = vertex_segment[i]
+        vx, vy, vz = vertices[i, 0], vertices[i, 1], vertices[i, 2]
+        x = transforms[s, 0, 0] * vx + transforms[s, 0, 1] * vy + transforms[s, 0, 2] * vz + transforms[s, 0, 3]
+        y = transforms[s, 1, 0] * vx + transforms[s, 1, 1] * vy + transforms[s, 1, 2] * vz + transforms[s, 1, 3]
+        z = transforms[s, 2, 0] * vx + transforms[s, 2, 1] * vy + transforms[s, 2, 2] * vz + transforms[s, 2, 3]
+        if z < near:
+            iz[i] = -1.0
+            xs[i] = 0
+            ys[i] = 0
+            continue
+        inv = 1.0 / z
+        u = min(max(fx * x * inv + cx, -_COORD_LIMIT), _COORD_LIMIT)
+        v = min(max(fy * y * inv + cy, -_COORD_LIMIT), _COORD_LIMIT)
+        iz[i] = inv
+        xs[i] = np.int64(np.floor(u * SUBPIXEL + 0.5))
+        ys[i] = np.int64(np.floor(v * SUBPIXEL + 0.5))
+
+
+@jit
+def _project_points(points, cam, xs, ys, iz):
+    """As :func:`_project_vertices` for points already in camera coordinates."""
+    fx, fy, cx, cy, near = cam[0], cam[1], cam[2], cam[3], cam[4]
+    for i in range(points.shape[0]):
+        z = points[i, 2]
+        if z < near:
+            iz[i] = -1.0
+            xs[i] = 0
+            ys[i] = 0
+            continue
+        inv = 1.0 / z
+        u = min(max(fx * points[i, 0] * inv + cx, -_COORD_LIMIT), _COORD_LIMIT)
+        v = min(max(fy * points[i, 1] * inv + cy, -_COORD_LIMIT), _COORD_LIMIT)
+        iz[i] = inv
+        xs[i] = np.int64(np.floor(u * SUBPIXEL + 0.5))
+        ys[i] = np.int64(np.floor(v * SUBPIXEL + 0.5))
+
+
+@jit
+def _rasterize(xs, ys, iz, triangles, triangle_part, width, height, cull,
+               part_buf, depth_buf, tri_buf, count_buf, bbox):
+    """Z-buffered rasterization of every triangle into the flat buffers.
+
+    With ``cull`` only front-facing triangles (counter-clockwise from outside, i.e. negative
+    signed area in y-down pixel coordinates) are drawn. ``bbox`` (int64[4]) receives the
+    inclusive pixel box ``x0, y0, x1, y1`` touched (x0 > x1 when nothing was drawn).
+    """
+    S = SUBPIXEL
+    half = S // 2
+    want_tri = tri_buf.size > 0
+    want_count = count_buf.size > 0
+    bx0, by0, bx1, by1 = width, height, -1, -1
+    for t in range(triangles.shape[0]):
+        i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+        if iz[i0] <= 0.0 or iz[i1] <= 0.0 or iz[i2] <= 0.0:
+            continue
+        x0, y0 = xs[i0], ys[i0]
+        x1, y1 = xs[i1], ys[i1]
+        x2, y2 = xs[i2], ys[i2]
+        area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
+        if area == 0:
+            continue
+        if area < 0:
+            # front-facing: swap to the positive orientation the traversal expects
+            i1, i2 = i2, i1
+            x1, y1, x2, y2 = x2, y2, x1, y1
+            area = -area
+        elif cull:
+            continue
+        # pixel box of the triangle, clamped to the image
+        minx = min(x0, min(x1, x2))
+        maxx = max(x0, max(x1, x2))
+        miny = min(y0, min(y1, y2))
+        maxy = max(y0, max(y1, y2))
+        px0 = max((minx - half + S - 1) // S, 0)
+        px1 = min((maxx - half) // S, width - 1)
+        py0 = max((miny - half + S - 1) // S, 0)
+        py1 = min((maxy - half) // S, height - 1)
+        if px0 > px1 or py0 > py1:
+            continue
+        # edge functions E_ab(p) = (xb-xa)(py-ya) - (yb-ya)(px-xa), >= 0 inside;
+        # top-left rule: bias -1 on edges that are neither top nor left
+        a01x, a01y = x1 - x0, y1 - y0
+        a12x, a12y = x2 - x1, y2 - y1
+        a20x, a20y = x0 - x2, y0 - y2
+        b0 = 0 if (a12y < 0 or (a12y == 0 and a12x > 0)) else -1
+        b1 = 0 if (a20y < 0 or (a20y == 0 and a20x > 0)) else -1
+        b2 = 0 if (a01y < 0 or (a01y == 0 and a01x > 0)) else -1
+        sx = px0 * S + half
+        sy = py0 * S + half
+        w0_row = a12x * (sy - y1) - a12y * (sx - x1) + b0
+        w1_row = a20x * (sy - y2) - a20y * (sx - x2) + b1
+        w2_row = a01x * (sy - y0) - a01y * (sx - x0) + b2
+        # inverse depth is affine in screen space: iz = z0 + dzdx * dx + dzdy * dy
+        fa = float(area)
+        z0, z1, z2 = iz[i0], iz[i1], iz[i2]
+        dzdx = ((z1 - z0) * (y2 - y0) - (z2 - z0) * (y1 - y0)) / fa * S
+        dzdy = ((x1 - x0) * (z2 - z0) - (x2 - x0) * (z1 - z0)) / fa * S
+        z_row = z0 + (dzdx * (sx - x0) + dzdy * (sy - y0)) / S
+        drawn = False
+        for py in range(py0, py1 + 1):
+            w0, w1, w2 = w0_row, w1_row, w2_row
+            zz = z_row
+            row = py * width
+            for px in range(px0, px1 + 1):
+                if (w0 | w1 | w2) >= 0:
+                    idx = row + px
+                    if want_count:
+                        count_buf[idx] += 1
+                    if zz > depth_buf[idx]:
+                        depth_buf[idx] = zz
+                        part_buf[idx] = triangle_part[t] + 1
+                        if want_tri:
+                            tri_buf[idx] = t
+                        drawn = True
+                w0 -= a12y * S
+                w1 -= a20y * S
+                w2 -= a01y * S
+                zz += dzdx
+            w0_row += a12x * S
+            w1_row += a20x * S
+            w2_row += a01x * S
+            z_row += dzdy
+        if drawn:
+            bx0 = min(bx0, px0)
+            by0 = min(by0, py0)
+            bx1 = max(bx1, px1)
+            by1 = max(by1, py1)
+    bbox[0], bbox[1], bbox[2], bbox[3] = bx0, by0, bx1, by1
+
+
+@jit
+def _is_occluding_edge(part_buf, depth_buf, idx, px, py, width, height, min_gap):
+    """Whether model pixel ``idx`` lies on an occluding edge: a 4-neighbour (inside the image)
+    is background, or belongs to another part and is farther by more than ``min_gap`` metres."""
+    p = part_buf[idx]
+    z = 1.0 / depth_buf[idx]
+    for k in range(4):
+        if k == 0:
+            if px == 0:
+                continue
+            j = idx - 1
+        elif k == 1:
+            if px == width - 1:
+                continue
+            j = idx + 1
+        elif k == 2:
+            if py == 0:
+                continue
+            j = idx - width
+        else:
+            if py == height - 1:
+                continue
+            j = idx + width
+        q = part_buf[j]
+        if q == 0:
+            return True
+        if q != p and 1.0 / depth_buf[j] - z > min_gap:
+            return True
+    return False
+
+
+@jit
+def _occluding_edges(part_buf, depth_buf, width, height, bbox, min_gap, edge_buf):
+    """Mark occluding-edge pixels inside ``bbox`` in the flat bool ``edge_buf``."""
+    for py in range(bbox[1], bbox[3] + 1):
+        for px in range(bbox[0], bbox[2] + 1):
+            idx = py * width + px
+            if part_buf[idx] != 0 and _is_occluding_edge(part_buf, depth_buf, idx, px, py, width, height, min_gap):
+                edge_buf[idx] = True
+
+
+@jit
+def _clear(part_buf, depth_buf, width, bbox):
+    """Reset the buffers inside ``bbox`` (the only place a render wrote)."""
+    for py in range(bbox[1], bbox[3] + 1):
+        row = py * width
+        for px in range(bbox[0], bbox[2] + 1):
+            part_buf[row + px] = 0
+            depth_buf[row + px] = 0.0

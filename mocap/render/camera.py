@@ -1,0 +1,120 @@
+"""Pinhole camera: intrinsics in pixels, camera coordinates in metres (x right, y down, z forward)."""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+#: Default image size (the paper's webcam resolution), pixels.
+DEFAULT_SIZE = (160, 120)
+#: Default horizontal field of view of a webcam, degrees.
+DEFAULT_HFOV_DEG = 60.0
+#: Nearest depth rendered, metres; triangles with a vertex closer are skipped.
+NEAR_PLANE_M = 0.05
+
+
+@dataclass(frozen=True)
+class Camera:
+    """Pinhole camera without distortion.
+
+    A point (x, y, z) in metres projects to pixel coordinates ``u = fx * x / z + cx``,
+    ``v = fy * y / z + cy``; pixel (row i, column j) covers ``[j, j+1) x [i, i+1)`` with its
+    centre at ``(j + 0.5, i + 0.5)``.
+
+    Attributes
+    ----------
+    width, height : int, pixels
+    fx, fy : float, pixels
+        Focal lengths.
+    cx, cy : float, pixels
+        Principal point.
+    """
+
+    width: int
+    height: int
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+
+    def __post_init__(self) -> None:
+        for key in ("width", "height"):
+            v = getattr(self, key)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not 1 <= v <= 16384:
+                raise ValueError(f"camera {key} must be an integer number of pixels in [1, 16384], got {v!r}")
+            object.__setattr__(self, key, int(v))
+        for key in ("fx", "fy", "cx", "cy"):
+            v = getattr(self, key)
+            if not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(v):
+                raise ValueError(f"camera {key} must be a finite number of pixels, got {v!r}")
+            object.__setattr__(self, key, float(v))
+        if self.fx <= 0 or self.fy <= 0:
+            raise ValueError(f"focal lengths must be positive, got fx={self.fx}, fy={self.fy}")
+
+    @classmethod
+    def default(cls, width: int = DEFAULT_SIZE[0], height: int = DEFAULT_SIZE[1],
+                hfov_deg: float = DEFAULT_HFOV_DEG) -> "Camera":
+        """A webcam-like camera: square pixels, centred principal point, ``hfov_deg`` wide."""
+        if not 1.0 <= hfov_deg <= 170.0:
+            raise ValueError(f"horizontal field of view must be in [1, 170] degrees, got {hfov_deg}")
+        f = 0.5 * width / math.tan(math.radians(hfov_deg) / 2.0)
+        return cls(width, height, f, f, width / 2.0, height / 2.0)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """Image shape ``(height, width)``."""
+        return (self.height, self.width)
+
+    def scaled(self, width: int, height: int) -> "Camera":
+        """The same camera at another resolution (intrinsics scaled per axis)."""
+        sx, sy = width / self.width, height / self.height
+        return Camera(width, height, self.fx * sx, self.fy * sy, self.cx * sx, self.cy * sy)
+
+    def intrinsics(self) -> np.ndarray:
+        """The 3x3 intrinsic matrix K, float64, pixels."""
+        return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
+
+    def project(self, points) -> np.ndarray:
+        """Project points in camera coordinates.
+
+        Parameters
+        ----------
+        points : array_like, shape (..., 3), metres
+            Must have z > 0.
+
+        Returns
+        -------
+        ndarray, shape (..., 2), float64, pixels (u right, v down)
+        """
+        p = np.asarray(points, dtype=np.float64)
+        if p.shape[-1] != 3:
+            raise ValueError(f"points must have shape (..., 3), got {p.shape}")
+        z = p[..., 2]
+        if np.any(z <= 0):
+            raise ValueError("cannot project points at or behind the camera (z <= 0)")
+        return np.stack([self.fx * p[..., 0] / z + self.cx, self.fy * p[..., 1] / z + self.cy], axis=-1)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "Camera":
+        extra = set(data) - {"width", "height", "fx", "fy", "cx", "cy"}
+        if extra:
+            raise ValueError(f"unknown camera keys: {', '.join(sorted(extra))}")
+        return cls(**data)
+
+    def to_json(self, path: str | Path) -> None:
+        from mocap.io.atomic import write_text_atomic
+        write_text_atomic(path, json.dumps(self.to_dict(), indent=2))
+
+    @classmethod
+    def from_json(cls, path: str | Path) -> "Camera":
+        return cls.from_dict(json.loads(Path(path).read_text()))
+
+    def as_array(self) -> np.ndarray:
+        """``[fx, fy, cx, cy, near]`` as float64, the form the compiled kernels take."""
+        return np.array([self.fx, self.fy, self.cx, self.cy, NEAR_PLANE_M])
