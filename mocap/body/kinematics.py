@@ -17,19 +17,44 @@ from mocap.body.skeleton import JOINT_NAMES, SEGMENT_NAMES, joint_points, segmen
 @jit
 def _rot_x(a):
     c, s = np.cos(a), np.sin(a)
-    return np.array(((1.0, 0.0, 0.0), (0.0, c, -s), (0.0, s, c)))
+    return (1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
 
 
 @jit
 def _rot_y(a):
     c, s = np.cos(a), np.sin(a)
-    return np.array(((c, 0.0, s), (0.0, 1.0, 0.0), (-s, 0.0, c)))
+    return (c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
 
 
 @jit
 def _rot_z(a):
     c, s = np.cos(a), np.sin(a)
-    return np.array(((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0)))
+    return (c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+
+
+@jit
+def _mul(a, b):
+    """Product of two row-major 3x3 matrices held as 9-tuples (kept in registers)."""
+    return (a[0] * b[0] + a[1] * b[3] + a[2] * b[6], a[0] * b[1] + a[1] * b[4] + a[2] * b[7],
+            a[0] * b[2] + a[1] * b[5] + a[2] * b[8],
+            a[3] * b[0] + a[4] * b[3] + a[5] * b[6], a[3] * b[1] + a[4] * b[4] + a[5] * b[7],
+            a[3] * b[2] + a[4] * b[5] + a[5] * b[8],
+            a[6] * b[0] + a[7] * b[3] + a[8] * b[6], a[6] * b[1] + a[7] * b[4] + a[8] * b[7],
+            a[6] * b[2] + a[7] * b[5] + a[8] * b[8])
+
+
+@jit
+def _store(out, k, r, parent, offset):
+    """out[k] = [r | parent_R @ offset + parent_t] where parent is segment index or -1."""
+    for i in range(3):
+        for j in range(3):
+            out[k, i, j] = r[3 * i + j]
+    for i in range(3):
+        if parent < 0:
+            out[k, i, 3] = offset[i]
+        else:
+            out[k, i, 3] = (out[parent, i, 0] * offset[0] + out[parent, i, 1] * offset[1]
+                            + out[parent, i, 2] * offset[2] + out[parent, i, 3])
 
 
 @jit
@@ -38,29 +63,21 @@ def _segment_transforms(pose, offsets, out):
 
     The angle layout is DESIGN.md section 2; see :mod:`mocap.body.pose` for the signs.
     """
-    r_chest = _rot_y(pose[3]) @ _rot_x(pose[4]) @ _rot_z(pose[5])
-    t_chest = pose[0:3].copy()
-    out[0, :, :3] = r_chest
-    out[0, :, 3] = t_chest
-    r_head = r_chest @ _rot_x(pose[6]) @ _rot_z(pose[7]) @ _rot_y(pose[8])
-    out[1, :, :3] = r_head
-    out[1, :, 3] = r_chest @ offsets[1] + t_chest
+    r_chest = _mul(_mul(_rot_y(pose[3]), _rot_x(pose[4])), _rot_z(pose[5]))
+    _store(out, 0, r_chest, -1, pose[0:3])
+    r_head = _mul(_mul(_mul(r_chest, _rot_x(pose[6])), _rot_z(pose[7])), _rot_y(pose[8]))
+    _store(out, 1, r_head, 0, offsets[1])
     for side in range(2):
         base = 9 + 7 * side          # first arm parameter of this side
         seg = 2 + 3 * side           # upper-arm segment index
         mirror = 1.0 if side == 0 else -1.0
-        r_ua = r_chest @ _rot_x(-pose[base]) @ _rot_z(mirror * pose[base + 1]) @ _rot_y(mirror * pose[base + 2])
-        t_ua = r_chest @ offsets[seg] + t_chest
-        r_fa = r_ua @ _rot_x(-pose[base + 3]) @ _rot_y(mirror * pose[base + 4])
-        t_fa = r_ua @ offsets[seg + 1] + t_ua
-        r_h = r_fa @ _rot_x(-pose[base + 5]) @ _rot_z(mirror * pose[base + 6])
-        t_h = r_fa @ offsets[seg + 2] + t_fa
-        out[seg, :, :3] = r_ua
-        out[seg, :, 3] = t_ua
-        out[seg + 1, :, :3] = r_fa
-        out[seg + 1, :, 3] = t_fa
-        out[seg + 2, :, :3] = r_h
-        out[seg + 2, :, 3] = t_h
+        r_ua = _mul(_mul(_mul(r_chest, _rot_x(-pose[base])), _rot_z(mirror * pose[base + 1])),
+                    _rot_y(mirror * pose[base + 2]))
+        _store(out, seg, r_ua, 0, offsets[seg])
+        r_fa = _mul(_mul(r_ua, _rot_x(-pose[base + 3])), _rot_y(mirror * pose[base + 4]))
+        _store(out, seg + 1, r_fa, seg, offsets[seg + 1])
+        r_h = _mul(_mul(r_fa, _rot_x(-pose[base + 5])), _rot_z(mirror * pose[base + 6]))
+        _store(out, seg + 2, r_h, seg + 1, offsets[seg + 2])
 
 
 @jit

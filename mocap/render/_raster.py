@@ -161,44 +161,111 @@ def _rasterize(xs, ys, iz, triangles, triangle_part, width, height, cull,
 
 
 @jit
-def _is_occluding_edge(part_buf, depth_buf, idx, px, py, width, height, min_gap):
-    """Whether model pixel ``idx`` lies on an occluding edge: a 4-neighbour (inside the image)
-    is background, or belongs to another part and is farther by more than ``min_gap`` metres."""
-    p = part_buf[idx]
-    z = 1.0 / depth_buf[idx]
-    for k in range(4):
-        if k == 0:
-            if px == 0:
-                continue
-            j = idx - 1
-        elif k == 1:
-            if px == width - 1:
-                continue
-            j = idx + 1
-        elif k == 2:
-            if py == 0:
-                continue
-            j = idx - width
+def _edge_scan(part_buf, depth_buf, width, height, bbox, min_gap, distance, mark_buf, clear):
+    """Find the occluding-edge pixels of a render by scanning neighbour transitions.
+
+    A model pixel is an occluding-edge pixel when one of its 4-neighbours inside the image is
+    background, or belongs to another part and is farther by more than ``min_gap`` metres (the
+    nearer side of a depth step is marked; creases between touching parts have no such step).
+    Only pairs of differing neighbours do work, so interiors cost one comparison a pixel.
+
+    Marks the pixels in the flat bool ``mark_buf`` and returns ``(sum of distance over them,
+    their count)``; ``distance`` may be empty (then the sum is 0). With ``clear`` the part,
+    depth and mark buffers are reset row by row as soon as no later pair needs them.
+    """
+    if bbox[0] > bbox[2]:
+        return 0.0, 0
+    xa, xb = max(bbox[0] - 1, 0), min(bbox[2] + 1, width - 1)
+    ya, yb = max(bbox[1] - 1, 0), min(bbox[3] + 1, height - 1)
+    # 8 pixels at a time: a word whose pixels equal their right and lower neighbours is skipped
+    use_words = width % 8 == 0
+    words = part_buf[: part_buf.size - part_buf.size % 8].view(np.uint64)
+    row_words = width // 8
+    total = 0.0
+    n = 0
+    for y in range(ya, yb + 1):
+        row = y * width
+        has_below = y < yb
+        if use_words:
+            for k in range((row + xa) // 8, (row + xb) // 8 + 1):
+                x0 = k * 8 - row
+                if x0 + 8 < width:
+                    w = words[k]
+                    diff = w ^ ((w >> np.uint64(8)) | (words[k + 1] << np.uint64(56)))
+                    if has_below:
+                        diff |= w ^ words[k + row_words]
+                    if diff == 0:
+                        continue
+                t, c = _scan_pixels(part_buf, depth_buf, width, row, max(x0, xa), min(x0 + 7, xb), xb,
+                                    has_below, min_gap, distance, mark_buf)
+                total += t
+                n += c
         else:
-            if py == height - 1:
-                continue
-            j = idx + width
-        q = part_buf[j]
-        if q == 0:
-            return True
-        if q != p and 1.0 / depth_buf[j] - z > min_gap:
-            return True
-    return False
+            t, c = _scan_pixels(part_buf, depth_buf, width, row, xa, xb, xb, has_below, min_gap, distance,
+                                mark_buf)
+            total += t
+            n += c
+        if clear:
+            _clear_row(part_buf, depth_buf, mark_buf, row, xa, xb)
+    return total, n
 
 
 @jit
-def _occluding_edges(part_buf, depth_buf, width, height, bbox, min_gap, edge_buf):
-    """Mark occluding-edge pixels inside ``bbox`` in the flat bool ``edge_buf``."""
-    for py in range(bbox[1], bbox[3] + 1):
-        for px in range(bbox[0], bbox[2] + 1):
-            idx = py * width + px
-            if part_buf[idx] != 0 and _is_occluding_edge(part_buf, depth_buf, idx, px, py, width, height, min_gap):
-                edge_buf[idx] = True
+def _scan_pixels(part_buf, depth_buf, width, row, x_from, x_to, x_last, has_below, min_gap, distance, mark_buf):
+    """Visit the right and lower neighbour pairs of pixels ``x_from..x_to`` of one row."""
+    have_distance = distance.size > 0
+    total = 0.0
+    n = 0
+    for x in range(x_from, x_to + 1):
+        a = row + x
+        pa = part_buf[a]
+        for k in range(2):
+            if k == 0:
+                if x >= x_last:
+                    continue
+                b = a + 1
+            else:
+                if not has_below:
+                    continue
+                b = a + width
+            pb = part_buf[b]
+            if pa == pb:
+                continue
+            j = _nearer_side(pa, pb, depth_buf[a], depth_buf[b], a, b, min_gap)
+            if j >= 0 and not mark_buf[j]:
+                mark_buf[j] = True
+                n += 1
+                if have_distance:
+                    total += distance[j]
+    return total, n
+
+
+@jit
+def _nearer_side(pa, pb, za, zb, a, b, min_gap):
+    """Which of two neighbouring pixels of different parts is an occluding-edge pixel: the model
+    one next to background, else the nearer one when the depth step exceeds ``min_gap``
+    (``za``, ``zb`` are inverse depths); -1 for none."""
+    if pa == 0:
+        return b
+    if pb == 0:
+        return a
+    gap = min_gap * za * zb
+    if za - zb > gap:
+        return a
+    if zb - za > gap:
+        return b
+    return -1
+
+
+@jit
+def _clear_row(part_buf, depth_buf, mark_buf, row, xa, xb):
+    # one loop per buffer: the compiler cannot prove they do not alias, and would not vectorise
+    for x in range(row + xa, row + xb + 1):
+        part_buf[x] = 0
+    for x in range(row + xa, row + xb + 1):
+        depth_buf[x] = 0.0
+    for x in range(row + xa, row + xb + 1):
+        mark_buf[x] = False
 
 
 @jit
@@ -206,6 +273,7 @@ def _clear(part_buf, depth_buf, width, bbox):
     """Reset the buffers inside ``bbox`` (the only place a render wrote)."""
     for py in range(bbox[1], bbox[3] + 1):
         row = py * width
-        for px in range(bbox[0], bbox[2] + 1):
-            part_buf[row + px] = 0
-            depth_buf[row + px] = 0.0
+        for x in range(row + bbox[0], row + bbox[2] + 1):
+            part_buf[x] = 0
+        for x in range(row + bbox[0], row + bbox[2] + 1):
+            depth_buf[x] = 0.0

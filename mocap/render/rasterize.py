@@ -52,9 +52,8 @@ def _check_gap(edge_gap: float) -> float:
 def _finish(camera: Camera, part_buf, depth_buf, tri_buf, bbox, part_label, edge_gap, want_tri) -> Rendering:
     w, h = camera.width, camera.height
     edge_buf = np.zeros(w * h, dtype=np.bool_)
-    if bbox[0] <= bbox[2]:
-        _raster._occluding_edges(part_buf, depth_buf, w, h, bbox, edge_gap, edge_buf)
-    lut = np.concatenate([[0], np.asarray(part_label, dtype=np.uint8)])
+    _raster._edge_scan(part_buf, depth_buf, w, h, bbox, edge_gap, np.empty(0, np.float32), edge_buf, False)
+    lut = np.concatenate([np.zeros(1, np.uint8), np.asarray(part_label, dtype=np.uint8)])
     parts = part_buf.reshape(h, w)
     with np.errstate(divide="ignore"):
         depth = np.where(depth_buf > 0, 1.0 / depth_buf, np.inf).astype(np.float32).reshape(h, w)

@@ -1,0 +1,266 @@
+"""Matching costs between a rendered pose and a prepared video frame.
+
+- :class:`RegionCost`: the non-overlapping ratio F(q) of the paper's eq. (1) between the
+  model's coloured silhouette and the segmented label image, over m colour classes.
+- :class:`EdgeCost`: the mean edge distance D_c of eq. (2): the mean, over the model's
+  occluding-edge pixels, of the image's distance-to-nearest-edge map.
+
+Each is built once per frame from its target and called as ``cost(pose) -> float``. One call
+is one compiled function that poses the mesh, rasterizes it and accumulates the cost only
+inside the model's bounding box, then clears what it drew; there is no Python work per pixel.
+The cost objects hold scratch buffers, so one object must not be called from two threads at
+once (make one per thread).
+
+Degenerate cases (documented, finite, never NaN):
+- F: a class whose union ``|A_c ∪ B_c|`` is empty (neither image nor model has it) drops out
+  of the product and of the exponent (m counts the remaining classes); if every class is empty,
+  F = 1 (:data:`EMPTY_REGION_COST`).
+- D_c: when the model has no occluding-edge pixel in view, D_c is the ``no_edge_penalty``
+  (default: the distance map's truncation value, i.e. its maximum).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from mocap._numba import jit
+from mocap.body.kinematics import _segment_transforms
+from mocap.body.model import BodyModel
+from mocap.body.pose import check_pose
+from mocap.body.skeleton import SEGMENT_NAMES
+from mocap.labels import MAX_CLASSES
+from mocap.render import _raster
+from mocap.render.camera import Camera
+from mocap.render.rasterize import EDGE_DEPTH_GAP_M, _check_gap
+
+#: F when neither the image nor the model has a pixel of any class.
+EMPTY_REGION_COST = 1.0
+
+
+# ----------------------------------------------------------------------------- kernels
+@jit
+def _render_pose(pose, scene, buffers):
+    """Pose the mesh and rasterize it into the scratch buffers (culled). Fills buffers' bbox."""
+    offsets, vertices, vertex_segment, triangles, triangle_part, part_label, cam, width, height = scene
+    part_buf, depth_buf, xs, ys, iz, transforms, bbox, no_tri, no_count = buffers
+    _segment_transforms(pose, offsets, transforms)
+    _raster._project_vertices(transforms, vertices, vertex_segment, cam, xs, ys, iz)
+    _raster._rasterize(xs, ys, iz, triangles, triangle_part, width, height, True,
+                       part_buf, depth_buf, no_tri, no_count, bbox)
+
+
+@jit
+def _region_counts_and_clear(part_buf, depth_buf, part_label, width, bbox, target, n_classes,
+                             model_count, overlap_count):
+    """|B_c| and |A_c ∩ B_c| for c = 1..m (index c) over the model's box; clears the box."""
+    for c in range(n_classes + 1):
+        model_count[c] = 0
+        overlap_count[c] = 0
+    for py in range(bbox[1], bbox[3] + 1):
+        row = py * width
+        for px in range(bbox[0], bbox[2] + 1):
+            idx = row + px
+            p = part_buf[idx]
+            if p != 0:
+                c = part_label[p - 1]
+                model_count[c] += 1
+                if target[idx] == c:
+                    overlap_count[c] += 1
+                part_buf[idx] = 0
+                depth_buf[idx] = 0.0
+
+
+@jit
+def _non_overlapping_ratio(target_count, model_count, overlap_count, n_classes):
+    """Eq. (1) from per-class counts (index 1..m), with the documented empty-union rule."""
+    log_sum = 0.0
+    used = 0
+    for c in range(1, n_classes + 1):
+        union = target_count[c] + model_count[c] - overlap_count[c]
+        if union == 0:
+            continue
+        used += 1
+        term = (union - overlap_count[c]) / union
+        if term == 0.0:
+            return 0.0
+        log_sum += np.log(term)
+    if used == 0:
+        return EMPTY_REGION_COST
+    return np.exp(log_sum / used)
+
+
+@jit
+def _region_cost(pose, scene, buffers, target, target_count, n_classes, model_count, overlap_count):
+    _render_pose(pose, scene, buffers)
+    part_buf, depth_buf, bbox = buffers[0], buffers[1], buffers[6]
+    _region_counts_and_clear(part_buf, depth_buf, scene[5], scene[7], bbox, target, n_classes,
+                             model_count, overlap_count)
+    return _non_overlapping_ratio(target_count, model_count, overlap_count, n_classes)
+
+
+@jit
+def _edge_cost(pose, scene, buffers, distance, mark_buf, min_gap, no_edge_penalty):
+    _render_pose(pose, scene, buffers)
+    total, n = _raster._edge_scan(buffers[0], buffers[1], scene[7], scene[8], buffers[6], min_gap,
+                                  distance, mark_buf, True)
+    if n == 0:
+        return no_edge_penalty
+    return total / n
+
+
+# ----------------------------------------------------------------------------- public
+def _scene(model: BodyModel, camera: Camera) -> tuple:
+    m = model.mesh
+    return (model.skeleton.offsets, m.vertices, m.vertex_segment, m.triangles, m.triangle_part,
+            model.part_label, camera.as_array(), np.int64(camera.width), np.int64(camera.height))
+
+
+def _buffers(model: BodyModel, camera: Camera) -> tuple:
+    n_px = camera.width * camera.height
+    n_v = model.mesh.vertices.shape[0]
+    return (np.zeros(n_px, np.uint8), np.zeros(n_px, np.float32), np.empty(n_v, np.int64),
+            np.empty(n_v, np.int64), np.empty(n_v), np.empty((len(SEGMENT_NAMES), 3, 4)),
+            np.empty(4, np.int64), np.empty(0, np.int32), np.empty(0, np.int32))
+
+
+def _check_image(image: np.ndarray, camera: Camera, what: str) -> None:
+    if not isinstance(image, np.ndarray) or image.shape != camera.shape:
+        shape = getattr(image, "shape", None)
+        raise ValueError(f"{what} must be an array of shape {camera.shape} (height, width) matching the "
+                         f"camera, got {shape}")
+
+
+class RegionCost:
+    """Non-overlapping ratio F(q) (eq. 1) against a segmented label image.
+
+    Parameters
+    ----------
+    target_labels : ndarray, shape (height, width), uint8
+        Segmented frame (:mod:`mocap.labels`: 0 background, 1..m classes, 255 unknown).
+    model : BodyModel
+        Its ``class_names`` give m.
+    camera : Camera
+        Must match the image size.
+
+    Calling ``cost(pose)`` with a (23,) pose (metres, radians) returns F in [0, 1]:
+    0 for a perfect match of every class, 1 for no overlap.
+    """
+
+    def __init__(self, target_labels: np.ndarray, model: BodyModel, camera: Camera) -> None:
+        _check_image(target_labels, camera, "target label image")
+        if target_labels.dtype != np.uint8:
+            raise ValueError(f"target label image must be uint8, got {target_labels.dtype}")
+        m = model.n_classes
+        if not 1 <= m <= MAX_CLASSES:
+            raise ValueError(f"model must have 1..{MAX_CLASSES} colour classes, got {m}")
+        self.model, self.camera, self.n_classes = model, camera, m
+        self._target = np.ascontiguousarray(target_labels).ravel()
+        counts = np.bincount(self._target, minlength=256).astype(np.int64)
+        self.target_count = counts[: m + 1].copy()
+        self.target_count[0] = 0
+        self._scene = _scene(model, camera)
+        self._buffers = _buffers(model, camera)
+        self._model_count = np.zeros(m + 1, np.int64)
+        self._overlap_count = np.zeros(m + 1, np.int64)
+
+    def __call__(self, pose) -> float:
+        return float(self.evaluate_unchecked(check_pose(pose)))
+
+    def evaluate_unchecked(self, pose: np.ndarray) -> float:
+        """As calling, without validating ``pose`` (a float64 (23,) array): for optimiser loops."""
+        return _region_cost(pose, self._scene, self._buffers, self._target, self.target_count,
+                            self.n_classes, self._model_count, self._overlap_count)
+
+    def kernel_args(self) -> tuple:
+        """Arguments after ``pose`` of the compiled kernel (for compiled optimiser loops)."""
+        return (self._scene, self._buffers, self._target, self.target_count, self.n_classes,
+                self._model_count, self._overlap_count)
+
+
+class EdgeCost:
+    """Mean edge distance D_c (eq. 2) against an image's distance-to-edge map.
+
+    Parameters
+    ----------
+    distance : ndarray, shape (height, width), float
+        Distance of every pixel to the nearest image edge, pixels (truncated).
+    model : BodyModel
+    camera : Camera
+    edge_gap : float, metres
+        Depth gap that makes a part boundary an occluding contour.
+    no_edge_penalty : float, pixels, optional
+        Value when the model shows no edge pixel; defaults to ``distance.max()``.
+
+    Calling ``cost(pose)`` returns D_c in pixels (>= 0).
+    """
+
+    def __init__(self, distance: np.ndarray, model: BodyModel, camera: Camera, *,
+                 edge_gap: float = EDGE_DEPTH_GAP_M, no_edge_penalty: float | None = None) -> None:
+        _check_image(distance, camera, "distance map")
+        d = np.ascontiguousarray(distance, dtype=np.float32)
+        if not np.isfinite(d).all() or (d < 0).any():
+            raise ValueError("distance map must be finite and non-negative")
+        penalty = float(d.max()) if no_edge_penalty is None else float(no_edge_penalty)
+        if not np.isfinite(penalty) or penalty < 0:
+            raise ValueError(f"no_edge_penalty must be finite and non-negative, got {no_edge_penalty}")
+        self.model, self.camera = model, camera
+        self.edge_gap = _check_gap(edge_gap)
+        self.no_edge_penalty = penalty
+        self._distance = d.ravel()
+        self._scene = _scene(model, camera)
+        self._buffers = _buffers(model, camera)
+        self._marks = np.zeros(camera.width * camera.height, np.bool_)
+
+    def __call__(self, pose) -> float:
+        return float(self.evaluate_unchecked(check_pose(pose)))
+
+    def evaluate_unchecked(self, pose: np.ndarray) -> float:
+        """As calling, without validating ``pose`` (a float64 (23,) array): for optimiser loops."""
+        return _edge_cost(pose, self._scene, self._buffers, self._distance, self._marks, self.edge_gap,
+                          self.no_edge_penalty)
+
+    def kernel_args(self) -> tuple:
+        """Arguments after ``pose`` of the compiled kernel (for compiled optimiser loops)."""
+        return (self._scene, self._buffers, self._distance, self._marks, self.edge_gap, self.no_edge_penalty)
+
+
+def non_overlapping_ratio(target_labels: np.ndarray, model_labels: np.ndarray, n_classes: int) -> float:
+    """Eq. (1) between two label images (no rendering), with the same empty-union rule.
+
+    Parameters
+    ----------
+    target_labels, model_labels : ndarray, shape (H, W), uint8
+    n_classes : int
+        m; labels 1..m are classes, anything else is ignored.
+
+    Returns
+    -------
+    float in [0, 1]
+    """
+    a, b = np.asarray(target_labels), np.asarray(model_labels)
+    if a.shape != b.shape or a.ndim != 2:
+        raise ValueError(f"label images must be 2-D and of one shape, got {a.shape} and {b.shape}")
+    if not 1 <= n_classes <= MAX_CLASSES:
+        raise ValueError(f"n_classes must be in 1..{MAX_CLASSES}, got {n_classes}")
+    cls = np.arange(n_classes + 1)
+    ta = np.array([np.count_nonzero(a == c) for c in cls], np.int64)
+    mb = np.array([np.count_nonzero(b == c) for c in cls], np.int64)
+    ov = np.array([np.count_nonzero((a == c) & (b == c)) for c in cls], np.int64)
+    return float(_non_overlapping_ratio(ta, mb, ov, n_classes))
+
+
+def mean_edge_distance(distance: np.ndarray, edge_mask: np.ndarray, no_edge_penalty: float | None = None) -> float:
+    """Eq. (2) from a distance map and a model edge mask (no rendering).
+
+    Parameters
+    ----------
+    distance : ndarray, shape (H, W), float, pixels
+    edge_mask : ndarray, shape (H, W), bool
+    no_edge_penalty : float, optional
+        Returned when the mask is empty; defaults to ``distance.max()``.
+    """
+    d, e = np.asarray(distance, dtype=np.float64), np.asarray(edge_mask, dtype=bool)
+    if d.shape != e.shape or d.ndim != 2:
+        raise ValueError(f"distance map and edge mask must be 2-D and of one shape, got {d.shape}, {e.shape}")
+    if not e.any():
+        return float(d.max() if no_edge_penalty is None else no_edge_penalty)
+    return float(d[e].mean())

@@ -1,0 +1,194 @@
+"""Background subtraction: a foreground mask robust to sensor noise and soft shadows.
+
+The colour test follows Horprasert, Harwood and Davis (1999): the frame colour ``I`` of a
+pixel is compared with the background colour ``E`` through its brightness ratio
+``alpha = <I, E> / <E, E>`` and its chromaticity distortion ``|I - alpha E|``. A shadow
+darkens a pixel without changing its chromaticity, so a changed pixel is foreground only
+when its brightness ratio leaves the shadow/highlight range or its chromaticity changed.
+The raw mask is then cleaned with scipy/scikit-image morphology.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+import numpy as np
+from scipy import ndimage as ndi
+from skimage import morphology
+
+from mocap._numba import jit
+from mocap.imaging._validate import check_rgb, check_same_size, foreground_bbox
+from mocap.imaging.config import ImagingConfig
+
+__all__ = ["subtract_background", "median_background", "clean_mask"]
+
+
+@jit
+def _change_mask_kernel(frame, frame_scale, background, background_scale, change2,
+                        alpha_lo, alpha_hi, chroma_rel, chroma_abs, out):  # pragma: no cover
+    height, width = out.shape
+    for y in range(height):
+        for x in range(width):
+            r = frame[y, x, 0] * frame_scale
+            g = frame[y, x, 1] * frame_scale
+            b = frame[y, x, 2] * frame_scale
+            er = background[y, x, 0] * background_scale
+            eg = background[y, x, 1] * background_scale
+            eb = background[y, x, 2] * background_scale
+            dr = r - er
+            dg = g - eg
+            db = b - eb
+            if dr * dr + dg * dg + db * db <= change2:
+                out[y, x] = False
+                continue
+            ee = er * er + eg * eg + eb * eb
+            if ee <= 0.0:
+                out[y, x] = True
+                continue
+            alpha = (r * er + g * eg + b * eb) / ee
+            if alpha < alpha_lo or alpha > alpha_hi:
+                out[y, x] = True
+                continue
+            cr = r - alpha * er
+            cg = g - alpha * eg
+            cb = b - alpha * eb
+            allowed = chroma_abs + chroma_rel * alpha * math.sqrt(ee)
+            out[y, x] = cr * cr + cg * cg + cb * cb > allowed * allowed
+
+
+def _change_mask(frame, frame_scale, background, background_scale, config):
+    out = np.empty(frame.shape[:2], dtype=np.bool_)
+    _change_mask_kernel(frame, frame_scale, background, background_scale,
+                        config.change_threshold ** 2, config.shadow_min_brightness,
+                        config.shadow_max_brightness, config.shadow_max_chroma,
+                        config.chroma_noise, out)
+    return out
+
+
+def _remove_small_objects(mask: np.ndarray, min_area: int) -> np.ndarray:
+    # scikit-image 0.26 renamed min_size (remove < n) to max_size (remove <= n).
+    return morphology.remove_small_objects(mask, max_size=min_area - 1)
+
+
+def _remove_small_holes(mask: np.ndarray, max_area: int) -> np.ndarray:
+    return morphology.remove_small_holes(mask, max_size=max_area)
+
+
+def _clean(raw: np.ndarray, config: ImagingConfig) -> np.ndarray:
+    """Morphological clean-up; the work after the opening is done on the bounding box."""
+    size = raw.shape[0] * raw.shape[1]
+    if config.opening_size > 1:
+        mask = ndi.binary_opening(raw, structure=np.ones((config.opening_size,) * 2, bool))
+    else:
+        mask = raw.copy()
+    margin = config.closing_size
+    box = foreground_bbox(mask, margin)
+    if box is None:
+        return mask
+    crop = mask[box]
+    min_area = int(math.ceil(config.min_object_fraction * size))
+    if min_area > 1:
+        crop = _remove_small_objects(crop, min_area)
+    if config.closing_size > 1:
+        # The crop has a margin of closing_size, so the dilation stays inside it except at
+        # the image border, where scipy's zero border would erode set pixels: a closing is
+        # extensive (never removes pixels), so put them back.
+        before = crop
+        crop = ndi.binary_closing(crop, structure=np.ones((config.closing_size,) * 2, bool))
+        crop |= before
+    max_hole = int(math.floor(config.max_hole_fraction * size))
+    if max_hole > 0:
+        crop = _remove_small_holes(crop, max_hole)
+    out = np.zeros_like(mask)
+    out[box] = crop
+    return out
+
+
+def clean_mask(raw: np.ndarray, config: ImagingConfig | None = None) -> np.ndarray:
+    """Morphological clean-up of a raw foreground mask.
+
+    Opening (removes speckle), removal of small connected parts, closing (bridges small
+    gaps), filling of small holes, with the sizes of ``config``.
+
+    Parameters
+    ----------
+    raw : ndarray of bool, shape (H, W)
+        Raw foreground mask.
+    config : ImagingConfig, optional
+        ``opening_size``, ``closing_size`` (pixels), ``min_object_fraction``,
+        ``max_hole_fraction`` (fractions of ``H * W``).
+
+    Returns
+    -------
+    ndarray of bool, shape (H, W)
+    """
+    if not isinstance(raw, np.ndarray) or raw.dtype != np.bool_ or raw.ndim != 2:
+        raise ValueError("raw must be a 2-D boolean array")
+    return _clean(raw, config or ImagingConfig())
+
+
+def subtract_background(frame: np.ndarray, background: np.ndarray,
+                        config: ImagingConfig | None = None, *, clean: bool = True) -> np.ndarray:
+    """Foreground mask of ``frame`` against a reference image of the empty scene.
+
+    A pixel is foreground when its colour moved more than ``config.change_threshold`` from
+    the background *and* the change is not a shadow or highlight: its brightness ratio
+    ``alpha = <I, E> / <E, E>`` is outside ``[shadow_min_brightness,
+    shadow_max_brightness]`` or its chromaticity distortion ``|I - alpha E|`` exceeds
+    ``chroma_noise + shadow_max_chroma * |alpha E|`` (0-255 units).
+
+    Parameters
+    ----------
+    frame : ndarray, shape (H, W, 3)
+        RGB frame, ``uint8`` (0-255) or float in [0, 1].
+    background : ndarray, shape (H, W, 3)
+        RGB image of the empty scene (e.g. :func:`median_background` of empty frames), same
+        size as ``frame``, ``uint8`` or float in [0, 1] (the two dtypes may differ).
+    config : ImagingConfig, optional
+        Thresholds and clean-up sizes; defaults to ``ImagingConfig()``.
+    clean : bool
+        Apply :func:`clean_mask` (default). ``False`` returns the raw per-pixel test.
+
+    Returns
+    -------
+    ndarray of bool, shape (H, W)
+        True on the foreground (the actor).
+
+    Raises
+    ------
+    ValueError
+        If an image is not ``(H, W, 3)`` (grayscale, RGBA), has an unsupported dtype or a
+        float range outside [0, 1], or if the two sizes differ.
+    """
+    frame, frame_scale = check_rgb(frame, "frame")
+    background, background_scale = check_rgb(background, "background")
+    check_same_size(frame, background, "background")
+    config = config or ImagingConfig()
+    raw = _change_mask(frame, frame_scale, background, background_scale, config)
+    return _clean(raw, config) if clean else raw
+
+
+def median_background(frames: Iterable[np.ndarray]) -> np.ndarray:
+    """Per-pixel median of several frames of the empty scene.
+
+    Parameters
+    ----------
+    frames : iterable of ndarray, each shape (H, W, 3)
+        RGB frames of the same size, ``uint8`` or float in [0, 1].
+
+    Returns
+    -------
+    ndarray of uint8, shape (H, W, 3)
+        The background estimate (0-255).
+    """
+    stack = []
+    for i, frame in enumerate(frames):
+        frame, scale = check_rgb(frame, f"frame {i}")
+        if stack:
+            check_same_size(stack[0], frame, f"frame {i}")
+        if scale != 1.0:
+            frame = np.round(frame * 255.0).astype(np.uint8)
+        stack.append(frame)
+    if not stack:
+        raise ValueError("median_background needs at least one frame")
+    return np.median(np.stack(stack), axis=0).round().astype(np.uint8)

@@ -1,0 +1,152 @@
+"""Every parameter of the image side, with defaults, saved as JSON."""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+#: Default squared-Mahalanobis limit of a colour class: the 99.9 % quantile of a chi-square
+#: with 3 degrees of freedom (scipy.stats.chi2.ppf(0.999, 3)).
+DEFAULT_COLOUR_THRESHOLD: float = 16.266236196238129
+
+EDGE_METHODS: tuple[str, ...] = ("canny", "deriche")
+DISTANCE_METHODS: tuple[str, ...] = ("edt", "chamfer")
+
+
+@dataclasses.dataclass(frozen=True)
+class ImagingConfig:
+    """Parameters of :func:`mocap.imaging.prepare_frame` (background, colour, edges, distance).
+
+    Intensities are on the 0-255 scale whatever the image dtype; lengths are in pixels.
+    The defaults work on :func:`mocap.imaging.testing.synthetic_scene` and on real webcam
+    frames from 160x120 to 768x432.
+
+    Attributes
+    ----------
+    change_threshold : float
+        A pixel is *changed* when the Euclidean RGB distance between frame and background
+        exceeds this (0-255 units). Set above the sensor noise (about 4 to 5 noise sigmas).
+    shadow_min_brightness, shadow_max_brightness : float
+        A changed pixel whose brightness ratio ``alpha = <I, E> / <E, E>`` (frame ``I``,
+        background ``E``) lies in this range and whose chromaticity did not change is a
+        shadow (``alpha < 1``) or a highlight (``alpha > 1``), not foreground.
+    shadow_max_chroma : float
+        Largest relative chromaticity distortion ``|I - alpha E| / |alpha E|`` (about the
+        sine of the angle between the two colours) of a shadow.
+    chroma_noise : float
+        Absolute slack (0-255 units) added to the allowed chromaticity distortion, for
+        sensor noise on dark pixels.
+    opening_size : int
+        Side of the square opening that removes speckle from the foreground (1 disables).
+    closing_size : int
+        Side of the square closing that bridges small gaps in the foreground (1 disables).
+    min_object_fraction : float
+        Connected foreground parts smaller than this fraction of the image area are dropped.
+    max_hole_fraction : float
+        Holes in the foreground smaller than this fraction of the image area are filled.
+    colour_threshold : float
+        Largest squared Mahalanobis distance (HSV) at which a pixel still belongs to a colour
+        class; farther from every class it is labelled unknown (255).
+    edge_method : {'canny', 'deriche'}
+        Edge detector: scikit-image's Canny, or a recursive Deriche gradient with the same
+        non-maximum suppression and hysteresis.
+    edge_sigma : float
+        Gaussian smoothing of Canny, in pixels (Deriche uses ``alpha = sqrt(pi) / sigma``).
+    edge_low_threshold, edge_high_threshold : float
+        Hysteresis thresholds on the gradient magnitude of the grey image in [0, 1] (the
+        units of :func:`skimage.feature.canny`: a sharp unit step gives about 4 / (sqrt(2 pi) sigma)... of
+        Sobel response; see :func:`mocap.imaging.detect_edges`).
+    edge_dilation : int
+        Edges are kept within this many pixels of the foreground.
+    distance_method : {'edt', 'chamfer'}
+        Exact Euclidean distance (scipy) or Borgefors' chamfer 3-4 (compiled two-pass).
+    max_distance : float
+        The distance map is truncated at this many pixels, so outliers cannot dominate.
+    """
+
+    change_threshold: float = 30.0
+    shadow_min_brightness: float = 0.45
+    shadow_max_brightness: float = 1.25
+    shadow_max_chroma: float = 0.10
+    chroma_noise: float = 10.0
+    opening_size: int = 3
+    closing_size: int = 5
+    min_object_fraction: float = 0.002
+    max_hole_fraction: float = 0.002
+    colour_threshold: float = DEFAULT_COLOUR_THRESHOLD
+    edge_method: str = "canny"
+    edge_sigma: float = 1.5
+    edge_low_threshold: float = 0.04
+    edge_high_threshold: float = 0.10
+    edge_dilation: int = 4
+    distance_method: str = "edt"
+    max_distance: float = 20.0
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            if f.type in ("float", float):
+                if isinstance(value, bool) or not isinstance(value, (int, float)):
+                    raise ValueError(f"{f.name} must be a number, got {value!r}")
+                if not math.isfinite(value):
+                    raise ValueError(f"{f.name} must be finite, got {value!r}")
+                object.__setattr__(self, f.name, float(value))
+            elif f.type in ("int", int):
+                if isinstance(value, bool) or not isinstance(value, int):
+                    raise ValueError(f"{f.name} must be an integer, got {value!r}")
+        positive = ("change_threshold", "shadow_max_brightness", "colour_threshold",
+                    "edge_sigma", "max_distance", "edge_high_threshold")
+        for name in positive:
+            if getattr(self, name) <= 0:
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        non_negative = ("shadow_min_brightness", "shadow_max_chroma", "chroma_noise",
+                        "min_object_fraction", "max_hole_fraction", "edge_low_threshold",
+                        "edge_dilation")
+        for name in non_negative:
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+        if self.shadow_min_brightness > self.shadow_max_brightness:
+            raise ValueError("shadow_min_brightness must not exceed shadow_max_brightness")
+        if self.edge_low_threshold > self.edge_high_threshold:
+            raise ValueError("edge_low_threshold must not exceed edge_high_threshold")
+        for name in ("opening_size", "closing_size"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be >= 1 (1 disables it), got {getattr(self, name)}")
+        if self.min_object_fraction >= 1 or self.max_hole_fraction >= 1:
+            raise ValueError("min_object_fraction and max_hole_fraction must be < 1")
+        if self.edge_method not in EDGE_METHODS:
+            raise ValueError(f"edge_method must be one of {EDGE_METHODS}, got {self.edge_method!r}")
+        if self.distance_method not in DISTANCE_METHODS:
+            raise ValueError(
+                f"distance_method must be one of {DISTANCE_METHODS}, got {self.distance_method!r}")
+
+    def to_dict(self) -> dict[str, object]:
+        """All parameters as a JSON-ready dictionary."""
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, object]) -> ImagingConfig:
+        """Build from a dictionary; missing keys take defaults, unknown keys raise ValueError."""
+        if not isinstance(data, dict):
+            raise ValueError(f"imaging config must be a JSON object, got {type(data).__name__}")
+        known = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ValueError(f"unknown imaging config key(s): {', '.join(unknown)}; "
+                             f"known: {', '.join(sorted(known))}")
+        return cls(**data)
+
+    def to_json(self, path: str | Path) -> None:
+        """Write the parameters to a JSON file."""
+        Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n", encoding="utf-8")
+
+    @classmethod
+    def from_json(cls, path: str | Path) -> ImagingConfig:
+        """Read parameters written by :meth:`to_json` (FileNotFoundError, ValueError)."""
+        text = Path(path).read_text(encoding="utf-8")
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise ValueError(f"{path}: not valid JSON ({exc})") from None
+        return cls.from_dict(data)
