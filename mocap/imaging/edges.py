@@ -29,44 +29,31 @@ _SOBEL_GAIN = 8.0
 
 # --------------------------------------------------------------------------- Deriche
 
-def _deriche_coefficients(alpha: float) -> tuple[np.ndarray, np.ndarray, float]:
-    """Causal/anti-causal coefficients of Deriche's smoothing and derivative filters.
+def _deriche_coefficients(alpha: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Coefficients ``(a1, a2, a3, a4)`` of Deriche's smoothing and derivative filters and
+    the shared feedback ``(b1, b2)``.
 
-    Returns ``(smooth, deriv, b)``: ``smooth = (a1, a2, a3, a4)`` (unit DC gain),
-    ``deriv = (a1, a2, a3, a4)`` (unit response to a unit ramp), ``b = (b1, b2)``.
+    The causal half is ``y1[n] = a1 x[n] + a2 x[n-1] + b1 y1[n-1] + b2 y1[n-2]``, the
+    anti-causal half ``y2[n] = a3 x[n+1] + a4 x[n+2] + b1 y2[n+1] + b2 y2[n+2]``, the
+    output ``y1 + y2``. Smoothing has unit gain on a constant; the derivative is scaled so a
+    unit ramp ``x[n] = n`` gives exactly 1.
     """
     ea = math.exp(-alpha)
     e2a = math.exp(-2.0 * alpha)
     k = (1.0 - ea) ** 2 / (1.0 + 2.0 * alpha * ea - e2a)
     smooth = np.array([k, k * ea * (alpha - 1.0), k * ea * (alpha + 1.0), -k * e2a])
-    # Derivative: y1[n] = x[n-1] + b1 y1[n-1] + b2 y1[n-2], y2[n] = -x[n+1] + ...; the
-    # gain makes the response to x[n] = n equal to 1 (Deriche's c = -(1 - e^-a)^2 / e^-a
-    # in continuous form; computed exactly for the discrete recursion here).
-    deriv = np.array([0.0, 1.0, -1.0, 0.0])
     b = np.array([2.0 * ea, -e2a])
-    # Response of the recursion to a ramp is linear in n away from the borders, with slope
-    # (a2 - a3 - 2 a4 ... ) / (1 - b1 - b2)**2; evaluate it in closed form:
-    # causal part: sum_j h1[j] (n - j), anti-causal: sum_j h2[j] (n + j).
-    # For this pair the slope is (1 * (-1) ... ) -> use the transfer function derivative.
-    denom = (1.0 - b[0] - b[1])
-    # H(z) = (a1 + a2 z^-1)/(1 - b1 z^-1 - b2 z^-2) + (a3 z + a4 z^2)/(1 - b1 z - b2 z^2);
-    # the ramp slope gain is -d/dw of the imaginary part at 0, i.e. sum_j j h[j] over both
-    # halves with sign: causal contributes -sum j h1[j], anti-causal +sum j h2[j].
-    # With a1 = 0, a2 = 1: sum_j j h1[j] = (1 + b2) / denom**2 ... (derived below numerically).
-    n = np.arange(0, 400, dtype=np.float64)
-    h1 = np.zeros(400)
-    h2 = np.zeros(400)
-    for i in range(400):
-        x_prev = 1.0 if i == 1 else 0.0
-        h1[i] = deriv[1] * x_prev + (b[0] * h1[i - 1] if i >= 1 else 0.0) + (
-            b[1] * h1[i - 2] if i >= 2 else 0.0)
-        x_next = 1.0 if i == 1 else 0.0
-        h2[i] = deriv[2] * x_next + (b[0] * h2[i - 1] if i >= 1 else 0.0) + (
-            b[1] * h2[i - 2] if i >= 2 else 0.0)
-    # h1[j] weights x[n - j], h2[j] weights x[n + j]; ramp response slope:
-    slope = -(n * h1).sum() + (n * h2).sum()
-    del denom
-    return smooth, deriv / slope, b
+    # Impulse response h[j] of the causal half of the derivative (a2 = 1; the anti-causal
+    # half is its mirror with a3 = -1). The ramp response is sum_j j (h2[j] - h1[j])
+    # = -2 sum_j j h[j], computed over enough terms for the e^(-alpha j) tail to vanish.
+    length = int(60.0 / alpha) + 10
+    h = np.zeros(length)
+    h[1] = 1.0
+    for j in range(2, length):
+        h[j] = b[0] * h[j - 1] + b[1] * h[j - 2]
+    ramp_gain = -2.0 * float(np.dot(np.arange(length), h))
+    deriv = np.array([0.0, 1.0, -1.0, 0.0]) / ramp_gain
+    return smooth, deriv, b
 
 
 @jit
