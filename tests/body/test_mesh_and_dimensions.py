@@ -1,0 +1,84 @@
+import json
+from collections import Counter
+
+import numpy as np
+import pytest
+from hypothesis import given, strategies as st
+
+from mocap.body import PART_NAMES, BodyDimensions, BodyModel, PartSize, build_mesh
+from mocap.body.mesh import part_mesh, signed_volume
+
+
+def edge_directions(triangles):
+    return Counter((int(a), int(b)) for t in triangles for a, b in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0])))
+
+
+@pytest.mark.parametrize("resolution", [4, 8, 12, 33])
+def test_every_part_is_closed_and_outward(resolution):
+    mesh = build_mesh(BodyDimensions(), resolution)
+    rings = resolution // 2 + 1
+    assert mesh.n_triangles == len(PART_NAMES) * 2 * resolution * rings
+    for p in range(len(PART_NAMES)):
+        tris = mesh.triangles[mesh.triangle_part == p]
+        directed = edge_directions(tris)
+        # closed and consistently oriented: each directed edge once, its reverse once
+        assert all(n == 1 for n in directed.values())
+        assert all(directed[(b, a)] == 1 for a, b in directed)
+        assert signed_volume(mesh.vertices, tris) > 0
+
+
+def test_ellipsoid_volume_converges_to_analytic():
+    v, t = part_mesh(0.3, 0.2, 0.1, e_long=1.0, e_cross=1.0, taper=0.0, resolution=96)
+    analytic = 4.0 / 3.0 * np.pi * 0.15 * 0.1 * 0.05
+    assert signed_volume(v, t) == pytest.approx(analytic, rel=5e-3)
+    assert v[:, 1].min() == pytest.approx(0.0) and v[:, 1].max() == pytest.approx(0.3)
+
+
+def test_resolution_and_classes_validated():
+    for bad in (3, 129, 12.5, True, "12"):
+        with pytest.raises(ValueError, match="resolution"):
+            build_mesh(BodyDimensions(), bad)
+    with pytest.raises(ValueError, match="unknown body part"):
+        BodyModel.build(part_class={**{p: "skin" for p in PART_NAMES}, "tail": "skin"})
+    with pytest.raises(ValueError, match="not one of"):
+        BodyModel.build(part_class={p: "fur" for p in PART_NAMES})
+    three = BodyModel.build(part_class={**{p: "clothes" for p in PART_NAMES}, "head": "skin", "r_hand": "glove",
+                                        "l_hand": "glove", "neck": "skin"},
+                            class_names=("skin", "clothes", "glove"))
+    assert three.n_classes == 3 and three.part_label[PART_NAMES.index("r_hand")] == 3
+
+
+def test_dimensions_json_round_trip(tmp_path):
+    dims = BodyDimensions().replace("r_forearm", length=0.3).scaled(1.1)
+    path = tmp_path / "dims.json"
+    dims.to_json(path)
+    assert json.loads(path.read_text())["units"] == "metres"
+    back = BodyDimensions.from_json(path)
+    assert back == dims
+    assert back["r_forearm"].length == pytest.approx(0.33)
+
+
+@pytest.mark.parametrize("make, match", [
+    (lambda: PartSize(-0.1, 0.1, 0.1), "positive"),
+    (lambda: PartSize(0.1, float("nan"), 0.1), "finite"),
+    (lambda: PartSize(0.1, 0.1, 0.0), "positive"),
+    (lambda: BodyDimensions().replace("tail", length=1.0), "unknown body part"),
+    (lambda: BodyDimensions({"torso": PartSize(1, 1, 1)}), "missing"),
+    (lambda: BodyDimensions().scaled(-2.0), "positive"),
+    (lambda: BodyDimensions.from_dict({"parts": {"torso": {"length": 1}}}), "length, width and depth"),
+    (lambda: BodyDimensions.from_dict({"units": "inches", "parts": {}}), "metres"),
+])
+def test_bad_dimensions_raise_clear_errors(make, match):
+    with pytest.raises(ValueError, match=match):
+        make()
+
+
+@given(st.floats(allow_nan=True, allow_infinity=True), st.floats(allow_nan=True, allow_infinity=True),
+       st.floats(allow_nan=True, allow_infinity=True))
+def test_part_size_accepts_only_finite_positive(length, width, depth):
+    ok = all(np.isfinite(v) and v > 0 for v in (length, width, depth))
+    if ok:
+        assert PartSize(length, width, depth).length == length
+    else:
+        with pytest.raises(ValueError):
+            PartSize(length, width, depth)

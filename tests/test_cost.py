@@ -1,0 +1,174 @@
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from hypothesis.extra import numpy as hnp
+from scipy import ndimage
+
+from mocap.body import JOINT_LIMITS, PARAMETER_INDEX as P, BodyModel, neutral_pose
+from mocap.cost import EMPTY_REGION_COST, EdgeCost, RegionCost, mean_edge_distance, non_overlapping_ratio
+from mocap.render import Camera, render
+from tests.naive import naive_mean_edge_distance, naive_non_overlapping_ratio
+
+MODEL = BodyModel.build(resolution=8)
+CAMERA = Camera.default()
+
+
+def random_pose(rng):
+    q = rng.uniform(JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1])
+    q[:3] = rng.uniform([-0.3, 0.0, 1.5], [0.3, 0.4, 2.5])
+    return q
+
+
+# ------------------------------------------------------------------ non-overlapping ratio
+def test_ratio_identical_is_zero_and_disjoint_is_one():
+    a = np.zeros((4, 6), np.uint8)
+    a[:2, :2] = 1
+    a[2:, :2] = 2
+    assert non_overlapping_ratio(a, a, 2) == 0.0
+    b = np.zeros_like(a)
+    b[:2, 4:] = 1
+    b[2:, 4:] = 2
+    assert non_overlapping_ratio(a, b, 2) == 1.0
+
+
+def test_ratio_hand_computed_example():
+    # class 1: image 4 px, model 4 px, 2 shared -> union 6 -> (6 - 2) / 6 = 2/3
+    # class 2: image 2 px, model 2 px, 1 shared -> union 3 -> (3 - 1) / 3 = 2/3
+    # F = (2/3 * 2/3) ** (1/2) = 2/3
+    a = np.zeros((3, 6), np.uint8)
+    b = np.zeros_like(a)
+    a[0, 0:4] = 1
+    b[0, 2:6] = 1
+    a[2, 0:2] = 2
+    b[2, 1:3] = 2
+    assert non_overlapping_ratio(a, b, 2) == pytest.approx(2 / 3)
+    # unknown (255) and background pixels never count
+    a[1, :] = 255
+    assert non_overlapping_ratio(a, b, 2) == pytest.approx(2 / 3)
+
+
+def test_ratio_empty_unions_are_documented():
+    a = np.zeros((3, 3), np.uint8)
+    assert non_overlapping_ratio(a, a, 2) == EMPTY_REGION_COST == 1.0
+    a[0, 0] = 1
+    b = a.copy()
+    b[1, 1] = 1                    # class 2 absent from both: dropped, F = class-1 term = 1/2
+    assert non_overlapping_ratio(a, b, 2) == pytest.approx(0.5)
+
+
+@settings(max_examples=50, deadline=None)
+@given(hnp.arrays(np.uint8, (6, 7), elements=st.sampled_from([0, 1, 2, 3, 255])),
+       hnp.arrays(np.uint8, (6, 7), elements=st.sampled_from([0, 1, 2, 3])), st.integers(1, 3))
+def test_ratio_matches_naive_set_twin(a, b, m):
+    assert non_overlapping_ratio(a, b, m) == pytest.approx(naive_non_overlapping_ratio(a, b, m), abs=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_region_cost_equals_ratio_of_rendered_labels(seed):
+    rng = np.random.default_rng(seed)
+    q_true, q = random_pose(rng), random_pose(rng)
+    target = render(q_true, MODEL, CAMERA).labels
+    cost = RegionCost(target, MODEL, CAMERA)
+    assert cost(q_true) == 0.0
+    expect = naive_non_overlapping_ratio(target, render(q, MODEL, CAMERA).labels, 2)
+    assert cost(q) == pytest.approx(expect, abs=1e-12)
+    assert cost(q) == pytest.approx(expect, abs=1e-12)     # buffers are left clean between calls
+
+
+def test_region_cost_grows_with_displacement():
+    q = neutral_pose()
+    cost = RegionCost(render(q, MODEL, CAMERA).labels, MODEL, CAMERA)
+    values = [cost(q + np.r_[dx, np.zeros(22)]) for dx in (0.0, 0.02, 0.05, 0.1, 1.5)]
+    assert values[0] == 0.0 and np.all(np.diff(values) > 0) and values[-1] == 1.0
+
+
+def test_region_cost_model_out_of_view():
+    target = render(neutral_pose(), MODEL, CAMERA).labels
+    q = neutral_pose()
+    q[2] = -1.0                                   # behind the camera: nothing drawn
+    assert RegionCost(target, MODEL, CAMERA)(q) == 1.0
+    assert RegionCost(np.zeros_like(target), MODEL, CAMERA)(q) == EMPTY_REGION_COST
+
+
+# ------------------------------------------------------------------ mean edge distance
+def test_edge_distance_zero_on_own_edges_and_equal_to_naive():
+    rng = np.random.default_rng(7)
+    q = random_pose(rng)
+    edges = render(q, MODEL, CAMERA).edges
+    dist = ndimage.distance_transform_edt(~edges).astype(np.float32)
+    cost = EdgeCost(dist, MODEL, CAMERA)
+    assert cost(q) == 0.0
+    for _ in range(5):
+        q2 = random_pose(rng)
+        expect = naive_mean_edge_distance(dist, render(q2, MODEL, CAMERA).edges, dist.max())
+        assert cost(q2) == pytest.approx(expect, rel=1e-6)
+
+
+@pytest.mark.parametrize("k", [1, 2, 5])
+def test_edge_distance_equals_known_shift(k):
+    # straight horizontal image edges; model edges k rows below them: D = k exactly
+    image_edges = np.zeros((40, 60), bool)
+    image_edges[10, :] = True
+    image_edges[30, :] = True
+    dist = ndimage.distance_transform_edt(~image_edges)
+    model_edges = np.roll(image_edges, k, axis=0)
+    assert mean_edge_distance(dist, model_edges) == pytest.approx(k)
+    assert naive_mean_edge_distance(dist, model_edges, 0) == pytest.approx(k)
+
+
+def test_edge_distance_of_shifted_body_is_bounded_by_shift():
+    q = neutral_pose()
+    edges = render(q, MODEL, CAMERA).edges
+    for k in (1, 3):
+        shifted = np.zeros_like(edges)
+        shifted[:, k:] = edges[:, :-k]
+        dist = ndimage.distance_transform_edt(~shifted).astype(np.float32)
+        d = EdgeCost(dist, MODEL, CAMERA)(q)
+        assert 0.3 * k < d <= k
+
+
+def test_edge_cost_without_model_edges_returns_penalty():
+    dist = np.full(CAMERA.shape, 4.0, np.float32)
+    q = neutral_pose()
+    q[2] = -2.0
+    assert EdgeCost(dist, MODEL, CAMERA)(q) == 4.0
+    assert EdgeCost(dist, MODEL, CAMERA, no_edge_penalty=30.0)(q) == 30.0
+
+
+# ------------------------------------------------------------------ bad input
+@pytest.mark.parametrize("make, match", [
+    (lambda: RegionCost(np.zeros((120, 161), np.uint8), MODEL, CAMERA), "shape"),
+    (lambda: RegionCost(np.zeros((120, 160), np.int32), MODEL, CAMERA), "uint8"),
+    (lambda: RegionCost([[0]], MODEL, CAMERA), "shape"),
+    (lambda: EdgeCost(np.zeros((10, 10)), MODEL, CAMERA), "shape"),
+    (lambda: EdgeCost(np.full((120, 160), np.nan), MODEL, CAMERA), "finite"),
+    (lambda: EdgeCost(-np.ones((120, 160)), MODEL, CAMERA), "non-negative"),
+    (lambda: EdgeCost(np.ones((120, 160)), MODEL, CAMERA, no_edge_penalty=float("inf")), "penalty"),
+    (lambda: non_overlapping_ratio(np.zeros((2, 2)), np.zeros((2, 3)), 2), "shape"),
+    (lambda: mean_edge_distance(np.zeros((2, 2)), np.zeros((3, 2), bool)), "shape"),
+])
+def test_bad_cost_input_raises(make, match):
+    with pytest.raises(ValueError, match=match):
+        make()
+
+
+@settings(max_examples=30, deadline=None)
+@given(hnp.arrays(np.float64, st.integers(0, 30), elements=st.floats(allow_nan=True, allow_infinity=True)))
+def test_cost_calls_with_bad_pose_raise_not_crash(values):
+    cost = RegionCost(np.zeros(CAMERA.shape, np.uint8), MODEL, CAMERA)
+    edge = EdgeCost(np.ones(CAMERA.shape, np.float32), MODEL, CAMERA)
+    if values.shape == (23,) and np.isfinite(values).all():
+        assert 0.0 <= cost(values) <= 1.0 and edge(values) >= 0.0
+    else:
+        with pytest.raises(ValueError):
+            cost(values)
+        with pytest.raises(ValueError):
+            edge(values)
+
+
+def test_pose_far_outside_limits_still_renders_finitely():
+    q = neutral_pose()
+    q[P["r_elbow_flex"]] = 1e6
+    q[0] = 1e3
+    target = render(neutral_pose(), MODEL, CAMERA).labels
+    assert np.isfinite(RegionCost(target, MODEL, CAMERA)(q))
