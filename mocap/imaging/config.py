@@ -66,12 +66,12 @@ class ImagingConfig:
     """
 
     change_threshold: float = 30.0
-    shadow_min_brightness: float = 0.45
+    shadow_min_brightness: float = 0.6
     shadow_max_brightness: float = 1.25
-    shadow_max_chroma: float = 0.10
-    chroma_noise: float = 10.0
+    shadow_max_chroma: float = 0.05
+    chroma_noise: float = 6.0
     opening_size: int = 3
-    closing_size: int = 5
+    closing_size: int = 3
     min_object_fraction: float = 0.002
     max_hole_fraction: float = 0.002
     colour_threshold: float = DEFAULT_COLOUR_THRESHOLD

@@ -58,23 +58,20 @@ def _deriche_coefficients(alpha: float) -> tuple[np.ndarray, np.ndarray, np.ndar
 
 @jit
 def _recursive_rows(src, a, b, out):  # pragma: no cover - compiled
-    """Deriche causal + anti-causal recursion along axis 1 (rows), borders replicated."""
+    """Deriche causal + anti-causal recursion along each row, borders replicated."""
     height, width = src.shape
-    y1 = np.empty(width)
-    y2 = np.empty(width)
     a1, a2, a3, a4 = a[0], a[1], a[2], a[3]
     b1, b2 = b[0], b[1]
     gain = 1.0 - b1 - b2
     for r in range(height):
         x0 = src[r, 0]
-        # steady state for a constant signal x0 at the left border
-        yp = (a1 + a2) * x0 / gain
+        yp = (a1 + a2) * x0 / gain  # steady state of a constant signal x0
         ypp = yp
         xp = x0
         for c in range(width):
             xc = src[r, c]
             yc = a1 * xc + a2 * xp + b1 * yp + b2 * ypp
-            y1[c] = yc
+            out[r, c] = yc
             ypp = yp
             yp = yc
             xp = xc
@@ -84,23 +81,49 @@ def _recursive_rows(src, a, b, out):  # pragma: no cover - compiled
         xnn = xn
         for c in range(width - 1, -1, -1):
             yc = a3 * xn + a4 * xnn + b1 * yn + b2 * ynn
-            y2[c] = yc
+            out[r, c] += yc
             ynn = yn
             yn = yc
             xnn = xn
             xn = src[r, c]
+
+
+@jit
+def _recursive_cols(src, a, b, out):  # pragma: no cover - compiled
+    """The same recursion down each column, rows outermost (cache-friendly)."""
+    height, width = src.shape
+    a1, a2, a3, a4 = a[0], a[1], a[2], a[3]
+    b1, b2 = b[0], b[1]
+    gain = 1.0 - b1 - b2
+    xp = np.empty(width)
+    xpp = np.empty(width)
+    yp = np.empty(width)
+    ypp = np.empty(width)
+    for c in range(width):
+        xp[c] = src[0, c]
+        yp[c] = (a1 + a2) * src[0, c] / gain
+        ypp[c] = yp[c]
+    for r in range(height):
         for c in range(width):
-            out[r, c] = y1[c] + y2[c]
-
-
-def _recursive(src: np.ndarray, a: np.ndarray, b: np.ndarray, axis: int) -> np.ndarray:
-    if axis == 1:
-        out = np.empty_like(src)
-        _recursive_rows(src, a, b, out)
-        return out
-    out = np.empty(src.shape[::-1])
-    _recursive_rows(np.ascontiguousarray(src.T), a, b, out)
-    return out.T
+            xc = src[r, c]
+            yc = a1 * xc + a2 * xp[c] + b1 * yp[c] + b2 * ypp[c]
+            out[r, c] = yc
+            ypp[c] = yp[c]
+            yp[c] = yc
+            xp[c] = xc
+    for c in range(width):
+        xp[c] = src[height - 1, c]  # x[n+1]
+        xpp[c] = xp[c]  # x[n+2]
+        yp[c] = (a3 + a4) * xp[c] / gain
+        ypp[c] = yp[c]
+    for r in range(height - 1, -1, -1):
+        for c in range(width):
+            yc = a3 * xp[c] + a4 * xpp[c] + b1 * yp[c] + b2 * ypp[c]
+            out[r, c] += yc
+            ypp[c] = yp[c]
+            yp[c] = yc
+            xpp[c] = xp[c]
+            xp[c] = src[r, c]
 
 
 def deriche_gradient(image: np.ndarray, alpha: float) -> tuple[np.ndarray, np.ndarray]:
@@ -125,10 +148,14 @@ def deriche_gradient(image: np.ndarray, alpha: float) -> tuple[np.ndarray, np.nd
     if not alpha > 0:
         raise ValueError(f"alpha must be > 0, got {alpha}")
     smooth, deriv, b = _deriche_coefficients(float(alpha))
-    sx = _recursive(image, smooth, b, axis=1)
-    sy = _recursive(image, smooth, b, axis=0)
-    gx = _recursive(sy, deriv, b, axis=1)
-    gy = _recursive(sx, deriv, b, axis=0)
+    sx = np.empty_like(image)
+    sy = np.empty_like(image)
+    gx = np.empty_like(image)
+    gy = np.empty_like(image)
+    _recursive_rows(image, smooth, b, sx)
+    _recursive_cols(image, smooth, b, sy)
+    _recursive_rows(sy, deriv, b, gx)
+    _recursive_cols(sx, deriv, b, gy)
     return gy, gx
 
 
@@ -174,11 +201,18 @@ def _hysteresis(strength: np.ndarray, high: float) -> np.ndarray:
     return good[labels]
 
 
+@jit
+def _magnitude_kernel(gy, gx, gain, out):  # pragma: no cover - compiled
+    height, width = out.shape
+    for r in range(height):
+        for c in range(width):
+            out[r, c] = gain * math.sqrt(gy[r, c] * gy[r, c] + gx[r, c] * gx[r, c])
+
+
 def _deriche_edges(grey, sigma, low, high):
     gy, gx = deriche_gradient(grey, math.sqrt(math.pi) / sigma)
-    gy *= _SOBEL_GAIN
-    gx *= _SOBEL_GAIN
-    magnitude = np.hypot(gy, gx)
+    magnitude = np.empty_like(gy)
+    _magnitude_kernel(gy, gx, _SOBEL_GAIN, magnitude)
     strength = np.empty_like(magnitude)
     _nonmax_kernel(gy, gx, magnitude, low, strength)
     return _hysteresis(strength, high)
@@ -198,7 +232,8 @@ def _edges(frame, scale, foreground, method, sigma, low, high, dilation):
             return np.zeros((h, w), dtype=bool)
         region = foreground[box]
         if dilation > 0:
-            region = ndi.binary_dilation(region, structure=np.ones((2 * dilation + 1,) * 2, bool))
+            region = ndi.maximum_filter(region, size=2 * dilation + 1, mode="constant",
+                                        cval=False)
     crop = frame[box]
     grey = color.rgb2gray(crop) if scale == 1.0 else color.rgb2gray(crop.astype(np.float64))
     if method == "canny":

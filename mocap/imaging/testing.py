@@ -20,7 +20,7 @@ __all__ = ["SyntheticScene", "synthetic_scene", "synthetic_scene_with_labels"]
 
 SKIN_RGB = (222.0, 168.0, 138.0)
 CLOTHES_CHOICES = ((40.0, 70.0, 160.0), (30.0, 120.0, 60.0), (150.0, 35.0, 45.0),
-                   (60.0, 60.0, 70.0))
+                   (55.0, 60.0, 85.0))
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -77,7 +77,7 @@ def synthetic_scene_with_labels(width: int, height: int, seed: int = 0, *,
         Standard deviation of the Gaussian sensor noise, 0-255 units, on frame and
         background independently.
     shadow : bool
-        Cast a soft shadow (brightness times about 0.65) of the person on the background.
+        Cast a soft shadow (brightness times about 0.7) of the person on the background.
 
     Returns
     -------
@@ -92,7 +92,7 @@ def synthetic_scene_with_labels(width: int, height: int, seed: int = 0, *,
     yy, xx = np.mgrid[0:h, 0:w]
 
     # -- background: wall and floor with low-frequency colour variation, texture, furniture
-    wall = np.array([178.0, 172.0, 160.0]) + rng.uniform(-15, 15, 3)
+    wall = np.array([165.0, 172.0, 178.0]) + rng.uniform(-12, 12, 3)
     floor = np.array([120.0, 95.0, 70.0]) + rng.uniform(-10, 10, 3)
     horizon = int(h * rng.uniform(0.72, 0.8))
     bg = np.where((yy < horizon)[..., None], wall, floor)
@@ -157,7 +157,7 @@ def synthetic_scene_with_labels(width: int, height: int, seed: int = 0, *,
         offset = (int(0.02 * h), int(0.12 * w))
         cast = ndi.shift(mask.astype(float), offset, order=0)
         cast = ndi.gaussian_filter(cast, 0.015 * s + 0.5)
-        frame *= (1.0 - 0.35 * cast)[..., None]
+        frame *= (1.0 - 0.3 * cast)[..., None]
     frame[mask] = person[mask]
 
     frame = np.clip(np.round(frame + rng.normal(0, noise, frame.shape)), 0, 255).astype(np.uint8)

@@ -1,0 +1,258 @@
+"""Frames in and out: images, video files and folders of images, as uint8 RGB.
+
+Reading goes through imageio v3 (Pillow for images, the ffmpeg plugin for videos); writing a
+video streams frames to ffmpeg through imageio-ffmpeg. Every failure on bad input is a
+``FileNotFoundError`` (missing path) or a ``ValueError`` with a one-line reason (corrupt file,
+unsupported channels or dtype, frames of different sizes), never a crash deep in a decoder.
+"""
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import imageio.v3 as iio
+import imageio_ffmpeg
+import numpy as np
+
+__all__ = ["IMAGE_SUFFIXES", "read_image", "iter_frames", "count_frames", "frame_rate",
+           "image_files", "VideoWriter"]
+
+#: Suffixes (lower case) of the image files a frame folder may hold.
+IMAGE_SUFFIXES: tuple[str, ...] = (".png", ".jpg", ".jpeg")
+# What decoders raise on a corrupt or unsupported file (Pillow raises SyntaxError on a
+# broken PNG; imageio raises OSError when no plugin can open the file).
+_DECODE_ERRORS = (OSError, ValueError, SyntaxError, RuntimeError, EOFError, KeyError, IndexError)
+
+
+def _check_exists(path: Path) -> None:
+    if not path.exists():
+        raise FileNotFoundError(f"no such file or folder: {path}")
+
+
+def _to_rgb_uint8(image: np.ndarray, source: str, allow_gray: bool) -> np.ndarray:
+    """Convert a decoded image to uint8 RGB (H, W, 3) or raise ValueError."""
+    if image.ndim == 4:
+        raise ValueError(f"{source} holds {image.shape[0]} images; expected a single image")
+    if image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] not in (1, 2, 3, 4)):
+        raise ValueError(f"{source} has unsupported shape {image.shape}; expected an RGB image")
+    if image.dtype == np.uint8:
+        data = image
+    elif image.dtype == np.uint16:
+        data = np.round(image / 257.0).astype(np.uint8)
+    elif image.dtype == np.bool_:
+        data = image.astype(np.uint8) * 255
+    elif image.dtype.kind == "f" and image.size and np.isfinite(image).all() \
+            and image.min() >= 0.0 and image.max() <= 1.0:
+        data = np.round(image * 255.0).astype(np.uint8)
+    else:
+        raise ValueError(f"{source} has unsupported sample type {image.dtype}")
+    if data.ndim == 3 and data.shape[2] in (2, 4):
+        alpha = data[..., -1]
+        if alpha.min() < 255:
+            raise ValueError(f"{source} has transparent pixels; flatten it onto an opaque "
+                             "background first")
+        data = data[..., :-1]
+    if data.ndim == 2 or data.shape[2] == 1:
+        if not allow_gray:
+            raise ValueError(f"{source} is a grayscale image; an RGB image is needed (colour "
+                             "classes need colour)")
+        data = np.repeat(data.reshape(data.shape[0], data.shape[1], 1), 3, axis=2)
+    return np.ascontiguousarray(data)
+
+
+def read_image(path: str | Path, *, allow_gray: bool = False) -> np.ndarray:
+    """Read one image file as RGB.
+
+    Parameters
+    ----------
+    path : str or Path
+        PNG, JPEG or any format Pillow reads.
+    allow_gray : bool
+        Accept a grayscale image by replicating its channel (off by default: a grayscale
+        background for a colour video would silently mark everything as foreground).
+
+    Returns
+    -------
+    ndarray of uint8, shape (H, W, 3)
+        RGB, 0-255. 16-bit images are rounded to 8 bits; an RGBA image whose alpha is fully
+        opaque loses its alpha channel.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``path`` does not exist.
+    ValueError
+        If the file is a folder, corrupt or not an image, holds several images, has
+        transparent pixels, is grayscale (unless ``allow_gray``) or an unsupported sample type.
+    """
+    path = Path(path)
+    _check_exists(path)
+    if path.is_dir():
+        raise ValueError(f"{path} is a folder, not an image file")
+    try:
+        image = iio.imread(path)
+    except _DECODE_ERRORS as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ValueError(f"cannot read image {path}: corrupt or unsupported file ({reason})") \
+            from None
+    return _to_rgb_uint8(np.asarray(image), str(path), allow_gray)
+
+
+def image_files(folder: str | Path) -> list[Path]:
+    """Sorted image files (:data:`IMAGE_SUFFIXES`) of a frame folder; ValueError if none."""
+    folder = Path(folder)
+    _check_exists(folder)
+    files = sorted(p for p in folder.iterdir()
+                   if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES)
+    if not files:
+        raise ValueError(f"folder {folder} holds no {'/'.join(IMAGE_SUFFIXES)} images")
+    return files
+
+
+def _check_range(start: int, stop: int | None) -> None:
+    if isinstance(start, bool) or not isinstance(start, (int, np.integer)) or start < 0:
+        raise ValueError(f"start must be a non-negative integer, got {start!r}")
+    if stop is not None and (isinstance(stop, bool) or not isinstance(stop, (int, np.integer))
+                             or stop < start):
+        raise ValueError(f"stop must be an integer >= start ({start}) or None, got {stop!r}")
+
+
+def iter_frames(source: str | Path, start: int = 0, stop: int | None = None) -> Iterator[np.ndarray]:
+    """Frames ``start`` (inclusive) to ``stop`` (exclusive) of a video or a folder of images.
+
+    Parameters
+    ----------
+    source : str or Path
+        A video file (any format ffmpeg decodes) or a folder of images (sorted by name,
+        :data:`IMAGE_SUFFIXES`).
+    start, stop : int
+        Frame range, 0-based; ``stop=None`` reads to the end. Past the end yields nothing.
+
+    Yields
+    ------
+    ndarray of uint8, shape (H, W, 3)
+        RGB frames, all of the same size.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``source`` does not exist.
+    ValueError
+        If the video cannot be decoded (also in the middle), a folder image is unreadable,
+        or folder images differ in size.
+    """
+    source = Path(source)
+    _check_range(start, stop)
+    _check_exists(source)
+    if source.is_dir():
+        files = image_files(source)[start:stop]
+        first_shape = None
+        for f in files:
+            frame = read_image(f)
+            if first_shape is None:
+                first_shape = frame.shape
+            elif frame.shape != first_shape:
+                raise ValueError(f"{f} is {frame.shape[1]}x{frame.shape[0]} but the first frame "
+                                 f"is {first_shape[1]}x{first_shape[0]}")
+            yield frame
+        return
+    try:
+        frames = iio.imiter(source, plugin="FFMPEG")
+        for index, frame in enumerate(frames):
+            if stop is not None and index >= stop:
+                break
+            if index >= start:
+                yield _to_rgb_uint8(np.asarray(frame), f"{source} frame {index}", True)
+    except _DECODE_ERRORS as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ValueError(f"cannot decode video {source}: {reason}") from None
+
+
+def count_frames(source: str | Path) -> int:
+    """Number of frames of a video file (decoded exactly by ffmpeg) or image folder."""
+    source = Path(source)
+    _check_exists(source)
+    if source.is_dir():
+        return len(image_files(source))
+    try:
+        n, _ = imageio_ffmpeg.count_frames_and_secs(str(source))
+    except _DECODE_ERRORS as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ValueError(f"cannot read video {source}: {reason}") from None
+    return int(n)
+
+
+def frame_rate(source: str | Path) -> float | None:
+    """Frames per second of a video file, or None (image folders, unknown rate)."""
+    source = Path(source)
+    _check_exists(source)
+    if source.is_dir():
+        return None
+    try:
+        fps = iio.immeta(source, plugin="FFMPEG").get("fps")
+    except _DECODE_ERRORS as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ValueError(f"cannot read video {source}: {reason}") from None
+    return float(fps) if fps and np.isfinite(fps) and fps > 0 else None
+
+
+class VideoWriter:
+    """Write uint8 RGB frames to an H.264 MP4 (or any ffmpeg format) one at a time.
+
+    Frames are padded with black to even sizes (yuv420p needs them); all frames must have
+    the size of the first. Use as a context manager::
+
+        with VideoWriter("out.mp4", fps=10) as video:
+            for frame in frames:
+                video.write(frame)
+
+    Parameters
+    ----------
+    path : str or Path
+        Output file; its folder must exist.
+    fps : float
+        Frames per second (> 0).
+    """
+
+    def __init__(self, path: str | Path, fps: float) -> None:
+        if not fps > 0:
+            raise ValueError(f"fps must be > 0, got {fps}")
+        self.path = Path(path)
+        if not self.path.parent.is_dir():
+            raise FileNotFoundError(f"folder {self.path.parent} does not exist")
+        self.fps = float(fps)
+        self._writer = None
+        self._shape: tuple[int, ...] | None = None
+        self.frames = 0
+
+    def write(self, frame: np.ndarray) -> None:
+        """Append one frame: uint8 RGB, shape (H, W, 3)."""
+        frame = np.asarray(frame)
+        if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3:
+            raise ValueError(f"video frames must be uint8 (H, W, 3), got {frame.dtype} "
+                             f"{frame.shape}")
+        if self._shape is None:
+            self._shape = frame.shape
+            h, w = frame.shape[0] + frame.shape[0] % 2, frame.shape[1] + frame.shape[1] % 2
+            self._writer = imageio_ffmpeg.write_frames(
+                str(self.path), (w, h), fps=self.fps, codec="libx264", pix_fmt_out="yuv420p",
+                macro_block_size=1, quality=7)
+            self._writer.send(None)
+        elif frame.shape != self._shape:
+            raise ValueError(f"frame {self.frames} has shape {frame.shape}, the first "
+                             f"{self._shape}")
+        pad = ((0, frame.shape[0] % 2), (0, frame.shape[1] % 2), (0, 0))
+        self._writer.send(np.ascontiguousarray(np.pad(frame, pad)))
+        self.frames += 1
+
+    def close(self) -> None:
+        """Finish the file (safe to call twice)."""
+        if self._writer is not None:
+            self._writer.close()
+            self._writer = None
+
+    def __enter__(self) -> VideoWriter:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
