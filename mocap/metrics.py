@@ -1,0 +1,261 @@
+"""Accuracy against ground truth (DESIGN.md section 5).
+
+Every function takes whole sequences (frames first) and returns a plain float (or a per-frame
+array when asked). Joints are the upper-body joints of
+:data:`~mocap.body.skeleton.JOINT_NAMES` in camera coordinates (metres); poses are the
+23-parameter vectors (metres and radians). Results are in the units people read: millimetres,
+degrees, pixels.
+
+=====================  ===================================================================
+function               definition
+=====================  ===================================================================
+:func:`mpjpe`          mean over frames and joints of the 3D joint distance, mm
+:func:`pa_mpjpe`       the same after aligning each predicted frame to the true one by the
+                       best similarity transform (rotation, translation, uniform scale)
+:func:`joint_angle_error`  mean absolute difference of the 20 joint angles, degrees,
+                       wrap-around aware (179 vs -179 degrees is 2 degrees apart)
+:func:`reprojection_error` mean 2D distance between the projected joints, pixels
+:func:`failure_rate`   fraction of frames whose MPJPE exceeds a threshold (100 mm)
+:func:`summary`        all of the above as the ``metrics`` object of ``run.json``
+=====================  ===================================================================
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from mocap.body.pose import ANGLE_NAMES, N_PARAMETERS, PARAMETER_INDEX
+from mocap.render.camera import Camera
+
+__all__ = ["DEFAULT_FAILURE_MM", "SUMMARY_KEYS", "failure_rate", "joint_angle_error", "mpjpe",
+           "pa_mpjpe", "reprojection_error", "summary"]
+
+#: Frames whose MPJPE exceeds this many millimetres count as failures (DESIGN.md section 5).
+DEFAULT_FAILURE_MM: float = 100.0
+#: Keys of :func:`summary`, in order (the ``metrics`` object of ``run.json`` without ``fps``).
+SUMMARY_KEYS: tuple[str, ...] = ("mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg", "reprojection_px",
+                                 "failure_rate")
+_ANGLE_COLUMNS = np.array([PARAMETER_INDEX[name] for name in ANGLE_NAMES])
+
+
+def _joint_pair(pred, true, min_joints: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """Validate two joint arrays of the same shape (N, J, 3)."""
+    p = np.asarray(pred, dtype=np.float64)
+    t = np.asarray(true, dtype=np.float64)
+    if p.ndim != 3 or p.shape[2] != 3:
+        raise ValueError(f"predicted joints must have shape (frames, joints, 3), got {p.shape}")
+    if t.shape != p.shape:
+        raise ValueError(f"predicted joints {p.shape} and true joints {t.shape} differ in shape")
+    if p.shape[0] == 0:
+        raise ValueError("joint arrays hold no frames")
+    if p.shape[1] < min_joints:
+        raise ValueError(f"need at least {min_joints} joints per frame, got {p.shape[1]}")
+    if not (np.isfinite(p).all() and np.isfinite(t).all()):
+        raise ValueError("joint positions must be finite (no NaN or infinity)")
+    return p, t
+
+
+def mpjpe(pred, true, *, per_frame: bool = False):
+    """Mean per-joint position error.
+
+    Parameters
+    ----------
+    pred, true : array_like, shape (N, J, 3), metres
+        Predicted and true joint positions, same joint order.
+    per_frame : bool
+        Return the error of every frame instead of the mean over frames.
+
+    Returns
+    -------
+    float, or ndarray of shape (N,) with ``per_frame``
+        Millimetres.
+
+    Raises
+    ------
+    ValueError
+        On shapes that differ or are not (N, J, 3), no frames, or non-finite values.
+    """
+    p, t = _joint_pair(pred, true)
+    err = np.linalg.norm(p - t, axis=2).mean(axis=1) * 1000.0
+    return err if per_frame else float(err.mean())
+
+
+def _procrustes_align(p: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """``p`` (J, 3) moved by the similarity transform that best fits it to ``t`` (least squares)."""
+    pc, tc = p - p.mean(axis=0), t - t.mean(axis=0)
+    norm = float(np.sum(pc * pc))
+    if norm == 0.0:  # all predicted joints at one point: only the translation can be fitted
+        return np.broadcast_to(t.mean(axis=0), p.shape).copy()
+    with warnings.catch_warnings():
+        # a degenerate (collinear) frame has no unique rotation; any optimal one will do
+        warnings.simplefilter("ignore", UserWarning)
+        rot, _ = Rotation.align_vectors(tc, pc)
+    rotated = rot.apply(pc)
+    scale = float(np.sum(rotated * tc)) / norm
+    return scale * rotated + t.mean(axis=0)
+
+
+def pa_mpjpe(pred, true, *, per_frame: bool = False):
+    """MPJPE after Procrustes alignment of every predicted frame to the true one.
+
+    Each frame of ``pred`` is rotated (a proper rotation, no reflection; Kabsch via
+    :meth:`scipy.spatial.transform.Rotation.align_vectors`), uniformly scaled and translated to
+    fit the true frame in the least-squares sense before the error is taken.
+
+    Parameters
+    ----------
+    pred, true : array_like, shape (N, J, 3), metres
+        J >= 3.
+    per_frame : bool
+        Return the error of every frame.
+
+    Returns
+    -------
+    float, or ndarray of shape (N,) with ``per_frame``
+        Millimetres.
+
+    Raises
+    ------
+    ValueError
+        As :func:`mpjpe`, or fewer than 3 joints.
+    """
+    p, t = _joint_pair(pred, true, min_joints=3)
+    aligned = np.stack([_procrustes_align(p[i], t[i]) for i in range(p.shape[0])])
+    return mpjpe(aligned, t, per_frame=per_frame)
+
+
+def _pose_pair(pred, true) -> tuple[np.ndarray, np.ndarray]:
+    p = np.asarray(pred, dtype=np.float64)
+    t = np.asarray(true, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] != N_PARAMETERS:
+        raise ValueError(f"predicted poses must have shape (frames, {N_PARAMETERS}), got {p.shape}")
+    if t.shape != p.shape:
+        raise ValueError(f"predicted poses {p.shape} and true poses {t.shape} differ in shape")
+    if p.shape[0] == 0:
+        raise ValueError("pose arrays hold no frames")
+    if not (np.isfinite(p).all() and np.isfinite(t).all()):
+        raise ValueError("poses must be finite (no NaN or infinity)")
+    return p, t
+
+
+def joint_angle_error(pred, true, *, per_frame: bool = False):
+    """Mean absolute error of the 20 joint angles, wrap-around aware.
+
+    The difference of two angles is taken on the circle (in [-180, 180) degrees), so a chest
+    yaw of 179 degrees against -179 degrees is an error of 2 degrees.
+
+    Parameters
+    ----------
+    pred, true : array_like, shape (N, 23)
+        Pose vectors (metres, radians); the three root positions are ignored.
+    per_frame : bool
+        Return the mean over the 20 angles of every frame.
+
+    Returns
+    -------
+    float, or ndarray of shape (N,) with ``per_frame``
+        Degrees.
+
+    Raises
+    ------
+    ValueError
+        On shapes that differ or are not (N, 23), no frames, or non-finite values.
+    """
+    p, t = _pose_pair(pred, true)
+    diff = p[:, _ANGLE_COLUMNS] - t[:, _ANGLE_COLUMNS]
+    wrapped = (diff + np.pi) % (2.0 * np.pi) - np.pi
+    err = np.rad2deg(np.abs(wrapped)).mean(axis=1)
+    return err if per_frame else float(err.mean())
+
+
+def reprojection_error(pred_joints, true_joints, camera: Camera, *, per_frame: bool = False):
+    """Mean 2D distance between predicted and true joints projected by ``camera``.
+
+    Parameters
+    ----------
+    pred_joints, true_joints : array_like, shape (N, J, 3), metres
+        Camera coordinates; every joint must lie in front of the camera (z > 0).
+    camera : Camera
+    per_frame : bool
+        Return the error of every frame.
+
+    Returns
+    -------
+    float, or ndarray of shape (N,) with ``per_frame``
+        Pixels.
+
+    Raises
+    ------
+    ValueError
+        As :func:`mpjpe`, or a joint at or behind the camera.
+    """
+    if not isinstance(camera, Camera):
+        raise ValueError(f"camera must be a mocap.render.Camera, got {type(camera).__name__}")
+    p, t = _joint_pair(pred_joints, true_joints)
+    err = np.linalg.norm(camera.project(p) - camera.project(t), axis=2).mean(axis=1)
+    return err if per_frame else float(err.mean())
+
+
+def failure_rate(pred, true, threshold_mm: float = DEFAULT_FAILURE_MM) -> float:
+    """Fraction of frames whose MPJPE exceeds ``threshold_mm``.
+
+    Parameters
+    ----------
+    pred, true : array_like, shape (N, J, 3), metres
+    threshold_mm : float
+        Positive, millimetres; a frame fails when its MPJPE is strictly larger.
+
+    Returns
+    -------
+    float
+        In [0, 1].
+
+    Raises
+    ------
+    ValueError
+        As :func:`mpjpe`, or a threshold that is not a positive finite number.
+    """
+    if isinstance(threshold_mm, bool) or not isinstance(threshold_mm, (int, float, np.integer, np.floating)) \
+            or not np.isfinite(threshold_mm) or threshold_mm <= 0:
+        raise ValueError(f"failure threshold must be a positive number of millimetres, got {threshold_mm!r}")
+    return float(np.mean(mpjpe(pred, true, per_frame=True) > threshold_mm))
+
+
+def summary(pred_poses, true_poses, pred_joints, true_joints, camera: Camera, *,
+            threshold_mm: float = DEFAULT_FAILURE_MM) -> dict[str, float]:
+    """All ground-truth metrics of a run, as ``run.json`` stores them.
+
+    Parameters
+    ----------
+    pred_poses, true_poses : array_like, shape (N, 23)
+        Metres and radians.
+    pred_joints, true_joints : array_like, shape (N, J, 3), metres
+        Camera coordinates.
+    camera : Camera
+    threshold_mm : float
+        Failure threshold of :func:`failure_rate`.
+
+    Returns
+    -------
+    dict
+        Exactly the keys of :data:`SUMMARY_KEYS`: ``mpjpe_mm``, ``pa_mpjpe_mm``,
+        ``angle_error_deg``, ``reprojection_px``, ``failure_rate`` (plain floats).
+
+    Raises
+    ------
+    ValueError
+        On bad input to any metric, or pose and joint arrays with different frame counts.
+    """
+    n_pose = np.shape(pred_poses)[0] if np.ndim(pred_poses) else 0
+    n_joint = np.shape(pred_joints)[0] if np.ndim(pred_joints) else 0
+    if n_pose != n_joint:
+        raise ValueError(f"poses cover {n_pose} frames but joints cover {n_joint}")
+    return {
+        "mpjpe_mm": mpjpe(pred_joints, true_joints),
+        "pa_mpjpe_mm": pa_mpjpe(pred_joints, true_joints),
+        "angle_error_deg": joint_angle_error(pred_poses, true_poses),
+        "reprojection_px": reprojection_error(pred_joints, true_joints, camera),
+        "failure_rate": failure_rate(pred_joints, true_joints, threshold_mm),
+    }

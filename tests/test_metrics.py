@@ -1,0 +1,121 @@
+"""Metrics of DESIGN.md section 5 on cases worked out by hand."""
+import math
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from mocap.body.pose import PARAMETER_INDEX, neutral_pose
+from mocap.metrics import (SUMMARY_KEYS, failure_rate, joint_angle_error, mpjpe, pa_mpjpe,
+                           reprojection_error, summary)
+from mocap.render.camera import Camera
+
+
+def _frames_with_errors(errors_mm, n_joints=4):
+    """True joints and predictions displaced by ``errors_mm[i]`` (along a 3-4-5 direction)."""
+    rng = np.random.default_rng(0)
+    true = rng.normal(size=(len(errors_mm), n_joints, 3)) + [0.0, 0.0, 3.0]
+    direction = np.array([0.6, 0.8, 0.0])
+    pred = true + np.asarray(errors_mm, float)[:, None, None] / 1000.0 * direction
+    return pred, true
+
+
+def test_mpjpe_constant_offset_is_its_length():
+    true = np.zeros((2, 3, 3))
+    pred = true + [0.003, 0.004, 0.0]              # 3-4-5 triangle: 5 mm
+    assert mpjpe(pred, true) == pytest.approx(5.0)
+
+
+def test_mpjpe_averages_joints_then_frames():
+    true = np.zeros((2, 2, 3))
+    pred = true.copy()
+    pred[0, 1, 0] = 0.010                          # frame 0: errors 0 and 10 mm -> 5
+    pred[1, :, 2] = 0.020                          # frame 1: both 20 mm -> 20
+    assert mpjpe(pred, true, per_frame=True) == pytest.approx([5.0, 20.0])
+    assert mpjpe(pred, true) == pytest.approx(12.5)
+
+
+def test_pa_mpjpe_removes_similarity_transform():
+    rng = np.random.default_rng(1)
+    true = rng.normal(size=(3, 10, 3))
+    rot = Rotation.from_euler("xyz", [30, -50, 70], degrees=True)
+    pred = 1.7 * rot.apply(true.reshape(-1, 3)).reshape(true.shape) + [0.5, -1.0, 2.0]
+    assert mpjpe(pred, true) > 100.0
+    assert pa_mpjpe(pred, true) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_pa_mpjpe_hand_computed_scale_fit():
+    # A cross: the prediction stretches the x arm to twice its length. By symmetry the best
+    # rotation is the identity and the translation zero; the best scale is
+    # s = sum(t.p) / sum(p.p) = (2 + 2 + 1 + 1) / (4 + 4 + 1 + 1) = 0.6, so the aligned points are
+    # (+-1.2, 0, 0) and (0, +-0.6, 0): errors 0.2, 0.2, 0.4, 0.4 m, mean 300 mm.
+    true = np.array([[[-1.0, 0, 0], [1.0, 0, 0], [0, 1.0, 0], [0, -1.0, 0]]])
+    pred = np.array([[[-2.0, 0, 0], [2.0, 0, 0], [0, 1.0, 0], [0, -1.0, 0]]])
+    assert pa_mpjpe(pred, true) == pytest.approx(300.0)
+
+
+def test_pa_mpjpe_does_not_reflect():
+    # A mirror image cannot be undone by a proper rotation: the error stays large.
+    true = np.array([[[1.0, 0, 0], [0, 2.0, 0], [0, 0, 3.0], [0.0, 0, 0]]])
+    pred = true * [-1.0, 1.0, 1.0]
+    assert pa_mpjpe(pred, true) > 100.0
+
+
+def test_joint_angle_error_one_angle():
+    true = np.tile(neutral_pose(), (2, 1))
+    pred = true.copy()
+    pred[:, PARAMETER_INDEX["r_elbow_flex"]] += math.radians(10.0)   # 10 deg on 1 of 20 angles
+    pred[:, PARAMETER_INDEX["root_x"]] += 5.0                       # positions are ignored
+    assert joint_angle_error(pred, true) == pytest.approx(0.5)
+
+
+def test_joint_angle_error_wraps_around():
+    true = np.tile(neutral_pose(), (1, 1))
+    pred = true.copy()
+    true[0, PARAMETER_INDEX["chest_yaw"]] = math.radians(179.0)
+    pred[0, PARAMETER_INDEX["chest_yaw"]] = math.radians(-179.0)     # 2 degrees apart
+    assert joint_angle_error(pred, true) == pytest.approx(2.0 / 20.0)
+
+
+def test_reprojection_error_hand_computed():
+    cam = Camera.default(160, 120)                  # f = 80 / tan(30 deg) = 138.564 px
+    true = np.array([[[0.0, 0.0, 2.0], [0.0, 0.5, 2.0]]])
+    pred = true + [0.2, 0.0, 0.0]                   # 0.2 m at 2 m: f * 0.1 px on both joints
+    assert reprojection_error(pred, true, cam) == pytest.approx(80.0 / math.tan(math.radians(30.0)) * 0.1)
+
+
+def test_failure_rate_counts_frames_strictly_above_threshold():
+    pred, true = _frames_with_errors([50.0, 150.0, 99.0, 101.0])
+    assert mpjpe(pred, true, per_frame=True) == pytest.approx([50.0, 150.0, 99.0, 101.0])
+    assert failure_rate(pred, true) == pytest.approx(0.5)
+    assert failure_rate(pred, true, threshold_mm=40.0) == pytest.approx(1.0)
+    assert failure_rate(pred, true, threshold_mm=200.0) == 0.0
+
+
+def test_summary_has_exactly_the_run_json_keys():
+    pred, true = _frames_with_errors([10.0, 20.0])
+    poses = np.tile(neutral_pose(), (2, 1))
+    out = summary(poses, poses, pred, true, Camera.default())
+    assert tuple(out) == SUMMARY_KEYS == ("mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg", "reprojection_px",
+                                          "failure_rate")
+    assert all(type(v) is float for v in out.values())
+    assert out["mpjpe_mm"] == pytest.approx(15.0)
+    assert out["angle_error_deg"] == 0.0 and out["failure_rate"] == 0.0
+
+
+@pytest.mark.parametrize("call", [
+    lambda: mpjpe(np.zeros((2, 3, 3)), np.zeros((2, 4, 3))),
+    lambda: mpjpe(np.zeros((3, 3)), np.zeros((3, 3))),
+    lambda: mpjpe(np.zeros((0, 3, 3)), np.zeros((0, 3, 3))),
+    lambda: mpjpe(np.full((1, 3, 3), np.nan), np.zeros((1, 3, 3))),
+    lambda: pa_mpjpe(np.zeros((1, 2, 3)), np.zeros((1, 2, 3))),
+    lambda: joint_angle_error(np.zeros((2, 22)), np.zeros((2, 22))),
+    lambda: reprojection_error(np.zeros((1, 2, 3)), np.zeros((1, 2, 3)), Camera.default()),
+    lambda: reprojection_error(np.ones((1, 2, 3)), np.ones((1, 2, 3)), "camera"),
+    lambda: failure_rate(np.ones((1, 2, 3)), np.ones((1, 2, 3)), threshold_mm=-1.0),
+    lambda: summary(np.zeros((2, 23)), np.zeros((2, 23)), np.ones((3, 4, 3)), np.ones((3, 4, 3)),
+                    Camera.default()),
+])
+def test_bad_input_is_a_value_error(call):
+    with pytest.raises(ValueError):
+        call()
