@@ -107,7 +107,47 @@ def _edge_cost(pose, scene, buffers, distance, mark_buf, min_gap, no_edge_penalt
     return total / n
 
 
+@jit
+def _render_labels(pose, scene, buffers, out):
+    """Render class labels into the flat uint8 ``out`` (fully overwritten) and reset the buffers."""
+    _render_pose(pose, scene, buffers)
+    part_buf, depth_buf, bbox = buffers[0], buffers[1], buffers[6]
+    part_label, width = scene[5], scene[7]
+    out[:] = 0
+    for py in range(bbox[1], bbox[3] + 1):
+        row = py * width
+        for x in range(row + bbox[0], row + bbox[2] + 1):
+            p = part_buf[x]
+            if p != 0:
+                out[x] = part_label[p - 1]
+    _raster._clear(part_buf, depth_buf, width, bbox)
+
+
 # ----------------------------------------------------------------------------- public
+class LabelRenderer:
+    """Repeated coloured-silhouette renders into preallocated buffers (no allocation per call).
+
+    Parameters
+    ----------
+    model : BodyModel
+    camera : Camera
+
+    ``renderer(pose)`` returns the class-label image, uint8 (height, width); the array is reused
+    by the next call (copy it to keep it). Not thread-safe: one object per thread.
+    """
+
+    def __init__(self, model: BodyModel, camera: Camera) -> None:
+        self.model, self.camera = model, camera
+        self._scene = _scene(model, camera)
+        self._buffers = _buffers(model, camera)
+        self._out = np.zeros(camera.width * camera.height, np.uint8)
+
+    def __call__(self, pose) -> np.ndarray:
+        _render_labels(check_pose(pose), self._scene, self._buffers, self._out)
+        return self._out.reshape(self.camera.shape)
+
+
+
 def _scene(model: BodyModel, camera: Camera) -> tuple:
     m = model.mesh
     return (model.skeleton.offsets, m.vertices, m.vertex_segment, m.triangles, m.triangle_part,

@@ -2,8 +2,10 @@
 
 Each part is tessellated on a latitude/longitude grid with a single vertex at each pole, so
 every part is a closed, consistently outward-wound mesh (needed for back-face culling and for
-occluding contours). ``resolution`` (longitudes per part) is the level of detail: the number
-of triangles is ``9 * 2 * resolution * rings`` with ``rings = resolution // 2 + 1``.
+occluding contours). ``resolution`` (longitudes per part) is the level of detail: the torso gets
+``resolution`` longitudes and ``resolution // 2 + 1`` latitude rings, smaller parts a fraction
+(:data:`PART_DETAIL`, at least 4 longitudes); a part with n longitudes and r rings has
+``2 n r`` triangles.
 """
 from __future__ import annotations
 
@@ -28,6 +30,13 @@ PART_SHAPES = MappingProxyType({
     "l_upper_arm": (0.45, 1.0, 0.2),
     "l_forearm": (0.45, 1.0, 0.25),
     "l_hand": (0.6, 0.6, 0.0),
+})
+#: Level of detail of each part relative to the torso: small parts need fewer triangles to
+#: look the same in the image, and per-triangle work dominates the rasterizer's time.
+PART_DETAIL = MappingProxyType({
+    "torso": 1.0, "neck": 0.5, "head": 0.75,
+    "r_upper_arm": 0.75, "r_forearm": 0.75, "r_hand": 0.5,
+    "l_upper_arm": 0.75, "l_forearm": 0.75, "l_hand": 0.5,
 })
 #: Smallest and largest accepted resolution (longitudes per part).
 MIN_RESOLUTION = 4
@@ -128,6 +137,11 @@ class BodyMesh:
         return int(self.triangles.shape[0])
 
 
+def part_resolution(part: str, resolution: int) -> int:
+    """Longitudes of ``part`` at mesh ``resolution`` (see :data:`PART_DETAIL`)."""
+    return max(MIN_RESOLUTION, int(round(resolution * PART_DETAIL[part])))
+
+
 def build_mesh(dims: BodyDimensions, resolution: int = 12) -> BodyMesh:
     """Tessellate every body part.
 
@@ -135,7 +149,7 @@ def build_mesh(dims: BodyDimensions, resolution: int = 12) -> BodyMesh:
     ----------
     dims : BodyDimensions
     resolution : int
-        Longitudes per part, in [MIN_RESOLUTION, MAX_RESOLUTION]; 12 gives 1,512 triangles.
+        Torso longitudes, in [MIN_RESOLUTION, MAX_RESOLUTION]; 12 gives 832 triangles.
 
     Returns
     -------
@@ -153,7 +167,7 @@ def build_mesh(dims: BodyDimensions, resolution: int = 12) -> BodyMesh:
         seg = SEGMENT_NAMES.index(PART_SEGMENT[name])
         e_long, e_cross, taper = PART_SHAPES[name]
         v, t = part_mesh(size.length, size.width, size.depth, e_long=e_long, e_cross=e_cross,
-                         taper=taper, resolution=int(resolution), start=spans[p, 0],
+                         taper=taper, resolution=part_resolution(name, resolution), start=spans[p, 0],
                          axis_sign=SEGMENT_AXIS_SIGN[seg])
         verts.append(v)
         vseg.append(np.full(len(v), seg, dtype=np.int64))
@@ -167,7 +181,12 @@ def build_mesh(dims: BodyDimensions, resolution: int = 12) -> BodyMesh:
 
 
 def resolution_for_image(width: int, height: int) -> int:
-    """Level of detail matched to the image size: about one mesh longitude per 13 pixels of
-    image width, clamped to [8, 24] (8 → 720 triangles at 160x120, 24 at 640x480 → 5,616... see
-    :func:`build_mesh`). Per-triangle work dominates small images, so fewer triangles there."""
-    return int(np.clip(round(width / 13.0), 8, 24))
+    """Mesh level of detail matched to the image size.
+
+    Per-triangle work dominates small images, so the triangle count grows with the image:
+    ``resolution = 8 * sqrt(max(width, height) / 160)`` clamped to [8, 24], i.e. 8 (392
+    triangles) at 160x120, 11 (696) at 320x240 and 16 (1,472) at 640x480.
+    """
+    if width < 1 or height < 1:
+        raise ValueError(f"image size must be positive, got {width}x{height}")
+    return int(np.clip(round(8.0 * np.sqrt(max(width, height) / 160.0)), 8, 24))

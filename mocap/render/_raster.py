@@ -129,21 +129,24 @@ def _rasterize(xs, ys, iz, triangles, triangle_part, width, height, cull,
         dzdy = ((x1 - x0) * (z2 - z0) - (x2 - x0) * (z1 - z0)) / fa * S
         z_row = z0 + (dzdx * (sx - x0) + dzdy * (sy - y0)) / S
         drawn = False
+        part_id = np.uint8(triangle_part[t] + 1)
         for py in range(py0, py1 + 1):
             w0, w1, w2 = w0_row, w1_row, w2_row
             zz = z_row
             row = py * width
             for px in range(px0, px1 + 1):
-                if (w0 | w1 | w2) >= 0:
-                    idx = row + px
-                    if want_count:
-                        count_buf[idx] += 1
-                    if zz > depth_buf[idx]:
-                        depth_buf[idx] = zz
-                        part_buf[idx] = triangle_part[t] + 1
-                        if want_tri:
-                            tri_buf[idx] = t
-                        drawn = True
+                # branch-free: which pixels are inside is unpredictable, so select, don't jump
+                idx = row + px
+                inside = (w0 | w1 | w2) >= 0
+                old_z = depth_buf[idx]
+                win = inside & (zz > old_z)
+                depth_buf[idx] = np.float32(zz) if win else old_z
+                part_buf[idx] = part_id if win else part_buf[idx]
+                drawn |= win
+                if want_tri:
+                    tri_buf[idx] = t if win else tri_buf[idx]
+                if want_count:
+                    count_buf[idx] += 1 if inside else 0
                 w0 -= a12y * S
                 w1 -= a20y * S
                 w2 -= a01y * S

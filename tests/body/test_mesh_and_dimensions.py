@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given, strategies as st
 
 from mocap.body import PART_NAMES, BodyDimensions, BodyModel, PartSize, build_mesh
-from mocap.body.mesh import part_mesh, signed_volume
+from mocap.body.mesh import part_mesh, part_resolution, signed_volume
 
 
 def edge_directions(triangles):
@@ -16,8 +16,12 @@ def edge_directions(triangles):
 @pytest.mark.parametrize("resolution", [4, 8, 12, 33])
 def test_every_part_is_closed_and_outward(resolution):
     mesh = build_mesh(BodyDimensions(), resolution)
-    rings = resolution // 2 + 1
-    assert mesh.n_triangles == len(PART_NAMES) * 2 * resolution * rings
+    expected = 0
+    for part in PART_NAMES:
+        n = part_resolution(part, resolution)
+        expected += 2 * n * (n // 2 + 1)
+    assert mesh.n_triangles == expected
+    assert part_resolution("torso", resolution) == resolution
     for p in range(len(PART_NAMES)):
         tris = mesh.triangles[mesh.triangle_part == p]
         directed = edge_directions(tris)

@@ -1,0 +1,216 @@
+"""``python -m mocap bench``: medians of every stage at every resolution (DESIGN.md section 6).
+
+Stages (JSON ``stage`` names): ``render`` (pose + rasterize the label image), ``cost_region``
+(render + non-overlapping ratio), ``cost_edge`` (render + mean edge distance),
+``llvmpipe_render`` (the same mesh through OpenGL on Mesa llvmpipe + read-back, when the
+``bench`` extra is installed), ``prepare_frame`` and its parts ``prepare_background``,
+``prepare_colour``, ``prepare_edges``, ``prepare_distance``, and ``frame_100`` / ``frame_500``
+(a whole frame of registration, image side included, at that many cost evaluations).
+
+Everything runs on one core (the process is pinned to one CPU where the OS allows, llvmpipe
+gets one thread), after a warm-up call that also triggers Numba compilation.
+"""
+from __future__ import annotations
+
+import gc
+import json
+import os
+import platform
+import sys
+import time
+from dataclasses import asdict, dataclass
+from typing import Callable, Sequence
+
+import numpy as np
+
+#: Resolutions of the render and cost stages.
+RENDER_SIZES: tuple[tuple[int, int], ...] = ((160, 120), (320, 240), (640, 480))
+#: Resolutions of the image-processing stages (the paper's Table 2).
+TABLE2_SIZES: tuple[tuple[int, int], ...] = ((160, 120), (256, 256), (320, 240), (480, 480), (512, 512), (640, 480))
+
+
+@dataclass(frozen=True)
+class BenchRow:
+    """One timed stage. Times in microseconds."""
+
+    stage: str
+    width: int
+    height: int
+    triangles: int
+    median_us: float
+    p10_us: float
+    p90_us: float
+    runs: int
+
+
+def time_calls(call: Callable[[int], object], *, min_runs: int, min_seconds: float) -> np.ndarray:
+    """Time ``call(i)`` for i = 0, 1, ... until both ``min_runs`` and ``min_seconds`` are reached.
+
+    Returns
+    -------
+    ndarray, shape (runs,), float64, microseconds
+    """
+    call(0)                                   # warm-up (and JIT compilation)
+    times = []
+    start = time.perf_counter()
+    gc_was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        i = 0
+        while i < min_runs or time.perf_counter() - start < min_seconds:
+            t0 = time.perf_counter_ns()
+            call(i)
+            times.append(time.perf_counter_ns() - t0)
+            i += 1
+    finally:
+        if gc_was_enabled:
+            gc.enable()
+    return np.asarray(times, dtype=np.float64) / 1000.0
+
+
+def _row(stage: str, size: tuple[int, int], triangles: int, times_us: np.ndarray) -> BenchRow:
+    p10, med, p90 = np.percentile(times_us, [10, 50, 90])
+    return BenchRow(stage, size[0], size[1], int(triangles), float(med), float(p10), float(p90), int(times_us.size))
+
+
+def _poses(n: int, seed: int = 0) -> list[np.ndarray]:
+    """Poses around the neutral one, as an optimiser would try them."""
+    from mocap.body import JOINT_LIMITS, clamp_to_limits, neutral_pose
+    rng = np.random.default_rng(seed)
+    base = neutral_pose()
+    out = []
+    for _ in range(n):
+        q = base.copy()
+        q[:3] += rng.normal(0.0, 0.02, 3)
+        q[3:] += rng.normal(0.0, 0.15, 20)
+        out.append(clamp_to_limits(q, JOINT_LIMITS))
+    return out
+
+
+def render_rows(sizes: Sequence[tuple[int, int]], *, min_runs: int, min_seconds: float,
+                with_llvmpipe: bool) -> tuple[list[BenchRow], list[str]]:
+    """Rows of the stages ``render``, ``cost_region``, ``cost_edge`` and ``llvmpipe_render``."""
+    from scipy import ndimage
+
+    from mocap.body import BodyModel, neutral_pose, resolution_for_image
+    from mocap.cost import EdgeCost, LabelRenderer, RegionCost
+    from mocap.render import Camera, render
+
+    rows: list[BenchRow] = []
+    notes: list[str] = []
+    poses = _poses(256)
+    pick = lambda i: poses[i % len(poses)]
+    for size in sizes:
+        camera = Camera.default(*size)
+        model = BodyModel.build(resolution=resolution_for_image(*size))
+        tri = model.mesh.n_triangles
+        target = render(neutral_pose(), model, camera)
+        distance = ndimage.distance_transform_edt(~target.edges).astype(np.float32)
+        labels = LabelRenderer(model, camera)
+        region = RegionCost(target.labels, model, camera)
+        edge = EdgeCost(distance, model, camera)
+        rows.append(_row("render", size, tri, time_calls(lambda i: labels(pick(i)), min_runs=min_runs,
+                                                          min_seconds=min_seconds)))
+        rows.append(_row("cost_region", size, tri, time_calls(lambda i: region(pick(i)), min_runs=min_runs,
+                                                               min_seconds=min_seconds)))
+        rows.append(_row("cost_edge", size, tri, time_calls(lambda i: edge(pick(i)), min_runs=min_runs,
+                                                             min_seconds=min_seconds)))
+        if with_llvmpipe:
+            try:
+                from mocap.render.gl_reference import GLRenderer
+                gl = GLRenderer(model, camera, threads=1)
+            except RuntimeError as exc:
+                notes.append(f"llvmpipe rows skipped: {exc}")
+                with_llvmpipe = False
+                continue
+            try:
+                rows.append(_row("llvmpipe_render", size, tri, time_calls(lambda i: gl.render_labels(pick(i)),
+                                                                          min_runs=min_runs, min_seconds=min_seconds)))
+                if len(notes) == 0 or not notes[0].startswith("llvmpipe renderer"):
+                    notes.insert(0, f"llvmpipe renderer: {gl.renderer_name}, LP_NUM_THREADS=1")
+            finally:
+                gl.release()
+    return rows, notes
+
+
+def environment() -> tuple[dict, str]:
+    """Versions of the libraries that matter and the CPU model."""
+    import numba
+    import scipy
+    import skimage
+
+    import mocap
+    versions = {"python": platform.python_version(), "mocap": mocap.__version__, "numpy": np.__version__,
+                "numba": numba.__version__, "scipy": scipy.__version__, "scikit-image": skimage.__version__}
+    try:
+        import moderngl
+        versions["moderngl"] = moderngl.__version__
+    except ImportError:
+        pass
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return versions, cpu
+
+
+def pin_to_one_core() -> bool:
+    """Pin this process to one CPU (Linux); returns whether it could."""
+    if not hasattr(os, "sched_setaffinity"):
+        return False
+    try:
+        cpus = sorted(os.sched_getaffinity(0))
+        os.sched_setaffinity(0, {cpus[-1]})
+        return True
+    except OSError:
+        return False
+
+
+def format_table(rows: Sequence[BenchRow], notes: Sequence[str]) -> str:
+    """Rows as an aligned text table, plus our-vs-llvmpipe ratios."""
+    lines = [f"{'stage':<20}{'size':>10}{'triangles':>11}{'median µs':>12}{'p10 µs':>10}{'p90 µs':>10}{'runs':>7}"]
+    for r in rows:
+        lines.append(f"{r.stage:<20}{f'{r.width}x{r.height}':>10}{r.triangles:>11}{r.median_us:>12.1f}"
+                     f"{r.p10_us:>10.1f}{r.p90_us:>10.1f}{r.runs:>7}")
+    by = {(r.stage, r.width, r.height): r for r in rows}
+    for (stage, w, h), r in by.items():
+        if stage == "llvmpipe_render" and ("render", w, h) in by:
+            ours = by[("render", w, h)].median_us
+            lines.append(f"llvmpipe / ours (render + label image) at {w}x{h}: {r.median_us / ours:.1f}x")
+    lines += [f"note: {n}" for n in notes]
+    return "\n".join(lines)
+
+
+def run_benchmark(*, quick: bool = False, with_llvmpipe: bool = True, stages: Sequence[str] = ("render",),
+                  progress: bool = True) -> dict:
+    """Run the benchmark and return the JSON-ready result of DESIGN.md section 6."""
+    from tqdm import tqdm
+
+    min_runs, min_seconds = (20, 0.02) if quick else (300, 1.0)
+    rows: list[BenchRow] = []
+    notes: list[str] = []
+    pinned = pin_to_one_core()
+    if not pinned:
+        notes.append("could not pin to one core")
+    groups = {"render": lambda: render_rows(RENDER_SIZES, min_runs=min_runs, min_seconds=min_seconds,
+                                            with_llvmpipe=with_llvmpipe)}
+    for name in tqdm(stages, desc="bench", unit="group", disable=not progress, file=sys.stderr):
+        if name not in groups:
+            raise ValueError(f"unknown benchmark group {name!r}; known: {', '.join(groups)}")
+        r, n = groups[name]()
+        rows += r
+        notes += n
+    versions, cpu = environment()
+    return {"rows": [asdict(r) for r in rows], "versions": versions, "cpu": cpu, "notes": notes}
+
+
+def print_result(result: dict, as_json: bool) -> None:
+    if as_json:
+        print(json.dumps(result, indent=2))
+    else:
+        print(format_table([BenchRow(**r) for r in result["rows"]], result.get("notes", [])))
