@@ -65,3 +65,99 @@ def naive_mean_edge_distance(distance, edges, penalty):
 
 
 # --- imaging ---
+
+
+def naive_change_mask(frame, background, change_threshold, shadow_min_brightness,
+                      shadow_max_brightness, shadow_max_chroma, chroma_noise):
+    """Raw background-subtraction test (before clean-up), pixel by pixel in float64 0-255."""
+    scale_f = 255.0 if frame.dtype.kind == "f" else 1.0
+    scale_b = 255.0 if background.dtype.kind == "f" else 1.0
+    out = np.zeros(frame.shape[:2], dtype=bool)
+    for y in range(frame.shape[0]):
+        for x in range(frame.shape[1]):
+            i = frame[y, x].astype(np.float64) * scale_f
+            e = background[y, x].astype(np.float64) * scale_b
+            if np.linalg.norm(i - e) <= change_threshold:
+                continue
+            if not e.any():
+                out[y, x] = True
+                continue
+            alpha = i @ e / (e @ e)
+            if not shadow_min_brightness <= alpha <= shadow_max_brightness:
+                out[y, x] = True
+                continue
+            allowed = chroma_noise + shadow_max_chroma * alpha * np.linalg.norm(e)
+            out[y, x] = np.linalg.norm(i - alpha * e) > allowed
+    return out
+
+
+def naive_hsv(image):
+    """HSV by scikit-image, hue in degrees."""
+    from skimage.color import rgb2hsv
+
+    hsv = rgb2hsv(image)
+    hsv[..., 0] *= 360.0
+    return hsv
+
+
+def naive_classify(image, foreground, means, covariances, threshold, unknown=255):
+    """Most likely Gaussian class per pixel (wrapped hue), by explicit loops."""
+    hsv = naive_hsv(image)
+    out = np.zeros(image.shape[:2], dtype=np.uint8)
+    inv = [np.linalg.inv(c) for c in covariances]
+    logdet = [np.log(np.linalg.det(c)) for c in covariances]
+    for y in range(image.shape[0]):
+        for x in range(image.shape[1]):
+            if not foreground[y, x]:
+                continue
+            best, label = -np.inf, unknown
+            for c in range(len(means)):
+                d = hsv[y, x] - means[c]
+                d[0] = (d[0] + 180.0) % 360.0 - 180.0
+                d2 = d @ inv[c] @ d
+                score = -0.5 * d2 - 0.5 * logdet[c]
+                if d2 <= threshold and score > best:
+                    best, label = score, c + 1
+            out[y, x] = label
+    return out
+
+
+def naive_distance(edges, max_distance, metric="euclidean"):
+    """Distance to the nearest edge by brute force over all edge pixels, truncated.
+
+    ``metric="chamfer34"``: Borgefors' 3-4 path length between two pixels,
+    ``(4 min(dx, dy) + 3 (max - min)) / 3``.
+    """
+    pts = np.argwhere(edges)
+    out = np.full(edges.shape, float(max_distance))
+    for y in range(edges.shape[0]):
+        for x in range(edges.shape[1]):
+            if len(pts) == 0:
+                continue
+            dy = np.abs(pts[:, 0] - y)
+            dx = np.abs(pts[:, 1] - x)
+            if metric == "euclidean":
+                d = np.sqrt(dy * dy + dx * dx)
+            else:
+                lo, hi = np.minimum(dx, dy), np.maximum(dx, dy)
+                d = (4 * lo + 3 * (hi - lo)) / 3.0
+            out[y, x] = min(d.min(), max_distance)
+    return out
+
+
+def naive_deriche_1d(x, a, b):
+    """Deriche causal + anti-causal recursion on a 1-D signal, borders replicated far out."""
+    pad = 200
+    xp = np.concatenate([np.full(pad, x[0]), x, np.full(pad, x[-1])])
+    n = len(xp)
+    y1 = np.zeros(n)
+    y2 = np.zeros(n)
+    for i in range(n):
+        y1[i] = a[0] * xp[i] + (a[1] * xp[i - 1] if i >= 1 else a[1] * xp[0])
+        y1[i] += (b[0] * y1[i - 1] if i >= 1 else 0.0) + (b[1] * y1[i - 2] if i >= 2 else 0.0)
+    for i in range(n - 1, -1, -1):
+        x1 = xp[i + 1] if i + 1 < n else xp[-1]
+        x2 = xp[i + 2] if i + 2 < n else xp[-1]
+        y2[i] = a[2] * x1 + a[3] * x2
+        y2[i] += (b[0] * y2[i + 1] if i + 1 < n else 0.0) + (b[1] * y2[i + 2] if i + 2 < n else 0.0)
+    return (y1 + y2)[pad:pad + len(x)]

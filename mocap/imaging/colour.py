@@ -26,9 +26,11 @@ from mocap.labels import DEFAULT_CLASS_NAMES, MAX_CLASSES, UNKNOWN
 __all__ = ["ColourModel", "learn_colour_model", "detect_face", "rgb_to_hsv", "skin_box_of_face",
            "clothes_box_of_face"]
 
-#: Smallest standard deviations of a class (hue degrees, saturation, value): a uniform
-#: sample must still give an invertible covariance and tolerate sensor noise.
-MIN_STD: tuple[float, float, float] = (2.0, 0.02, 0.02)
+#: Standard deviations added (in quadrature) to every learned class (hue degrees,
+#: saturation, value): a uniform sample must still give an invertible covariance, and the
+#: sample (a face, a patch of chest) is lit more evenly than the whole body, so value (the
+#: brightness) gets the widest allowance.
+MIN_STD: tuple[float, float, float] = (2.0, 0.02, 0.05)
 #: Classes whose mean saturation is below this are achromatic: their hue is noise, so its
 #: variance is set to that of a uniform hue (``360**2 / 12``) and its correlations to 0.
 ACHROMATIC_SATURATION: float = 0.12

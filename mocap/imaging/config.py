@@ -54,9 +54,10 @@ class ImagingConfig:
     edge_sigma : float
         Gaussian smoothing of Canny, in pixels (Deriche uses ``alpha = sqrt(pi) / sigma``).
     edge_low_threshold, edge_high_threshold : float
-        Hysteresis thresholds on the gradient magnitude of the grey image in [0, 1] (the
-        units of :func:`skimage.feature.canny`: a sharp unit step gives about 4 / (sqrt(2 pi) sigma)... of
-        Sobel response; see :func:`mocap.imaging.detect_edges`).
+        Hysteresis thresholds on the gradient magnitude of the grey image in [0, 1], in the
+        units of :func:`skimage.feature.canny` (Sobel response: 8 times the grey-level slope
+        per pixel; a sharp step of contrast ``d`` peaks near ``8 d / (sqrt(2 pi) sigma)``,
+        about ``2.1 d`` at ``sigma = 1.5``).
     edge_dilation : int
         Edges are kept within this many pixels of the foreground.
     distance_method : {'edt', 'chamfer'}
