@@ -1,6 +1,6 @@
 """Frames in and out: images, video files and folders of images, as uint8 RGB.
 
-Reading goes through imageio v3 (Pillow for images, the ffmpeg plugin for videos); writing a
+Reading goes through imageio v3 (its Pillow plugin for images, the ffmpeg plugin for videos); writing a
 video streams frames to ffmpeg through imageio-ffmpeg. Every failure on bad input is a
 ``FileNotFoundError`` (missing path) or a ``ValueError`` with a one-line reason (corrupt file,
 unsupported channels or dtype, frames of different sizes), never a crash deep in a decoder.
@@ -66,7 +66,7 @@ def read_image(path: str | Path, *, allow_gray: bool = False) -> np.ndarray:
     Parameters
     ----------
     path : str or Path
-        PNG, JPEG or any format Pillow reads.
+        PNG, JPEG or any other format Pillow reads.
     allow_gray : bool
         Accept a grayscale image by replicating its channel (off by default: a grayscale
         background for a colour video would silently mark everything as foreground).
@@ -90,7 +90,7 @@ def read_image(path: str | Path, *, allow_gray: bool = False) -> np.ndarray:
     if path.is_dir():
         raise ValueError(f"{path} is a folder, not an image file")
     try:
-        image = iio.imread(path)
+        image = iio.imread(path, plugin="pillow")
     except _DECODE_ERRORS as exc:
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ValueError(f"cannot read image {path}: corrupt or unsupported file ({reason})") \
