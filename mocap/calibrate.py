@@ -94,3 +94,64 @@ class Calibration:
             raise ValueError(f"{path}: not valid JSON ({exc})") from None
         except (ValueError, TypeError, KeyError) as exc:
             raise ValueError(f"{path}: {exc}") from None
+
+
+#: Fewest sample pixels a colour class needs to be learnt.
+MIN_COLOUR_SAMPLES = 12
+
+
+def colour_model_from_pose(frame: np.ndarray, background: np.ndarray | None, model: BodyModel, camera: Camera,
+                           pose, imaging=None):
+    """Learn the colour classes from a frame where the model's pose is known (calibration).
+
+    Each class is sampled from the frame's foreground pixels inside the projection of the
+    model parts of that class (eroded by one pixel so that boundary pixels, mixed with the
+    background, are left out).
+
+    Parameters
+    ----------
+    frame : ndarray, shape (H, W, 3)
+        RGB, uint8 or float in [0, 1].
+    background : ndarray, shape (H, W, 3), or None
+        Empty scene; without it every projected pixel is used.
+    model : BodyModel
+    camera : Camera
+        Must match the frame size.
+    pose : array_like, shape (23,)
+        The actor's pose in ``frame`` (metres, radians).
+    imaging : ImagingConfig, optional
+        Background-subtraction settings.
+
+    Returns
+    -------
+    mocap.imaging.ColourModel
+        Classes ``model.class_names`` in label order.
+
+    Raises
+    ------
+    ValueError
+        If the frame and camera sizes differ or a class has too few sample pixels.
+    """
+    from scipy import ndimage
+
+    from mocap.imaging import ColourModel, subtract_background
+    from mocap.render import render
+
+    frame = np.asarray(frame)
+    if frame.ndim != 3 or frame.shape[:2] != camera.shape:
+        raise ValueError(f"frame of shape {frame.shape} does not match the camera ({camera.height}, {camera.width}, 3)")
+    foreground = np.ones(camera.shape, bool)
+    if background is not None:
+        foreground = subtract_background(frame, background, imaging)
+    labels = render(pose, model, camera).labels
+    samples = {}
+    for c, name in enumerate(model.class_names, start=1):
+        inside = labels == c
+        mask = ndimage.binary_erosion(inside) & foreground
+        if np.count_nonzero(mask) < MIN_COLOUR_SAMPLES:
+            mask = inside & foreground
+        if np.count_nonzero(mask) < MIN_COLOUR_SAMPLES:
+            raise ValueError(f"the calibrated model covers only {np.count_nonzero(mask)} foreground pixels of "
+                             f"class {name!r} in the first frame; is the initial pose right?")
+        samples[name] = frame[mask]
+    return ColourModel.from_samples(samples)

@@ -80,9 +80,28 @@ class PoseTable:
         """Write the table as CSV, atomically."""
         write_text_atomic(path, self.to_csv_text())
 
+    def append_to(self, path: str | Path) -> None:
+        """Append the rows to a CSV journal (header first if the file is new), flushed to disk.
+
+        A run that is killed leaves at most a partial last line, which :meth:`read` with
+        ``tolerate_partial`` drops.
+        """
+        import os
+
+        path = Path(path)
+        text = self.to_csv_text()
+        if path.exists() and path.stat().st_size > 0:
+            text = text.split("\n", 1)[1]
+        with path.open("a", newline="") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+
     @classmethod
-    def read(cls, path: str | Path) -> "PoseTable":
-        """Read a table written by :meth:`write` (extra columns come back as float64)."""
+    def read(cls, path: str | Path, *, tolerate_partial: bool = False) -> "PoseTable":
+        """Read a table written by :meth:`write` or :meth:`append_to` (extra columns come back
+        as float64). With ``tolerate_partial`` a malformed last row (a run killed while writing
+        it) is dropped instead of raising."""
         path = Path(path)
         with path.open(newline="") as fh:
             reader = csv.reader(fh)
@@ -94,6 +113,13 @@ class PoseTable:
                 raise ValueError(f"{path}: not a pose table (columns must start with frame, the 23 "
                                  f"parameters and the joint columns)")
             rows = [r for r in reader if r]
+        if tolerate_partial and rows:
+            try:
+                if len(rows[-1]) != len(header):
+                    raise ValueError
+                [float(v) for v in rows[-1]]
+            except ValueError:
+                rows = rows[:-1]
         try:
             data = np.array(rows, dtype=np.float64).reshape(len(rows), len(header))
         except ValueError as exc:
