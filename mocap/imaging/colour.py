@@ -31,9 +31,12 @@ __all__ = ["ColourModel", "learn_colour_model", "detect_face", "rgb_to_hsv", "sk
 #: sample (a face, a patch of chest) is lit more evenly than the whole body, so value (the
 #: brightness) gets the widest allowance.
 MIN_STD: tuple[float, float, float] = (2.0, 0.02, 0.05)
-#: Classes whose mean saturation is below this are achromatic: their hue is noise, so its
-#: variance is set to that of a uniform hue (``360**2 / 12``) and its correlations to 0.
+#: A pixel is achromatic when its saturation is below ACHROMATIC_SATURATION or its chroma
+#: ``s * v = max - min`` (RGB in [0, 1]) is below ACHROMATIC_CHROMA (dark pixels: there hue
+#: and saturation are sensor noise). A class whose sample is mostly achromatic gets the hue
+#: variance of a uniform hue (``360**2 / 12``) and no hue correlations: hue is ignored.
 ACHROMATIC_SATURATION: float = 0.12
+ACHROMATIC_CHROMA: float = 0.06
 _UNIFORM_HUE_VAR = 360.0 ** 2 / 12.0
 #: Fewest sample pixels a class is learned from.
 MIN_SAMPLES: int = 20
@@ -151,12 +154,16 @@ def _mahalanobis2(hsv: np.ndarray, mean: np.ndarray, cov: np.ndarray) -> np.ndar
     return np.einsum("ni,ij,nj->n", dev, np.linalg.inv(cov), dev)
 
 
+def _chromatic(hsv: np.ndarray) -> np.ndarray:
+    return (hsv[:, 1] >= ACHROMATIC_SATURATION) & (hsv[:, 1] * hsv[:, 2] >= ACHROMATIC_CHROMA)
+
+
 def _gaussian(hsv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Mean (circular hue) and regularised covariance of HSV samples ``(N, 3)``."""
     mean = np.array([_circular_mean_degrees(hsv[:, 0]), hsv[:, 1].mean(), hsv[:, 2].mean()])
     dev = _deviations(hsv, mean)
     cov = dev.T @ dev / max(len(hsv) - 1, 1)
-    if mean[1] < ACHROMATIC_SATURATION:
+    if _chromatic(hsv).mean() < 0.5:
         cov[0, :] = 0.0
         cov[:, 0] = 0.0
         cov[0, 0] = _UNIFORM_HUE_VAR
@@ -174,7 +181,7 @@ def _fit_mode(hsv: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
     if len(hsv) < MIN_SAMPLES:
         raise ValueError(f"colour class {name!r}: only {len(hsv)} sample pixels "
                          f"(need {MIN_SAMPLES}); enlarge its sample box")
-    chromatic = hsv[:, 1] >= ACHROMATIC_SATURATION
+    chromatic = _chromatic(hsv)
     hue_bin = np.where(chromatic, np.floor(hsv[:, 0] / 30.0).astype(int) % 12 + 1, 0)
     sat_bin = np.minimum((hsv[:, 1] * 6).astype(int), 5)
     val_bin = np.minimum((hsv[:, 2] * 6).astype(int), 5)
@@ -521,7 +528,8 @@ def learn_colour_model(frame: np.ndarray, background: np.ndarray | None = None,
                        if b is None]
             raise ValueError(
                 "no face found in the frame to learn the colour model from; pass "
-                + " and ".join(missing) + " as (row, col, height, width) sample boxes")
+                + " and ".join(missing) + " as (row, col, height, width) sample boxes "
+                "(command line: --skin-box/--clothes-box ROW,COL,HEIGHT,WIDTH)")
         skin_box = skin_box if skin_box is not None else skin_box_of_face(face)
         if clothes_box is None:
             try:

@@ -60,6 +60,9 @@ class ImagingConfig:
         about ``2.1 d`` at ``sigma = 1.5``).
     edge_dilation : int
         Edges are kept within this many pixels of the foreground.
+    silhouette_edges : bool
+        Add the outline of the foreground mask to the edges (it survives where actor and
+        background have the same grey level and the image edge vanishes).
     distance_method : {'edt', 'chamfer'}
         Exact Euclidean distance (scipy) or Borgefors' chamfer 3-4 (compiled two-pass).
     max_distance : float
@@ -67,7 +70,7 @@ class ImagingConfig:
     """
 
     change_threshold: float = 30.0
-    shadow_min_brightness: float = 0.6
+    shadow_min_brightness: float = 0.7
     shadow_max_brightness: float = 1.25
     shadow_max_chroma: float = 0.05
     chroma_noise: float = 6.0
@@ -78,9 +81,10 @@ class ImagingConfig:
     colour_threshold: float = DEFAULT_COLOUR_THRESHOLD
     edge_method: str = "canny"
     edge_sigma: float = 1.5
-    edge_low_threshold: float = 0.04
-    edge_high_threshold: float = 0.10
+    edge_low_threshold: float = 0.08
+    edge_high_threshold: float = 0.20
     edge_dilation: int = 4
+    silhouette_edges: bool = True
     distance_method: str = "edt"
     max_distance: float = 20.0
 
@@ -93,6 +97,9 @@ class ImagingConfig:
                 if not math.isfinite(value):
                     raise ValueError(f"{f.name} must be finite, got {value!r}")
                 object.__setattr__(self, f.name, float(value))
+            elif f.type in ("bool", bool):
+                if not isinstance(value, bool):
+                    raise ValueError(f"{f.name} must be true or false, got {value!r}")
             elif f.type in ("int", int):
                 if isinstance(value, bool) or not isinstance(value, int):
                     raise ValueError(f"{f.name} must be an integer, got {value!r}")

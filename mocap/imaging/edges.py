@@ -220,7 +220,7 @@ def _deriche_edges(grey, sigma, low, high):
 
 # --------------------------------------------------------------------------- edges
 
-def _edges(frame, scale, foreground, method, sigma, low, high, dilation):
+def _edges(frame, scale, foreground, method, sigma, low, high, dilation, silhouette):
     h, w = frame.shape[:2]
     if foreground is None:
         region = None
@@ -241,8 +241,13 @@ def _edges(frame, scale, foreground, method, sigma, low, high, dilation):
                               mode="nearest")
     else:
         found = _deriche_edges(grey, sigma, low, high)
+    if region is not None:
+        found &= region
+        if silhouette:
+            inner = foreground[box]
+            found |= inner & ~ndi.minimum_filter(inner, size=3, mode="nearest")
     out = np.zeros((h, w), dtype=bool)
-    out[box] = found if region is None else found & region
+    out[box] = found
     return out
 
 
@@ -250,7 +255,8 @@ def detect_edges(frame: np.ndarray, foreground: np.ndarray | None = None, *,
                  method: str = _DEFAULTS.edge_method, sigma: float = _DEFAULTS.edge_sigma,
                  low_threshold: float = _DEFAULTS.edge_low_threshold,
                  high_threshold: float = _DEFAULTS.edge_high_threshold,
-                 dilation: int = _DEFAULTS.edge_dilation) -> np.ndarray:
+                 dilation: int = _DEFAULTS.edge_dilation,
+                 silhouette: bool = _DEFAULTS.silhouette_edges) -> np.ndarray:
     """Edges of ``frame`` near the foreground.
 
     The grey image (:func:`skimage.color.rgb2gray`) of the foreground's bounding box is
@@ -276,6 +282,10 @@ def detect_edges(frame: np.ndarray, foreground: np.ndarray | None = None, *,
         ``8 d / (sqrt(2 pi) sigma)``).
     dilation : int
         Edges farther than this (pixels, chessboard) from the foreground are dropped.
+    silhouette : bool
+        Add the outline of ``foreground`` (its pixels with a background 8-neighbour; the
+        image border does not count) to the edges, so that a silhouette the grey image does
+        not show (actor and background of equal luminance) still counts.
 
     Returns
     -------
@@ -294,7 +304,7 @@ def detect_edges(frame: np.ndarray, foreground: np.ndarray | None = None, *,
     if isinstance(dilation, bool) or not isinstance(dilation, (int, np.integer)) or dilation < 0:
         raise ValueError(f"dilation must be a non-negative integer, got {dilation!r}")
     return _edges(frame, scale, foreground, method, float(sigma), float(low_threshold),
-                  float(high_threshold), int(dilation))
+                  float(high_threshold), int(dilation), bool(silhouette))
 
 
 # --------------------------------------------------------------------------- distance

@@ -111,7 +111,8 @@ def prepare_frame(frame: np.ndarray, background: np.ndarray | None, colour_model
         colour_time, background_time = t1 - t0, t2 - t1
     is_empty = not foreground.any()
     edges = _edges(frame, scale, foreground, config.edge_method, config.edge_sigma,
-                   config.edge_low_threshold, config.edge_high_threshold, config.edge_dilation)
+                   config.edge_low_threshold, config.edge_high_threshold, config.edge_dilation,
+                   config.silhouette_edges)
     t3 = clock()
     distance = _distance(edges, config.distance_method, config.max_distance)
     t4 = clock()

@@ -77,7 +77,7 @@ def synthetic_scene_with_labels(width: int, height: int, seed: int = 0, *,
         Standard deviation of the Gaussian sensor noise, 0-255 units, on frame and
         background independently.
     shadow : bool
-        Cast a soft shadow (brightness times about 0.7) of the person on the background.
+        Cast a soft shadow (brightness times about 0.75) of the person on the background.
 
     Returns
     -------
@@ -157,7 +157,7 @@ def synthetic_scene_with_labels(width: int, height: int, seed: int = 0, *,
         offset = (int(0.02 * h), int(0.12 * w))
         cast = ndi.shift(mask.astype(float), offset, order=0)
         cast = ndi.gaussian_filter(cast, 0.015 * s + 0.5)
-        frame *= (1.0 - 0.3 * cast)[..., None]
+        frame *= (1.0 - 0.25 * cast)[..., None]
     frame[mask] = person[mask]
 
     frame = np.clip(np.round(frame + rng.normal(0, noise, frame.shape)), 0, 255).astype(np.uint8)

@@ -39,7 +39,7 @@ def test_unknown_keys_are_rejected(tmp_path):
     {"shadow_min_brightness": 1.5, "shadow_max_brightness": 1.2}, {"opening_size": 0},
     {"opening_size": 2.5}, {"edge_method": "sobel"}, {"distance_method": "l1"},
     {"edge_low_threshold": 0.3, "edge_high_threshold": 0.1}, {"min_object_fraction": 1.0},
-    {"colour_threshold": "big"}, {"edge_dilation": True},
+    {"colour_threshold": "big"}, {"edge_dilation": True}, {"silhouette_edges": 1},
 ])
 def test_invalid_values_are_rejected(kwargs):
     with pytest.raises(ValueError):

@@ -105,12 +105,27 @@ def test_edges_are_kept_only_near_the_foreground(method):
     image[:, :15] = rng.integers(0, 256, (80, 15, 3))  # texture away from the person
     foreground = inside.copy()
     everywhere = detect_edges(image, method=method)
-    near = detect_edges(image, foreground, method=method, dilation=3)
+    near = detect_edges(image, foreground, method=method, dilation=3, silhouette=False)
     assert everywhere[:, :15].sum() > 50 and near[:, :15].sum() == 0
     from scipy import ndimage as ndi
     allowed = ndi.binary_dilation(foreground, np.ones((7, 7), bool))
     assert not (near & ~allowed).any()
     np.testing.assert_array_equal(near, everywhere & allowed)
+
+
+def test_silhouette_edges_outline_an_isoluminant_person():
+    # actor and background have the same grey level: only the mask outline can be an edge
+    from skimage.color import rgb2gray
+
+    _, inside, _ = _disk_image()
+    image = np.where(inside[..., None], (150, 100, 100), (100, 100, 150)).astype(np.uint8)
+    grey = rgb2gray(image)
+    assert np.ptp(grey) < 0.05  # below the hysteresis thresholds' step
+    assert not detect_edges(image, inside, silhouette=False).any()
+    edges = detect_edges(image, inside)
+    from scipy import ndimage as ndi
+    outline = inside & ~ndi.binary_erosion(inside, np.ones((3, 3), bool), border_value=1)
+    np.testing.assert_array_equal(edges, outline)
 
 
 def test_empty_foreground_has_no_edges():
