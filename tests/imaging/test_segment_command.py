@@ -1,0 +1,93 @@
+"""``python -m mocap segment`` end to end on a tiny synthetic clip, and its errors."""
+from __future__ import annotations
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+from mocap.cli import main
+from mocap.imaging import ColourModel, ImagingConfig
+from mocap.imaging.colour import skin_box_of_face
+from mocap.imaging.testing import synthetic_scene_with_labels
+from mocap.io.video import count_frames, read_image
+
+
+@pytest.fixture()
+def clip(tmp_path):
+    """Folder of 4 synthetic frames (one empty) and the background image."""
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    scenes = [synthetic_scene_with_labels(96, 72, seed) for seed in range(3)]
+    for i, scene in enumerate(scenes):
+        iio.imwrite(frames / f"{i:06d}.png", scene.frame)
+    iio.imwrite(frames / "000003.png", scenes[0].background)  # nobody in the scene
+    iio.imwrite(tmp_path / "background.png", scenes[0].background)
+    return tmp_path, scenes[0]
+
+
+def _boxes(scene):
+    s = skin_box_of_face(scene.face_box)
+    c = scene.clothes_box
+    return ["--skin-box", ",".join(map(str, s)), "--clothes-box", ",".join(map(str, c))]
+
+
+def test_segment_writes_everything(clip, capsys):
+    root, scene = clip
+    out = root / "out"
+    status = main(["segment", str(root / "frames"), "--background", str(root / "background.png"),
+                   "--out", str(out), *_boxes(scene)])
+    assert status == 0
+    for sub in ("labels", "edges", "distance"):
+        assert sorted(p.name for p in (out / sub).iterdir()) == [f"{i:06d}.png" for i in range(4)]
+    labels = read_image(out / "labels" / "000000.png")
+    assert labels.shape == (72, 96, 3)
+    assert (labels.reshape(-1, 3) != 0).any(axis=1).mean() > 0.1  # a coloured person
+    assert not read_image(out / "labels" / "000003.png").any()  # the empty frame
+    assert count_frames(out / "segment.mp4") == 4
+    assert ColourModel.from_json(out / "colour_model.json").names == ("skin", "clothes")
+    assert ImagingConfig.from_json(out / "imaging.json") == ImagingConfig()
+    printed = capsys.readouterr().out
+    assert "segmented 4 frames (1 with nobody in them)" in printed
+
+
+def test_segment_with_median_background_and_saved_model(clip):
+    root, scene = clip
+    first = root / "first"
+    assert main(["segment", str(root / "frames"), "--background", str(root / "background.png"),
+                 "--out", str(first), "--max-frames", "1", *_boxes(scene)]) == 0
+    second = root / "second"
+    # frames 3..3 are the empty view; the colour model is reused
+    assert main(["segment", str(root / "frames"), "--background-frames", "3:4", "--out",
+                 str(second), "--colour-model", str(first / "colour_model.json"), "--start", "1",
+                 "--max-frames", "2"]) == 0
+    assert sorted(p.name for p in (second / "labels").iterdir()) == ["000001.png", "000002.png"]
+
+
+@pytest.mark.parametrize("extra, message", [
+    ([], "--background IMG"),
+    (["--background", "missing.png"], "no such file"),
+    (["--background", "corrupt.png"], "corrupt"),
+    (["--background", "small.png"], "background is 40x30 but the video is 96x72"),
+    (["--background", "gray.png"], "grayscale"),
+    (["--background", "background.png", "--start", "99"], "past the end"),
+    (["--background", "background.png", "--config", "bad.json"], "unknown imaging config"),
+    (["--background", "background.png"], "no face found"),
+])
+def test_segment_errors_exit_2_with_one_line(clip, capsys, monkeypatch, extra, message):
+    root, _ = clip
+    monkeypatch.chdir(root)
+    (root / "corrupt.png").write_bytes(b"\x89PNG\r\n\x1a\n" + b"x" * 50)
+    iio.imwrite(root / "small.png", np.zeros((30, 40, 3), np.uint8))
+    iio.imwrite(root / "gray.png", np.zeros((72, 96), np.uint8))
+    (root / "bad.json").write_text('{"max_distnace": 3}')
+    status = main(["segment", str(root / "frames"), "--out", str(root / "o"), *extra])
+    assert status == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and message in err and "\n" not in err
+
+
+def test_segment_rejects_malformed_boxes(clip):
+    root, _ = clip
+    with pytest.raises(SystemExit):
+        main(["segment", str(root / "frames"), "--background", str(root / "background.png"),
+              "--skin-box", "1,2,3"])
