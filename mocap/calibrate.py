@@ -155,3 +155,152 @@ def colour_model_from_pose(frame: np.ndarray, background: np.ndarray | None, mod
                              f"class {name!r} in the first frame; is the initial pose right?")
         samples[name] = frame[mask]
     return ColourModel.from_samples(samples)
+
+
+# ----------------------------------------------------------------------------- automatic calibration
+#: Pose parameters fitted by automatic calibration (a roughly neutral posture is assumed).
+CALIBRATED_POSE_PARAMETERS: tuple[str, ...] = (
+    "root_x", "root_y", "root_z", "chest_yaw", "chest_roll",
+    "r_shoulder_flex", "r_shoulder_abd", "r_elbow_flex", "l_shoulder_flex", "l_shoulder_abd", "l_elbow_flex",
+)
+#: Body proportions fitted by automatic calibration: factor name -> (parts, sizes it scales).
+PROPORTION_FACTORS = MappingProxyType({
+    "torso_width": (("torso",), ("width", "depth")),
+    "torso_length": (("torso",), ("length",)),
+    "arm_length": (("r_upper_arm", "r_forearm", "l_upper_arm", "l_forearm"), ("length",)),
+    "arm_width": (("r_upper_arm", "r_forearm", "l_upper_arm", "l_forearm"), ("width", "depth")),
+    "head_size": (("head", "neck"), ("length", "width", "depth")),
+})
+#: Range of every proportion factor relative to the default adult.
+PROPORTION_RANGE = (0.75, 1.35)
+
+
+@dataclass(frozen=True)
+class AutoCalibrationConfig:
+    """Settings of :func:`auto_calibrate`.
+
+    Attributes
+    ----------
+    depth_grid_m : tuple of float, metres
+        Candidate actor depths tried before the simplex search.
+    evaluations : int
+        Cost evaluations of each of the two simplex stages (silhouette, then colours).
+    resolution : int
+        Mesh level of detail used while fitting.
+    """
+
+    depth_grid_m: tuple[float, ...] = tuple(np.round(np.linspace(1.0, 4.0, 16), 3))
+    evaluations: int = 1500
+    resolution: int = 8
+
+
+def _apply_factors(base: BodyDimensions, factors: np.ndarray) -> BodyDimensions:
+    parts = dict(base.parts)
+    for f, (parts_scaled, sizes) in zip(factors, PROPORTION_FACTORS.values()):
+        for p in parts_scaled:
+            s = parts[p]
+            parts[p] = type(s)(**{k: getattr(s, k) * (f if k in sizes else 1.0) for k in ("length", "width", "depth")})
+    return BodyDimensions(parts)
+
+
+def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *, imaging=None,
+                   base_dims: BodyDimensions | None = None, config: AutoCalibrationConfig | None = None,
+                   progress: bool = False) -> Calibration:
+    """Fit body proportions and the initial pose to a first frame with a roughly neutral posture.
+
+    Beyond the paper's manual adjustment (its section 3.1): (1) the foreground silhouette
+    alone, as one class, fixes position, depth and arm pose over a grid of depths and then by
+    downhill simplex over pose and proportions; (2) the colour classes are learnt inside the
+    fitted model's projected parts (:func:`colour_model_from_pose`) and (3) a second simplex
+    refines everything on the two-class label image with the non-overlapping ratio.
+
+    From one view, a larger actor farther away looks the same as a smaller one nearer: the
+    overall scale stays that of ``base_dims`` (default adult proportions) and the fit adjusts
+    the depth and the *relative* proportions (:data:`PROPORTION_FACTORS`, within
+    :data:`PROPORTION_RANGE`).
+
+    Parameters
+    ----------
+    frame, background : ndarray, shape (H, W, 3)
+        First frame and empty scene, RGB uint8 or float in [0, 1].
+    camera : Camera
+        Must match the frame size.
+    imaging : ImagingConfig, optional
+    base_dims : BodyDimensions, optional
+    config : AutoCalibrationConfig, optional
+
+    Returns
+    -------
+    Calibration
+
+    Raises
+    ------
+    ValueError
+        If sizes differ or no actor is visible.
+    """
+    from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX, neutral_pose
+    from mocap.cost import RegionCost
+    from mocap.imaging import ImagingConfig, prepare_frame, subtract_background
+    from mocap.optimize import initial_simplex, minimize
+
+    config = AutoCalibrationConfig() if config is None else config
+    imaging = ImagingConfig() if imaging is None else imaging
+    base = BodyDimensions() if base_dims is None else base_dims
+    frame = np.asarray(frame)
+    if frame.ndim != 3 or frame.shape[:2] != camera.shape:
+        raise ValueError(f"frame of shape {frame.shape} does not match the camera ({camera.height}, {camera.width}, 3)")
+    foreground = subtract_background(frame, background, imaging)
+    if np.count_nonzero(foreground) < 50:
+        raise ValueError("no actor in the first frame (the foreground is empty): cannot calibrate")
+    one_class = {p: "body" for p in PART_NAMES}
+    pose_index = np.array([PARAMETER_INDEX[n] for n in CALIBRATED_POSE_PARAMETERS])
+    n_pose, n_fac = len(pose_index), len(PROPORTION_FACTORS)
+    lower = np.r_[JOINT_LIMITS[pose_index, 0], np.full(n_fac, PROPORTION_RANGE[0])]
+    upper = np.r_[JOINT_LIMITS[pose_index, 1], np.full(n_fac, PROPORTION_RANGE[1])]
+    # a neutral posture is assumed: keep the torso roughly upright and facing the camera
+    for name, limit in (("chest_yaw", 0.6), ("chest_roll", 0.3)):
+        k = CALIBRATED_POSE_PARAMETERS.index(name)
+        lower[k], upper[k] = -limit, limit
+
+    def unpack(x):
+        pose = neutral_pose()
+        pose[pose_index] = x[:n_pose]
+        return pose, _apply_factors(base, x[n_pose:])
+
+    def objective(target, part_class, class_names):
+        def cost(x):
+            pose, dims = unpack(x)
+            model = BodyModel.build(dims, resolution=config.resolution, part_class=part_class, class_names=class_names)
+            return RegionCost(target, model, camera)(pose)
+        return cost
+
+    # (1) silhouette: depth grid, then simplex
+    target = foreground.astype(np.uint8)
+    rows, cols = np.nonzero(foreground)
+    top, centre_col = rows.min(), cols.mean()
+    start = neutral_pose()
+    head_top = -(base["torso"].length + base["neck"].length * 0.7 + base["head"].length)
+    best = (np.inf, None)
+    cost1 = objective(target, one_class, ("body",))
+    for z in config.depth_grid_m:
+        x = np.r_[start[pose_index], np.ones(n_fac)]
+        x[0] = (centre_col + 0.5 - camera.cx) * z / camera.fx
+        x[1] = (top + 0.5 - camera.cy) * z / camera.fy - head_top
+        x[2] = z
+        x = np.clip(x, lower, upper)
+        f = cost1(x)
+        if f < best[0]:
+            best = (f, x)
+    steps = np.r_[0.03, 0.03, 0.1, 0.1, 0.05, np.full(n_pose - 5, 0.25), np.full(n_fac, 0.08)]
+    res = minimize(cost1, initial_simplex(best[1], steps, lower, upper), lower, upper,
+                   budget=config.evaluations, ftol=1e-6)
+    # (2) colours from the fitted pose, (3) two-class refinement
+    pose, dims = unpack(res.x)
+    model = BodyModel.build(dims, resolution=config.resolution)
+    colour = colour_model_from_pose(frame, background, model, camera, pose, imaging)
+    labels = prepare_frame(frame, background, colour, imaging).labels
+    cost2 = objective(labels, dict(DEFAULT_PART_CLASS), DEFAULT_CLASS_NAMES)
+    res2 = minimize(cost2, initial_simplex(res.x, 0.5 * steps, lower, upper), lower, upper,
+                    budget=config.evaluations, ftol=1e-6)
+    pose, dims = unpack(res2.x)
+    return Calibration(dims, pose, camera)
