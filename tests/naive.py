@@ -41,6 +41,62 @@ def naive_segment_transforms(pose, offsets):
     return out
 
 
+# --- optimiser ---
+
+
+def naive_nelder_mead(f, simplex, lower, upper, budget, ftol, coef=(1.0, 2.0, 0.5, 0.5)):
+    """Textbook bounded Nelder-Mead, written plainly: returns the list of evaluated points.
+
+    Same rules as mocap.optimize: clip every trial point; reflect, expand, contract outside /
+    inside, shrink towards the best; stop on the relative spread test or the exact budget.
+    """
+    alpha, beta, gamma, sigma = coef
+    clip = lambda x: np.minimum(np.maximum(x, lower), upper)
+    points = []
+
+    def evaluate(x):
+        if len(points) >= budget:
+            raise StopIteration
+        points.append(np.array(x))
+        return f(x)
+
+    simplex = [clip(np.array(v, float)) for v in simplex]
+    n = len(simplex) - 1
+    try:
+        values = [evaluate(v) for v in simplex]
+        while True:
+            order = np.argsort(values, kind="stable")
+            low, high = int(np.argmin(values)), int(np.argmax(values))
+            second = max((i for i in range(n + 1) if i != high), key=lambda i: values[i])
+            if 2 * abs(values[high] - values[low]) <= ftol * (abs(values[high]) + abs(values[low]) + 1e-12):
+                return points
+            c = np.mean([simplex[i] for i in range(n + 1) if i != high], axis=0)
+            xr = clip(c + alpha * (c - simplex[high]))
+            fr = evaluate(xr)
+            if fr < values[low]:
+                xe = clip(c + alpha * beta * (c - simplex[high]))
+                fe = evaluate(xe)
+                simplex[high], values[high] = (xe, fe) if fe < fr else (xr, fr)
+            elif fr < values[second]:
+                simplex[high], values[high] = xr, fr
+            else:
+                outside = fr < values[high]
+                xc = clip(c + alpha * gamma * (c - simplex[high])) if outside else clip(c - gamma * (c - simplex[high]))
+                fc = evaluate(xc)
+                if (fc <= fr) if outside else (fc < values[high]):
+                    simplex[high], values[high] = xc, fc
+                else:
+                    for i in range(n + 1):
+                        if i != low:
+                            simplex[i] = clip(simplex[low] + sigma * (simplex[i] - simplex[low]))
+                    for i in range(n + 1):
+                        if i != low:
+                            values[i] = evaluate(simplex[i])
+            del order
+    except StopIteration:
+        return points
+
+
 # --- costs ---
 
 
