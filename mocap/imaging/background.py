@@ -22,6 +22,8 @@ from mocap.imaging.config import ImagingConfig
 
 __all__ = ["subtract_background", "median_background", "clean_mask"]
 
+_DEFAULT_CONFIG = ImagingConfig()  # frozen: sharing it is safe
+
 
 @jit
 def _change_mask_kernel(frame, frame_scale, background, background_scale, change2,
@@ -124,7 +126,7 @@ def clean_mask(raw: np.ndarray, config: ImagingConfig | None = None) -> np.ndarr
     """
     if not isinstance(raw, np.ndarray) or raw.dtype != np.bool_ or raw.ndim != 2:
         raise ValueError("raw must be a 2-D boolean array")
-    return _clean(raw, config or ImagingConfig())
+    return _clean(raw, config or _DEFAULT_CONFIG)
 
 
 def subtract_background(frame: np.ndarray, background: np.ndarray,
@@ -163,7 +165,7 @@ def subtract_background(frame: np.ndarray, background: np.ndarray,
     frame, frame_scale = check_rgb(frame, "frame")
     background, background_scale = check_rgb(background, "background")
     check_same_size(frame, background, "background")
-    config = config or ImagingConfig()
+    config = config or _DEFAULT_CONFIG
     raw = _change_mask(frame, frame_scale, background, background_scale, config)
     return _clean(raw, config) if clean else raw
 

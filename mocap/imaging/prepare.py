@@ -15,6 +15,8 @@ from mocap.labels import BACKGROUND, UNKNOWN
 
 __all__ = ["PreparedFrame", "prepare_frame"]
 
+_DEFAULT_CONFIG = ImagingConfig()  # frozen: sharing it is safe
+
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class PreparedFrame:
@@ -85,7 +87,7 @@ def prepare_frame(frame: np.ndarray, background: np.ndarray | None, colour_model
     if not isinstance(colour_model, ColourModel):
         raise ValueError(f"colour_model must be a ColourModel, got {type(colour_model).__name__}")
     if config is None:
-        config = ImagingConfig()
+        config = _DEFAULT_CONFIG
     elif not isinstance(config, ImagingConfig):
         raise ValueError(f"config must be an ImagingConfig, got {type(config).__name__}")
     if background is not None:
