@@ -28,7 +28,7 @@ from mocap.io.video import count_frames, iter_frames, read_image
 from mocap.track import FrameResult, Tracker, TrackerConfig
 
 #: Per-frame columns of ``poses.csv`` after the pose and joint columns.
-EXTRA_COLUMNS = ("region_residual", "edge_residual", "failed", "empty", "evaluations", "region_iterations",
+EXTRA_COLUMNS = ("region_residual", "edge_residual", "edge_residual_after_region", "failed", "empty", "evaluations", "region_iterations",
                  "edge_iterations", "ms_prepare", "ms_region", "ms_edge", "ms_recovery", "ms_total")
 COLOUR_SOURCES = ("calibration", "face")
 
@@ -48,6 +48,7 @@ class RunSummary:
 def _frame_row(r: FrameResult) -> PoseTable:
     t = r.timings_ms
     extra = {"region_residual": [r.region_residual], "edge_residual": [r.edge_residual],
+             "edge_residual_after_region": [r.edge_residual_after_region],
              "failed": np.array([int(r.failed)]), "empty": np.array([int(r.empty)]),
              "evaluations": np.array([r.evaluations]), "region_iterations": np.array([r.region_iterations]),
              "edge_iterations": np.array([r.edge_iterations]), "ms_prepare": [t.get("prepare", 0.0)],

@@ -157,6 +157,8 @@ class Registration:
         F(pose), in [0, 1].
     edge_residual : float, pixels
         Mean edge distance at ``pose``.
+    edge_residual_after_region : float, pixels
+        Mean edge distance at the region step's result (the paper's Fig. 6 grey line).
     region : SimplexResult or None
     edge : SimplexResult or None
     """
@@ -164,6 +166,7 @@ class Registration:
     pose: np.ndarray
     region_residual: float
     edge_residual: float
+    edge_residual_after_region: float
     region: SimplexResult | None
     edge: SimplexResult | None
 
@@ -201,6 +204,7 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
         region = minimize_cost(region_cost, initial_simplex(q0, steps, lower, upper), lower, upper,
                                budget=n_region, ftol=config.ftol, adaptive=config.adaptive)
         pose = region.x
+    edge_after_region = edge_cost(pose)
     if n_edge > 0:
         if region is not None and config.edge_start == "region_simplex":
             simplex = region.simplex
@@ -210,7 +214,7 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
                              adaptive=config.adaptive)
         if edge.evaluations > 0:
             pose = edge.x
-    return Registration(pose.copy(), region_cost(pose), edge_cost(pose), region, edge)
+    return Registration(pose.copy(), region_cost(pose), edge_cost(pose), edge_after_region, region, edge)
 
 
 @dataclass
@@ -226,6 +230,7 @@ class FrameResult:
     joints: np.ndarray
     region_residual: float
     edge_residual: float
+    edge_residual_after_region: float
     failed: bool
     empty: bool
     recovery: str
@@ -277,7 +282,7 @@ class Tracker:
             self.history.append(pose)
             timings.update(region=0.0, edge=0.0, recovery=0.0)
             timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)
-            return FrameResult(frame_index, pose, self.model.joint_positions(pose), math.nan, math.nan,
+            return FrameResult(frame_index, pose, self.model.joint_positions(pose), math.nan, math.nan, math.nan,
                                False, True, "empty frame: pose kept", 0, 0, 0, timings)
         region_cost = RegionCost(prepared.labels, self.model, self.camera)
         edge_cost = EdgeCost(prepared.distance, self.model, self.camera, edge_gap=cfg.edge_gap_m)
@@ -304,7 +309,7 @@ class Tracker:
             self.last_good = reg.pose
         timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)
         return FrameResult(frame_index, reg.pose, self.model.joint_positions(reg.pose), reg.region_residual,
-                           reg.edge_residual, failed, False, action, evaluations,
+                           reg.edge_residual, reg.edge_residual_after_region, failed, False, action, evaluations,
                            reg.region.iterations if reg.region else 0, reg.edge.iterations if reg.edge else 0,
                            timings)
 
@@ -320,3 +325,25 @@ def _share(part: SimplexResult | None, reg: Registration) -> float:
     if part is None or reg.evaluations == 0:
         return 0.0
     return part.evaluations / reg.evaluations
+
+
+def track_prepared(prepared_frames, tracker: Tracker, *, first_index: int = 0, progress: bool = False,
+                   description: str = "tracking") -> list[FrameResult]:
+    """Track frames already prepared by :func:`mocap.imaging.prepare_frame` (in memory).
+
+    Experiments reuse one image-side pass for many tracker settings this way.
+
+    Parameters
+    ----------
+    prepared_frames : sequence of PreparedFrame
+    tracker : Tracker
+        Its state carries over from frame to frame (and from call to call).
+
+    Returns
+    -------
+    list of FrameResult
+    """
+    from tqdm import tqdm
+
+    return [tracker.step(first_index + i, p)
+            for i, p in enumerate(tqdm(prepared_frames, desc=description, unit="frame", disable=not progress))]

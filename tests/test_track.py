@@ -1,0 +1,96 @@
+import json
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from mocap.body import PARAMETER_INDEX as P, BodyModel, clamp_to_limits, neutral_pose
+from mocap.cost import EdgeCost, RegionCost
+from mocap.track import AUTO_SPLIT_THRESHOLD, TrackerConfig, register, split_budget
+from mocap.render import Camera, render
+
+MODEL = BodyModel.build(resolution=8)
+CAMERA = Camera.default()
+#: Bound on the mean 3D joint error after registering a perturbed pose on a clean frame, metres.
+SINGLE_FRAME_BOUND_M = 0.035
+
+
+def joint_error(a, b):
+    return float(np.linalg.norm(MODEL.joint_positions(a) - MODEL.joint_positions(b), axis=1).mean())
+
+
+@pytest.mark.parametrize("total, split, expect", [
+    (100, "auto", (100, 0)), (AUTO_SPLIT_THRESHOLD - 1, "auto", (199, 0)), (200, "auto", (100, 100)),
+    (501, "auto", (251, 250)), (400, "1:3", (100, 300)), (300, "1:0", (300, 0)), (300, "0:1", (0, 300)),
+    (500, "250:250", (250, 250)), (0, "auto", (0, 0)),
+])
+def test_split_policies(total, split, expect):
+    assert split_budget(total, split) == expect
+
+
+@pytest.mark.parametrize("bad", ["", "1", "1:2:3", "a:b", "-1:2", "0:0", "inf:1"])
+def test_bad_split_rejected(bad):
+    with pytest.raises(ValueError, match="split"):
+        split_budget(100, bad)
+
+
+def test_config_json_round_trip_and_misspelt_keys(tmp_path):
+    cfg = TrackerConfig(evaluations=300, split="2:1", prediction="constant_velocity")
+    cfg.to_json(tmp_path / "c.json")
+    assert TrackerConfig.from_json(tmp_path / "c.json") == cfg
+    data = json.loads((tmp_path / "c.json").read_text())
+    data["evaluatons"] = 3
+    with pytest.raises(ValueError, match="unknown TrackerConfig option"):
+        TrackerConfig.from_dict(data)
+    for bad in ({"evaluations": -1}, {"edge_start": "big"}, {"prediction": "psychic"}, {"angle_step_deg": 0},
+                {"ftol": float("nan")}):
+        with pytest.raises(ValueError):
+            TrackerConfig(**bad)
+
+
+def clean_frame(pose):
+    r = render(pose, MODEL, CAMERA)
+    distance = np.minimum(ndimage.distance_transform_edt(~r.edges), 20.0).astype(np.float32)
+    return RegionCost(r.labels, MODEL, CAMERA), EdgeCost(distance, MODEL, CAMERA)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_registration_recovers_a_perturbed_pose(seed):
+    rng = np.random.default_rng(seed)
+    truth = neutral_pose()
+    truth[9:] += rng.normal(0.0, 0.3, 14)
+    truth = clamp_to_limits(truth)
+    region, edge = clean_frame(truth)
+    start = truth.copy()
+    start[3:] += rng.normal(0.0, 0.08, 20)
+    start[:3] += rng.normal(0.0, 0.015, 3)
+    start = clamp_to_limits(start)
+    reg = register(region, edge, start, TrackerConfig(evaluations=600))
+    assert joint_error(reg.pose, truth) < min(SINGLE_FRAME_BOUND_M, 0.75 * joint_error(start, truth))
+    assert reg.region_residual < region(start)
+    assert reg.region.evaluations + reg.edge.evaluations == 600
+
+
+def test_edge_step_lowers_the_edge_residual_it_starts_from():
+    rng = np.random.default_rng(5)
+    truth = neutral_pose()
+    truth[P["r_elbow_flex"]] = 1.2
+    truth[P["l_shoulder_abd"]] = 0.9
+    region, edge = clean_frame(truth)
+    start = clamp_to_limits(truth + np.r_[0.01, -0.01, 0.03, rng.normal(0, 0.06, 20)])
+    reg = register(region, edge, start, TrackerConfig(evaluations=400, split="1:1"))
+    assert reg.edge_residual_after_region == pytest.approx(edge(reg.region.x))
+    assert reg.edge_residual < reg.edge_residual_after_region
+    # all-region runs have no edge step at all
+    only = register(region, edge, start, TrackerConfig(evaluations=150))
+    assert only.edge is None and only.region.evaluations == 150
+
+
+def test_fresh_edge_simplex_option_starts_elsewhere():
+    truth = neutral_pose()
+    region, edge = clean_frame(truth)
+    start = clamp_to_limits(truth + 0.05)
+    handed = register(region, edge, start, TrackerConfig(evaluations=300, split="1:1"))
+    fresh = register(region, edge, start, TrackerConfig(evaluations=300, split="1:1", edge_start="fresh"))
+    np.testing.assert_array_equal(handed.region.x, fresh.region.x)
+    assert not np.array_equal(handed.pose, fresh.pose)
