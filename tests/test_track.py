@@ -68,7 +68,8 @@ def test_registration_recovers_a_perturbed_pose(seed):
     reg = register(region, edge, start, TrackerConfig(evaluations=600))
     assert joint_error(reg.pose, truth) < min(SINGLE_FRAME_BOUND_M, 0.75 * joint_error(start, truth))
     assert reg.region_residual < region(start)
-    assert reg.region.evaluations + reg.edge.evaluations == 600
+    assert reg.region.evaluations == 300                 # auto split: 50/50 from 200 on
+    assert reg.edge.evaluations == 300 or reg.edge.converged
 
 
 def test_edge_step_lowers_the_edge_residual_it_starts_from():
