@@ -65,7 +65,10 @@ def check_rgb(image: object, name: str = "frame") -> tuple[np.ndarray, float]:
         raise ValueError(f"{name} must have shape (H, W, 3), got {image.shape}")
     if image.shape[0] < 1 or image.shape[1] < 1:
         raise ValueError(f"{name} is empty (shape {image.shape})")
-    return image, image_scale(image, name)
+    scale = image_scale(image, name)
+    if image.dtype.kind == "f" and (image.dtype.itemsize < 4 or not image.dtype.isnative):
+        image = image.astype(np.float32)  # half floats / foreign byte order: kernels need these
+    return image, scale
 
 
 def check_same_size(frame: np.ndarray, other: np.ndarray, other_name: str) -> None:

@@ -9,6 +9,7 @@ The raw mask is then cleaned with scipy/scikit-image morphology.
 """
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Iterable
 
@@ -67,13 +68,23 @@ def _change_mask(frame, frame_scale, background, background_scale, config):
     return out
 
 
+# scikit-image 0.26 replaced min_size (remove objects < n) and area_threshold (fill holes
+# < n) by max_size (remove/fill <= n) and deprecated the old names; support both.
+_SKIMAGE_MAX_SIZE = "max_size" in inspect.signature(morphology.remove_small_objects).parameters
+
+
 def _remove_small_objects(mask: np.ndarray, min_area: int) -> np.ndarray:
-    # scikit-image 0.26 renamed min_size (remove < n) to max_size (remove <= n).
-    return morphology.remove_small_objects(mask, max_size=min_area - 1)
+    """Drop connected parts (4-connected) with fewer than ``min_area`` pixels."""
+    if _SKIMAGE_MAX_SIZE:
+        return morphology.remove_small_objects(mask, max_size=min_area - 1)
+    return morphology.remove_small_objects(mask, min_size=min_area)
 
 
 def _remove_small_holes(mask: np.ndarray, max_area: int) -> np.ndarray:
-    return morphology.remove_small_holes(mask, max_size=max_area)
+    """Fill holes (4-connected) of at most ``max_area`` pixels."""
+    if _SKIMAGE_MAX_SIZE:
+        return morphology.remove_small_holes(mask, max_size=max_area)
+    return morphology.remove_small_holes(mask, area_threshold=max_area + 1)
 
 
 def _clean(raw: np.ndarray, config: ImagingConfig) -> np.ndarray:

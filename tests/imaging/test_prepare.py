@@ -80,6 +80,9 @@ def test_float_frames_give_the_same_result(scene, model):
     assert (a.labels == b.labels).mean() > 0.999
     c = prepare_frame(scene.frame, scene.background / 255.0, model)  # mixed dtypes
     assert (a.labels == c.labels).mean() > 0.999
+    d = prepare_frame((scene.frame / 255.0).astype(np.float16),
+                      (scene.background / 255.0).astype(">f8"), model)
+    assert (a.labels == d.labels).mean() > 0.99
 
 
 def test_empty_scene_returns_an_empty_label_image(scene, model):
