@@ -133,6 +133,68 @@ def render_rows(sizes: Sequence[tuple[int, int]], *, min_runs: int, min_seconds:
     return rows, notes
 
 
+def imaging_rows(sizes: Sequence[tuple[int, int]], *, min_runs: int, min_seconds: float) -> list[BenchRow]:
+    """Rows ``prepare_frame`` (whole image side, timed outside) and its parts ``prepare_background``,
+    ``prepare_colour``, ``prepare_edges``, ``prepare_distance`` (timed inside the same calls), on the
+    synthetic scene of :mod:`mocap.imaging.testing` (varying seeds: noise and arm positions)."""
+    from mocap.imaging import ColourModel, prepare_frame
+    from mocap.imaging.testing import synthetic_scene_with_labels
+
+    rows: list[BenchRow] = []
+    for size in sizes:
+        scenes = [synthetic_scene_with_labels(size[0], size[1], seed) for seed in range(8)]
+        colour = ColourModel.from_boxes(scenes[0].frame, {"skin": scenes[0].face_box,
+                                                          "clothes": scenes[0].clothes_box})
+        parts: dict[str, list[float]] = {}
+
+        def call(i):
+            s = scenes[i % len(scenes)]
+            out = prepare_frame(s.frame, s.background, colour)
+            if i > 0:
+                for k, v in out.timings.items():
+                    parts.setdefault(k, []).append(1e6 * v)
+
+        rows.append(_row("prepare_frame", size, 0, time_calls(call, min_runs=min_runs, min_seconds=min_seconds)))
+        for key in ("background", "colour", "edges", "distance"):
+            rows.append(_row(f"prepare_{key}", size, 0, np.asarray(parts[key])))
+    return rows
+
+
+def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, min_runs: int) -> list[BenchRow]:
+    """Rows ``frame_<N>``: one whole frame (image side + two-step registration with N cost
+    evaluations, auto split) on a synthetic sequence, median over its frames."""
+    import tempfile
+
+    from mocap.body.mesh import resolution_for_image
+    from mocap.calibrate import Calibration, colour_model_from_pose
+    from mocap.imaging import prepare_frame
+    from mocap.io.sequence import find_sequence
+    from mocap.io.video import iter_frames, read_image
+    from mocap.synth import generate_sequence
+    from mocap.track import Tracker, TrackerConfig
+
+    rows: list[BenchRow] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        seq = find_sequence(generate_sequence("gestures-1", tmp, frames=frames, seed=0, size=size))
+        calibration = Calibration.from_json(seq.calibration)
+        model = calibration.body_model(resolution_for_image(*size))
+        camera = calibration.camera
+        images = list(iter_frames(seq.frames))
+        background = read_image(seq.background)
+        colour = colour_model_from_pose(images[0], background, model, camera, calibration.initial_pose)
+        for budget in budgets:
+            tracker = Tracker(model, camera, TrackerConfig(evaluations=budget), calibration.initial_pose)
+            times = []
+            while len(times) < min_runs:
+                for i, frame in enumerate(images):
+                    t0 = time.perf_counter_ns()
+                    tracker.step(i, prepare_frame(frame, background, colour))
+                    times.append((time.perf_counter_ns() - t0) / 1000.0)
+                tracker = Tracker(model, camera, TrackerConfig(evaluations=budget), calibration.initial_pose)
+            rows.append(_row(f"frame_{budget}", size, model.mesh.n_triangles, np.asarray(times[1:])))
+    return rows
+
+
 def environment() -> tuple[dict, str]:
     """Versions of the libraries that matter and the CPU model."""
     import numba
@@ -186,7 +248,11 @@ def format_table(rows: Sequence[BenchRow], notes: Sequence[str]) -> str:
     return "\n".join(lines)
 
 
-def run_benchmark(*, quick: bool = False, with_llvmpipe: bool = True, stages: Sequence[str] = ("render",),
+#: Groups of stages, in the order a full run measures them.
+GROUPS: tuple[str, ...] = ("render", "imaging", "frame")
+
+
+def run_benchmark(*, quick: bool = False, with_llvmpipe: bool = True, stages: Sequence[str] = GROUPS,
                   progress: bool = True) -> dict:
     """Run the benchmark and return the JSON-ready result of DESIGN.md section 6."""
     from tqdm import tqdm
@@ -198,7 +264,10 @@ def run_benchmark(*, quick: bool = False, with_llvmpipe: bool = True, stages: Se
     if not pinned:
         notes.append("could not pin to one core")
     groups = {"render": lambda: render_rows(RENDER_SIZES, min_runs=min_runs, min_seconds=min_seconds,
-                                            with_llvmpipe=with_llvmpipe)}
+                                            with_llvmpipe=with_llvmpipe),
+              "imaging": lambda: (imaging_rows(TABLE2_SIZES, min_runs=min_runs // 3, min_seconds=min_seconds), []),
+              "frame": lambda: (frame_rows((160, 120), (100, 500), frames=12 if quick else 50,
+                                           min_runs=12 if quick else 100), [])}
     for name in tqdm(stages, desc="bench", unit="group", disable=not progress, file=sys.stderr):
         if name not in groups:
             raise ValueError(f"unknown benchmark group {name!r}; known: {', '.join(groups)}")

@@ -10,11 +10,19 @@ def add_parser(subparsers) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object (DESIGN.md section 6)")
     p.add_argument("--quick", action="store_true", help="few runs per stage (a smoke test, not a measurement)")
     p.add_argument("--no-llvmpipe", action="store_true", help="skip the OpenGL (Mesa llvmpipe) comparison")
+    p.add_argument("--groups", nargs="+", default=None, metavar="GROUP",
+                   help="stage groups to run: render (render and cost evaluations), imaging (prepare_*), "
+                        "frame (frame_100, frame_500); default all")
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from mocap.bench import print_result, run_benchmark
-    result = run_benchmark(quick=args.quick, with_llvmpipe=not args.no_llvmpipe)
+    from mocap.bench import GROUPS
+    groups = tuple(args.groups) if args.groups else GROUPS
+    unknown = set(groups) - set(GROUPS)
+    if unknown:
+        raise ValueError(f"unknown benchmark group(s) {', '.join(sorted(unknown))}; known: {', '.join(GROUPS)}")
+    result = run_benchmark(quick=args.quick, with_llvmpipe=not args.no_llvmpipe, stages=groups)
     print_result(result, args.json)
     return 0
