@@ -51,22 +51,51 @@ def _render_pose(pose, scene, buffers):
 @jit
 def _region_counts_and_clear(part_buf, depth_buf, part_label, width, bbox, target, n_classes,
                              model_count, overlap_count):
-    """|B_c| and |A_c ∩ B_c| for c = 1..m (index c) over the model's box; clears the box."""
+    """|B_c| and |A_c ∩ B_c| for c = 1..m (index c) over the model's box; clears the box.
+
+    Along a row the part changes rarely, so counts accumulate in registers over each run of
+    one part and reach the count arrays only at the run's end (index 0 collects background).
+    """
     for c in range(n_classes + 1):
         model_count[c] = 0
         overlap_count[c] = 0
+    x0, x1 = bbox[0], bbox[2]
+    # 8 pixels at a time where the width allows: all-background words are skipped (nothing
+    # outside the box was drawn, so whole words never count a pixel twice or a stray one)
+    use_words = width % 8 == 0
+    words = part_buf[: part_buf.size - part_buf.size % 8].view(np.uint64)
     for py in range(bbox[1], bbox[3] + 1):
         row = py * width
-        for px in range(bbox[0], bbox[2] + 1):
-            idx = row + px
-            p = part_buf[idx]
-            if p != 0:
-                c = part_label[p - 1]
-                model_count[c] += 1
-                if target[idx] == c:
-                    overlap_count[c] += 1
-                part_buf[idx] = 0
-                depth_buf[idx] = 0.0
+        cur = np.uint8(0)
+        c = 0
+        run = 0
+        hit = 0
+        if use_words:
+            k_from, k_to = (row + x0) // 8, (row + x1) // 8 + 1
+        else:
+            k_from, k_to = 0, 1
+        for k in range(np.uint64(k_from), np.uint64(k_to)):
+            if use_words:
+                if words[k] == 0:
+                    continue
+                a, b = k * np.uint64(8), k * np.uint64(8) + np.uint64(8)
+            else:
+                a, b = np.uint64(row + x0), np.uint64(row + x1 + 1)
+            for idx in range(a, b):
+                p = part_buf[idx]
+                if p != cur:
+                    model_count[c] += run
+                    overlap_count[c] += hit
+                    cur = p
+                    c = part_label[p - 1] if p != 0 else 0
+                    run = 0
+                    hit = 0
+                run += 1
+                hit += target[idx] == c
+        model_count[c] += run
+        overlap_count[c] += hit
+        part_buf[row + x0: row + x1 + 1] = 0
+        depth_buf[row + x0: row + x1 + 1] = 0.0
 
 
 @jit
@@ -112,15 +141,24 @@ def _render_labels(pose, scene, buffers, out):
     """Render class labels into the flat uint8 ``out`` (fully overwritten) and reset the buffers."""
     _render_pose(pose, scene, buffers)
     part_buf, depth_buf, bbox = buffers[0], buffers[1], buffers[6]
-    part_label, width = scene[5], scene[7]
-    out[:] = 0
-    for py in range(bbox[1], bbox[3] + 1):
+    part_label, width, height = scene[5], scene[7], scene[8]
+    lut = np.zeros(256, np.uint8)
+    for p in range(part_label.size):
+        lut[p + 1] = part_label[p]
+    x0, y0, x1, y1 = bbox[0], bbox[1], bbox[2], bbox[3]
+    if x0 > x1:
+        out[:] = 0
+        return
+    out[: y0 * width] = 0
+    out[(y1 + 1) * width:] = 0
+    for py in range(y0, y1 + 1):
         row = py * width
-        for x in range(row + bbox[0], row + bbox[2] + 1):
-            p = part_buf[x]
-            if p != 0:
-                out[x] = part_label[p - 1]
-    _raster._clear(part_buf, depth_buf, width, bbox)
+        out[row: row + x0] = 0
+        for x in range(np.uint64(row + x0), np.uint64(row + x1 + 1)):
+            out[x] = lut[part_buf[x]]
+        out[row + x1 + 1: row + width] = 0
+        part_buf[row + x0: row + x1 + 1] = 0
+        depth_buf[row + x0: row + x1 + 1] = 0.0
 
 
 # ----------------------------------------------------------------------------- public

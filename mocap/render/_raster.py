@@ -76,10 +76,49 @@ def _rasterize(xs, ys, iz, triangles, triangle_part, width, height, cull,
     signed area in y-down pixel coordinates) are drawn. ``bbox`` (int64[4]) receives the
     inclusive pixel box ``x0, y0, x1, y1`` touched (x0 > x1 when nothing was drawn).
     """
+    no_rows = np.empty(0, np.int64)
+    _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
+                     part_buf, depth_buf, tri_buf, count_buf, bbox, no_rows, no_rows)
+
+
+@jit
+def _upper(w, m, inv_m, n):
+    """Largest k in [-1, n + 1] with ``w - m * k >= 0`` for m > 0 (exact; -1 when none in 0..n)."""
+    k = np.int64(np.floor(min(max(w * inv_m, -1.0), n + 1.0)))
+    if w - m * k < 0:
+        k -= 1
+    elif w - m * (k + 1) >= 0:
+        k += 1
+    return k
+
+
+@jit
+def _lower(w, m, inv_m, n):
+    """Smallest k in [-1, n + 1] with ``w - m * k >= 0`` for m < 0 (exact; n + 1 when none in 0..n)."""
+    k = np.int64(np.ceil(min(max(w * inv_m, -1.0), n + 1.0)))
+    if w - m * k < 0:
+        k += 1
+    elif w - m * (k - 1) >= 0:
+        k -= 1
+    return k
+
+
+@jit
+def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
+                     part_buf, depth_buf, tri_buf, count_buf, bbox, row_lo, row_hi):
+    """:func:`_rasterize`, row span by row span; also widens the per-row drawn column range
+    ``row_lo[y] .. row_hi[y]`` (when those arrays are non-empty; the caller initialises them
+    to ``width`` and -1).
+
+    Each edge function is affine in the column, so on a pixel row the pixels where all three
+    are >= 0 form one run: its ends are estimated in floating point and then corrected with
+    the exact integer edge functions, so exactly the pixels of the per-pixel test are drawn.
+    """
     S = SUBPIXEL
     half = S // 2
     want_tri = tri_buf.size > 0
     want_count = count_buf.size > 0
+    want_rows = row_lo.size > 0
     bx0, by0, bx1, by1 = width, height, -1, -1
     for t in range(triangles.shape[0]):
         i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
@@ -122,35 +161,68 @@ def _rasterize(xs, ys, iz, triangles, triangle_part, width, height, cull,
         w0_row = a12x * (sy - y1) - a12y * (sx - x1) + b0
         w1_row = a20x * (sy - y2) - a20y * (sx - x2) + b1
         w2_row = a01x * (sy - y0) - a01y * (sx - x0) + b2
+        # per pixel step to the right: E -= m
+        m0, m1, m2 = a12y * S, a20y * S, a01y * S
+        inv0 = 1.0 / m0 if m0 != 0 else 0.0
+        inv1 = 1.0 / m1 if m1 != 0 else 0.0
+        inv2 = 1.0 / m2 if m2 != 0 else 0.0
+        n = px1 - px0
         # inverse depth is affine in screen space: iz = z0 + dzdx * dx + dzdy * dy
         fa = float(area)
         z0, z1, z2 = iz[i0], iz[i1], iz[i2]
         dzdx = ((z1 - z0) * (y2 - y0) - (z2 - z0) * (y1 - y0)) / fa * S
         dzdy = ((x1 - x0) * (z2 - z0) - (x2 - x0) * (z1 - z0)) / fa * S
         z_row = z0 + (dzdx * (sx - x0) + dzdy * (sy - y0)) / S
-        drawn = False
         part_id = np.uint8(triangle_part[t] + 1)
+        drawn = False
         for py in range(py0, py1 + 1):
-            w0, w1, w2 = w0_row, w1_row, w2_row
-            zz = z_row
-            row = py * width
-            for px in range(px0, px1 + 1):
-                # branch-free: which pixels are inside is unpredictable, so select, don't jump
-                idx = row + px
-                inside = (w0 | w1 | w2) >= 0
-                old_z = depth_buf[idx]
-                win = inside & (zz > old_z)
-                depth_buf[idx] = np.float32(zz) if win else old_z
-                part_buf[idx] = part_id if win else part_buf[idx]
-                drawn |= win
-                if want_tri:
-                    tri_buf[idx] = t if win else tri_buf[idx]
-                if want_count:
-                    count_buf[idx] += 1 if inside else 0
-                w0 -= a12y * S
-                w1 -= a20y * S
-                w2 -= a01y * S
-                zz += dzdx
+            lo = np.int64(0)
+            hi = n
+            if m0 > 0:
+                hi = min(hi, _upper(w0_row, m0, inv0, n))
+            elif m0 < 0:
+                lo = max(lo, _lower(w0_row, m0, inv0, n))
+            elif w0_row < 0:
+                hi = np.int64(-1)
+            if m1 > 0:
+                hi = min(hi, _upper(w1_row, m1, inv1, n))
+            elif m1 < 0:
+                lo = max(lo, _lower(w1_row, m1, inv1, n))
+            elif w1_row < 0:
+                hi = np.int64(-1)
+            if m2 > 0:
+                hi = min(hi, _upper(w2_row, m2, inv2, n))
+            elif m2 < 0:
+                lo = max(lo, _lower(w2_row, m2, inv2, n))
+            elif w2_row < 0:
+                hi = np.int64(-1)
+            if lo <= hi:
+                drawn = True
+                row = py * width + px0
+                zz = z_row + dzdx * lo
+                if want_tri or want_count:
+                    for k in range(lo, hi + 1):
+                        idx = row + k
+                        old_z = depth_buf[idx]
+                        win = zz > old_z
+                        depth_buf[idx] = np.float32(zz) if win else old_z
+                        part_buf[idx] = part_id if win else part_buf[idx]
+                        if want_tri:
+                            tri_buf[idx] = t if win else tri_buf[idx]
+                        if want_count:
+                            count_buf[idx] += 1
+                        zz += dzdx
+                else:
+                    for k in range(lo, hi + 1):
+                        idx = np.uint64(row + k)     # unsigned: no negative-index wrap-around
+                        old_z = depth_buf[idx]
+                        win = zz > old_z
+                        depth_buf[idx] = np.float32(zz) if win else old_z
+                        part_buf[idx] = part_id if win else part_buf[idx]
+                        zz += dzdx
+                if want_rows:
+                    row_lo[py] = min(row_lo[py], px0 + lo)
+                    row_hi[py] = max(row_hi[py], px0 + hi)
             w0_row += a12x * S
             w1_row += a20x * S
             w2_row += a01x * S
@@ -262,13 +334,11 @@ def _nearer_side(pa, pb, za, zb, a, b, min_gap):
 
 @jit
 def _clear_row(part_buf, depth_buf, mark_buf, row, xa, xb):
-    # one loop per buffer: the compiler cannot prove they do not alias, and would not vectorise
-    for x in range(row + xa, row + xb + 1):
-        part_buf[x] = 0
-    for x in range(row + xa, row + xb + 1):
-        depth_buf[x] = 0.0
-    for x in range(row + xa, row + xb + 1):
-        mark_buf[x] = False
+    # slice fills compile to memset-like vector stores (an element loop with signed indices
+    # does not: Numba's negative-index wrap-around keeps it scalar, ~10x slower)
+    part_buf[row + xa: row + xb + 1] = 0
+    depth_buf[row + xa: row + xb + 1] = 0.0
+    mark_buf[row + xa: row + xb + 1] = False
 
 
 @jit
@@ -276,7 +346,5 @@ def _clear(part_buf, depth_buf, width, bbox):
     """Reset the buffers inside ``bbox`` (the only place a render wrote)."""
     for py in range(bbox[1], bbox[3] + 1):
         row = py * width
-        for x in range(row + bbox[0], row + bbox[2] + 1):
-            part_buf[x] = 0
-        for x in range(row + bbox[0], row + bbox[2] + 1):
-            depth_buf[x] = 0.0
+        part_buf[row + bbox[0]: row + bbox[2] + 1] = 0
+        depth_buf[row + bbox[0]: row + bbox[2] + 1] = 0.0
