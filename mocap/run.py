@@ -226,7 +226,9 @@ def _previous_run(journal: Path, run_json: Path, settings: dict, overwrite: bool
     if previous.get("settings") != json.loads(json.dumps(settings)):
         raise ValueError(f"{journal.parent} holds a run with other settings (or no run.json); "
                          "use --overwrite or another --out")
-    return PoseTable.read(journal, tolerate_partial=True)
+    done = PoseTable.read(journal, tolerate_partial=True)
+    done.write(journal)             # drop a partial last line before appending to it again
+    return done
 
 
 def _finish(out_dir, table, settings, source, model, calibration, camera, gt, fps, start, wall_s,

@@ -1,0 +1,109 @@
+"""End to end through the CLI: a short synthetic sequence tracked, outputs checked, resumed."""
+import json
+import shutil
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+from mocap.cli import main
+from mocap.io.bvh import read_bvh, read_pose_bvh
+from mocap.io.pose_table import PoseTable
+from mocap.io.video import count_frames
+from mocap.metrics import mpjpe
+
+#: Mean joint error bound on the short test sequence with the true calibration, millimetres.
+SEQUENCE_MPJPE_BOUND_MM = 110.0
+N_FRAMES = 16
+
+
+@pytest.fixture(scope="module")
+def sequence(tmp_path_factory):
+    from mocap.synth import generate_sequence
+    return generate_sequence("gestures-2", tmp_path_factory.mktemp("seq") / "gestures-2", frames=N_FRAMES, seed=3)
+
+
+@pytest.mark.slow
+def test_track_cli_end_to_end(sequence, tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["track", str(sequence), "--out", str(out), "--iterations", "300"]) == 0
+    printed = capsys.readouterr().out
+    assert "MPJPE" in printed and "frames/s" in printed
+    for name in ("poses.csv", "poses.bvh", "overlay.mp4", "residuals.png", "run.json", "colour_model.json"):
+        assert (out / name).is_file(), name
+    table = PoseTable.read(out / "poses.csv")
+    truth = PoseTable.read(sequence / "ground_truth.csv")
+    assert len(table) == N_FRAMES and list(table.frames) == list(range(N_FRAMES))
+    assert mpjpe(table.joints, truth.joints) < SEQUENCE_MPJPE_BOUND_MM
+    run = json.loads((out / "run.json").read_text())
+    assert set(run["metrics"]) == {"mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg", "reprojection_px", "failure_rate", "fps"}
+    assert run["metrics"]["mpjpe_mm"] == pytest.approx(mpjpe(table.joints, truth.joints))
+    assert run["settings"]["tracker"]["evaluations"] == 300
+    assert np.all(table.extra["evaluations"] > 0) and np.all(table.extra["evaluations"] <= 2 * 300)  # + recovery
+    # the BVH parses, has the skeleton, and gives the same poses back
+    bvh = read_bvh(out / "poses.bvh")
+    assert bvh.n_frames == N_FRAMES
+    poses, fps = read_pose_bvh(out / "poses.bvh")
+    np.testing.assert_allclose(poses, table.poses, atol=1e-6)
+    assert count_frames(out / "overlay.mp4") == N_FRAMES
+    assert iio.imread(out / "residuals.png").ndim == 3
+
+
+@pytest.mark.slow
+def test_interrupted_run_resumes_to_the_same_poses(sequence, tmp_path):
+    fresh, resumed = tmp_path / "fresh", tmp_path / "resumed"
+    args = ["--iterations", "150", "--no-overlay"]
+    assert main(["track", str(sequence), "--out", str(fresh), *args]) == 0
+    assert main(["track", str(sequence), "--out", str(resumed), "--max-frames", "6", *args]) == 0
+    # simulate a kill while writing frame 6: a partial line at the end of the journal
+    with (resumed / "poses.csv").open("a") as fh:
+        fh.write("6,0.01,0.2")
+    assert main(["track", str(sequence), "--out", str(resumed), *args]) == 0
+    a, b = PoseTable.read(fresh / "poses.csv"), PoseTable.read(resumed / "poses.csv")
+    assert list(b.frames) == list(range(N_FRAMES))
+    np.testing.assert_array_equal(a.poses, b.poses)
+    assert json.loads((resumed / "run.json").read_text())["resumed_from_frame"] == 6
+    # other settings in the same folder: refused, nothing lost
+    before = (resumed / "poses.csv").read_bytes()
+    assert main(["track", str(sequence), "--out", str(resumed), "--iterations", "99"]) == 2
+    assert (resumed / "poses.csv").read_bytes() == before
+
+
+@pytest.mark.slow
+def test_empty_frame_is_marked_and_the_pose_kept(sequence, tmp_path):
+    folder = tmp_path / "seq"
+    shutil.copytree(sequence, folder)
+    shutil.copy(folder / "background.png", folder / "frames" / "000005.png")   # nobody in view
+    out = tmp_path / "run"
+    assert main(["track", str(folder), "--out", str(out), "--iterations", "100", "--max-frames", "8",
+                 "--no-overlay"]) == 0
+    table = PoseTable.read(out / "poses.csv")
+    assert table.extra["empty"].tolist() == [0, 0, 0, 0, 0, 1, 0, 0]
+    np.testing.assert_array_equal(table.poses[5], table.poses[4])
+    assert np.isnan(table.extra["region_residual"][5])
+
+
+def test_bad_input_gives_one_line_errors(sequence, tmp_path, capsys):
+    def fails(args, match):
+        assert main(args) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("error:") and "\n" not in err and match in err
+
+    fails(["track", str(tmp_path / "missing.mp4")], "no such video")
+    fails(["track", str(sequence / "frames"), "--calibration", str(sequence / "calibration.json")], "background")
+    fails(["track", str(sequence / "frames"), "--background", str(sequence / "background.png")], "calibration")
+    small = tmp_path / "small.png"
+    iio.imwrite(small, np.zeros((60, 80, 3), np.uint8))
+    fails(["track", str(sequence), "--background", str(small), "--out", str(tmp_path / "o1")], "background")
+    other = json.loads((sequence / "calibration.json").read_text())
+    other["camera"].update(width=320, height=240, cx=160.0, cy=120.0)
+    (tmp_path / "cal320.json").write_text(json.dumps(other))
+    fails(["track", str(sequence), "--calibration", str(tmp_path / "cal320.json"), "--out", str(tmp_path / "o2")],
+          "calibrate for this video")
+    broken = tmp_path / "broken.mp4"
+    broken.write_bytes(b"\x00\x00\x00\x18ftypmp42 this is not a video")
+    fails(["track", str(broken), "--background", str(sequence / "background.png"),
+           "--calibration", str(sequence / "calibration.json"), "--out", str(tmp_path / "o3")], "video")
+    fails(["track", str(sequence), "--split", "2:x", "--out", str(tmp_path / "o4")], "split")
+    (tmp_path / "bad.json").write_text("{not json")
+    fails(["track", str(sequence), "--calibration", str(tmp_path / "bad.json"), "--out", str(tmp_path / "o5")], "JSON")
