@@ -252,10 +252,12 @@ def _edge_scan(part_buf, depth_buf, width, height, bbox, min_gap, distance, mark
         return 0.0, 0
     xa, xb = max(bbox[0] - 1, 0), min(bbox[2] + 1, width - 1)
     ya, yb = max(bbox[1] - 1, 0), min(bbox[3] + 1, height - 1)
-    # 8 pixels at a time: a word whose pixels equal their right and lower neighbours is skipped
+    # 8 pixels at a time: per word, the bytes that differ from their right / lower neighbour
+    # say exactly which pairs need work; a word with none is skipped
     use_words = width % 8 == 0
     words = part_buf[: part_buf.size - part_buf.size % 8].view(np.uint64)
     row_words = width // 8
+    have_distance = distance.size > 0
     total = 0.0
     n = 0
     for y in range(ya, yb + 1):
@@ -264,17 +266,38 @@ def _edge_scan(part_buf, depth_buf, width, height, bbox, min_gap, distance, mark
         if use_words:
             for k in range((row + xa) // 8, (row + xb) // 8 + 1):
                 x0 = k * 8 - row
+                w = words[np.uint64(k)]
+                right = w >> np.uint64(8)
                 if x0 + 8 < width:
-                    w = words[k]
-                    diff = w ^ ((w >> np.uint64(8)) | (words[k + 1] << np.uint64(56)))
-                    if has_below:
-                        diff |= w ^ words[k + row_words]
-                    if diff == 0:
+                    right |= words[np.uint64(k + 1)] << np.uint64(56)
+                d_right = w ^ right
+                d_below = w ^ words[np.uint64(k + row_words)] if has_below else np.uint64(0)
+                if (d_right | d_below) == 0:
+                    continue
+                for i in range(max(xa - x0, 0), min(xb - x0, 7) + 1):
+                    sh = np.uint64(8 * i)
+                    r_diff = ((d_right >> sh) & np.uint64(255)) != 0
+                    b_diff = ((d_below >> sh) & np.uint64(255)) != 0
+                    if not (r_diff or b_diff):
                         continue
-                t, c = _scan_pixels(part_buf, depth_buf, width, row, max(x0, xa), min(x0 + 7, xb), xb,
-                                    has_below, min_gap, distance, mark_buf)
-                total += t
-                n += c
+                    a = row + x0 + i
+                    pa = part_buf[np.uint64(a)]
+                    if r_diff and x0 + i < xb:
+                        j = _nearer_side(pa, part_buf[np.uint64(a + 1)], depth_buf[np.uint64(a)],
+                                         depth_buf[np.uint64(a + 1)], a, a + 1, min_gap)
+                        if j >= 0 and not mark_buf[np.uint64(j)]:
+                            mark_buf[np.uint64(j)] = True
+                            n += 1
+                            if have_distance:
+                                total += distance[np.uint64(j)]
+                    if b_diff:
+                        j = _nearer_side(pa, part_buf[np.uint64(a + width)], depth_buf[np.uint64(a)],
+                                         depth_buf[np.uint64(a + width)], a, a + width, min_gap)
+                        if j >= 0 and not mark_buf[np.uint64(j)]:
+                            mark_buf[np.uint64(j)] = True
+                            n += 1
+                            if have_distance:
+                                total += distance[np.uint64(j)]
         else:
             t, c = _scan_pixels(part_buf, depth_buf, width, row, xa, xb, xb, has_below, min_gap, distance,
                                 mark_buf)
