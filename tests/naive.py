@@ -120,6 +120,31 @@ def naive_mean_edge_distance(distance, edges, penalty):
     return float(sum(values) / len(values)) if values else float(penalty)
 
 
+# --- synth ---
+
+
+def naive_surface_samples(rows, cols, tri, triangles, verts, normals, local, vnoise, cam):
+    """Surface attributes per pixel by solving t*ray = v0 + b1*e1 + b2*e2 with numpy.linalg.solve,
+    barycentrics clamped into the triangle as the kernel does; returns normal, local, point, noise."""
+    fx, fy, cx, cy = cam[:4]
+    out = ([], [], [], [])
+    for r, c, t in zip(rows, cols, tri):
+        i0, i1, i2 = triangles[t]
+        ray = np.array([(c + 0.5 - cx) / fx, (r + 0.5 - cy) / fy, 1.0])
+        e1, e2 = verts[i1] - verts[i0], verts[i2] - verts[i0]
+        _, b1, b2 = np.linalg.solve(np.stack([ray, -e1, -e2], axis=1), verts[i0])
+        b1, b2 = min(max(b1, 0.0), 1.0), min(max(b2, 0.0), 1.0)
+        if b1 + b2 > 1.0:
+            b1, b2 = b1 / (b1 + b2), b2 / (b1 + b2)
+        w = np.array([1.0 - b1 - b2, b1, b2])
+        n = w @ normals[[i0, i1, i2]]
+        out[0].append(n / np.linalg.norm(n))
+        out[1].append(w @ local[[i0, i1, i2]])
+        out[2].append(w @ verts[[i0, i1, i2]])
+        out[3].append(w @ vnoise[[i0, i1, i2]])
+    return tuple(np.array(a) for a in out)
+
+
 # --- imaging ---
 
 
