@@ -20,6 +20,8 @@ from mocap._numba import jit
 SUBPIXEL = 16
 #: Largest |pixel coordinate| kept after projection (keeps integer edge functions in range).
 _COORD_LIMIT = 1.0e6
+#: Triangles whose pixel box is narrower than this are traversed pixel by pixel, not by runs.
+_NARROW = 4
 
 
 @jit
@@ -113,6 +115,9 @@ def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
     Each edge function is affine in the column, so on a pixel row the pixels where all three
     are >= 0 form one run: its ends are estimated in floating point and then corrected with
     the exact integer edge functions, so exactly the pixels of the per-pixel test are drawn.
+    Boxes narrower than :data:`_NARROW` pixels (most triangles at 160x120) are cheaper to test
+    pixel by pixel with the same integer edge functions, and are (unless a row range, triangle
+    ids or coverage counts are asked for).
     """
     S = SUBPIXEL
     half = S // 2
@@ -175,6 +180,30 @@ def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
         z_row = z0 + (dzdx * (sx - x0) + dzdy * (sy - y0)) / S
         part_id = np.uint8(triangle_part[t] + 1)
         drawn = False
+        py_last = py1
+        if n < _NARROW and not (want_tri or want_count or want_rows):
+            # narrow box: testing every pixel of the row is cheaper than finding the run's ends
+            for py in range(py0, py1 + 1):
+                w0, w1, w2 = w0_row, w1_row, w2_row
+                zz = z_row
+                row = py * width + px0
+                for k in range(n + 1):
+                    idx = np.uint64(row + k)
+                    old_z = depth_buf[idx]
+                    inside = (w0 | w1 | w2) >= 0
+                    win = inside & (zz > old_z)
+                    depth_buf[idx] = np.float32(zz) if win else old_z
+                    part_buf[idx] = part_id if win else part_buf[idx]
+                    drawn |= inside
+                    w0 -= m0
+                    w1 -= m1
+                    w2 -= m2
+                    zz += dzdx
+                w0_row += a12x * S
+                w1_row += a20x * S
+                w2_row += a01x * S
+                z_row += dzdy
+            py1 = py0 - 1           # rows done
         for py in range(py0, py1 + 1):
             lo = np.int64(0)
             hi = n
@@ -231,7 +260,7 @@ def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
             bx0 = min(bx0, px0)
             by0 = min(by0, py0)
             bx1 = max(bx1, px1)
-            by1 = max(by1, py1)
+            by1 = max(by1, py_last)
     bbox[0], bbox[1], bbox[2], bbox[3] = bx0, by0, bx1, by1
 
 
