@@ -138,7 +138,7 @@ STYLES = MappingProxyType({
     "gestures-3": MotionStyle(
         _GESTURE_PAIRS + ((_sym("raise"), 0.5), (_sym("point_side", "point_forward"), 0.6),
                           (_sym("wave"), 0.4), (_sym("hand_to_chest", "point_side"), 0.4)),
-        transition=(0.35, 0.7), hold=(0.1, 0.6), jitter_deg=10.0,
+        transition=(0.4, 0.75), hold=(0.1, 0.6), jitter_deg=10.0,
         sway=(("chest_yaw", 12.0), ("chest_roll", 5.0), ("chest_pitch", 4.0), ("head_turn", 20.0),
               ("head_flex", 10.0), ("head_tilt", 6.0), ("root_x", 0.06), ("root_z", 0.06), ("root_y", 0.015))),
     "arms-crossing": MotionStyle(
@@ -282,6 +282,9 @@ def gesture_motion(style: MotionStyle, rng: np.random.Generator, n_frames: int, 
         poses[:, _idx("chest_yaw")] += turn(tt)
         # the head leads the turn a little
         poses[:, _idx("head_turn")] += np.clip(turn.derivative()(tt) * 0.15, -0.35, 0.35)
+    if style.yaw_hold is not None:                          # the sway stays inside the held range
+        lo, hi = np.deg2rad(style.yaw_hold)
+        poses[:, _idx("chest_yaw")] = np.sign(yaw0) * np.clip(np.abs(poses[:, _idx("chest_yaw")]), lo, hi)
     poses[:, _idx("chest_yaw")] = (poses[:, _idx("chest_yaw")] + np.pi) % (2.0 * np.pi) - np.pi
     return np.clip(poses, JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1])
 
