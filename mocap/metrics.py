@@ -102,7 +102,9 @@ def pa_mpjpe(pred, true, *, per_frame: bool = False):
 
     Each frame of ``pred`` is rotated (a proper rotation, no reflection; Kabsch via
     :meth:`scipy.spatial.transform.Rotation.align_vectors`), uniformly scaled and translated to
-    fit the true frame in the least-squares sense before the error is taken.
+    fit the true frame in the least-squares sense before the error is taken. The fit minimises
+    the sum of *squared* distances, so when one limb is far off it may raise the *mean*
+    distance: PA-MPJPE can then exceed MPJPE.
 
     Parameters
     ----------

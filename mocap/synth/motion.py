@@ -13,7 +13,7 @@ number of frames asked for.
 Sequences (the paper's Fig. 5):
 
 * ``gestures-1``: moderate arm gestures facing the camera (wave, point, raise, shrug, clap,
-  touch the head).
+  touch the head), the easiest sequence.
 * ``gestures-2``: gestures with fast motion in depth: the actor steps towards and away from
   the camera (root depth between about 1.35 and 2.2 m in under a second) and reaches forwards.
 * ``gestures-3``: fast, varied gestures with more torso and head motion.
@@ -38,7 +38,7 @@ from scipy.interpolate import PchipInterpolator
 
 from mocap.body.model import BodyModel
 from mocap.body.pose import JOINT_LIMITS, N_PARAMETERS, PARAMETER_INDEX
-from mocap.body.skeleton import SEGMENT_NAMES
+from mocap.body.skeleton import JOINT_NAMES, SEGMENT_NAMES
 
 __all__ = ["ARM_GESTURES", "ARM_PARAMETERS", "MOTIONS", "MotionStyle", "avoid_torso", "gesture_motion",
            "root_height_for_depth"]
@@ -130,7 +130,7 @@ _GESTURE_PAIRS = (
 
 #: The style of every procedural sequence.
 STYLES = MappingProxyType({
-    "gestures-1": MotionStyle(_GESTURE_PAIRS),
+    "gestures-1": MotionStyle(_GESTURE_PAIRS, transition=(0.8, 1.3), hold=(0.4, 1.2)),
     "gestures-2": MotionStyle(
         ((_sym("reach_forward"), 1.0), (_sym("point_forward", "rest"), 1.0), (_sym("clap"), 0.8),
          (_sym("rest"), 0.8), (_sym("rest", "reach_forward"), 0.8), (_sym("shrug"), 0.5), (_sym("wave", "rest"), 0.5)),
@@ -311,14 +311,14 @@ def avoid_torso(poses: np.ndarray, model: BodyModel, *, margin_m: float = 0.02, 
     torso = model.dims["torso"]
     a, b = 0.5 * torso.width + margin_m, 0.5 * torso.depth + margin_m
     chest = SEGMENT_NAMES.index("chest")
-    sides = {"r": (3, 4, 5), "l": (7, 8, 9)}              # elbow, wrist, hand rows of JOINT_NAMES
+    sides = {side: [JOINT_NAMES.index(f"{side}_{j}") for j in ("elbow", "wrist", "hand")] for side in ("r", "l")}
     hi = JOINT_LIMITS[_idx("r_shoulder_flex"), 1]
     for i in range(out.shape[0]):
         for side, rows in sides.items():
             k = _idx(f"{side}_shoulder_flex")
             for _ in range(max_steps):
                 t = model.segment_transforms(out[i])
-                joints = model.joint_positions(out[i])[list(rows)]
+                joints = model.joint_positions(out[i])[rows]
                 local = (joints - t[chest, :, 3]) @ t[chest, :, :3]
                 inside = ((local[:, 0] / a) ** 2 + (local[:, 2] / b) ** 2 < 1.0) & (local[:, 1] < 0.0) \
                     & (local[:, 1] > -torso.length)

@@ -63,7 +63,7 @@ from types import MappingProxyType
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from mocap.body.pose import DEFAULT_ROOT, JOINT_LIMITS, N_PARAMETERS, PARAMETER_INDEX
+from mocap.body.pose import DEFAULT_ROOT, JOINT_LIMITS, N_PARAMETERS, PARAMETER_INDEX, POSITION_NAMES
 from mocap.io.bvh import Bvh, read_bvh
 
 __all__ = ["CMU_UNIT_M", "JOINT_MAPS", "MotionClip", "RetargetConfig", "clip_from_asf_amc", "clip_from_bvh",
@@ -469,6 +469,7 @@ def retarget(clip: MotionClip, config: RetargetConfig = RetargetConfig()) -> np.
         limit = np.asarray(config.max_offset_m, dtype=np.float64)
         scale = np.where(reach > limit, limit / np.maximum(reach, 1e-12), 1.0)
         placed = centre + d * scale
-    pose[:, 0:3] = placed
+    for axis, name in enumerate(POSITION_NAMES):
+        pose[:, PARAMETER_INDEX[name]] = placed[:, axis]
     pose[:, PARAMETER_INDEX["chest_yaw"]] = _wrap(pose[:, PARAMETER_INDEX["chest_yaw"]])
     return np.clip(pose, JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1])

@@ -123,6 +123,12 @@ def _check_seed(seed) -> int:
     return int(seed)
 
 
+def _streams(seed: int, spec: SequenceSpec) -> dict[str, np.random.SeedSequence]:
+    """Independent random streams of one (seed, sequence)."""
+    keys = ("motion", "actor", "scene", "drift", "noise")
+    return dict(zip(keys, np.random.SeedSequence([seed, spec.index]).spawn(len(keys))))
+
+
 def supersampling(width: int) -> int:
     """Rendering samples per output pixel and axis: 3 up to 320 pixels wide, 2 up to 800, else 1."""
     return 3 if width <= 320 else 2 if width <= 800 else 1
@@ -144,6 +150,8 @@ class SequenceSetup:
     light : Light
     background : ndarray, shape (H * s, W * s, 3), float64
         Linear radiance of the empty scene at the render resolution.
+    background_radiance : ndarray, shape (H, W, 3), float64
+        The same at the output resolution (block averages).
     sensor : SensorConfig
     drift : SensorDrift
     """
@@ -158,7 +166,13 @@ class SequenceSetup:
     sensor: SensorConfig
     drift: SensorDrift
     noise_seed: np.random.SeedSequence = field(repr=False)
-    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+    background_radiance: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        small = downsample(self.background, self.supersample)
+        for array in (self.background, small):
+            array.setflags(write=False)
+        object.__setattr__(self, "background_radiance", small)
 
     @property
     def render_camera(self) -> Camera:
@@ -177,7 +191,7 @@ class SequenceSetup:
         """
         image, parts = render_actor(self.actor, pose, self.render_camera, self.light, self.background)
         s = self.supersample
-        out = self.background_radiance().copy()
+        out = self.background_radiance.copy()
         coverage = np.zeros(out.shape[:2])
         rows, cols = np.nonzero(parts >= 0)
         if rows.size:
@@ -191,15 +205,6 @@ class SequenceSetup:
             coverage[r0:r1, c0:c1] = downsample(upper[:, :, None], s)[:, :, 0]
         return out, coverage
 
-    def background_radiance(self) -> np.ndarray:
-        """Linear radiance of the empty scene at the output size, (H, W, 3) float64 (read-only)."""
-        cached = self._cache.get("background")
-        if cached is None:
-            cached = downsample(self.background, self.supersample)
-            cached.setflags(write=False)
-            self._cache["background"] = cached
-        return cached
-
     def frame(self, pose, index: int) -> np.ndarray:
         """The 8-bit RGB frame number ``index`` (its time and noise) with the actor in ``pose``,
         (H, W, 3) uint8."""
@@ -212,7 +217,7 @@ class SequenceSetup:
 
     def background_frame(self) -> np.ndarray:
         """The empty scene through the camera (exposure of frame 0, noise of its own)."""
-        return apply_sensor(self.background_radiance(), self.sensor, self.drift, 0.0, self._noise_rng(-1))[0]
+        return apply_sensor(self.background_radiance, self.sensor, self.drift, 0.0, self._noise_rng(-1))[0]
 
     def _noise_rng(self, index: int) -> np.random.Generator:
         return np.random.default_rng(np.random.SeedSequence(self.noise_seed.entropy,
@@ -239,21 +244,31 @@ def setup_sequence(name: str, *, seed: int = 0, size=(160, 120), sensor: SensorC
     spec = _check_name(name)
     seed = _check_seed(seed)
     width, height = _check_size(size)
-    root = np.random.SeedSequence([seed, spec.index])
-    _, actor_ss, scene_ss, drift_ss, noise_ss = root.spawn(5)
+    streams = _streams(seed, spec)
     camera = Camera.default(width, height)
     s = supersampling(width)
-    actor = Actor.random(np.random.default_rng(actor_ss), bare_forearms=spec.bare_forearms, pattern=spec.pattern)
-    scene_rng = np.random.default_rng(scene_ss)
+    actor = Actor.random(np.random.default_rng(streams["actor"]), bare_forearms=spec.bare_forearms,
+                         pattern=spec.pattern)
+    scene_rng = np.random.default_rng(streams["scene"])
     light = Light.random(scene_rng)
     background = make_background(scene_rng, width * s, height * s)
     return SequenceSetup(name, seed, camera, s, actor, light, background, sensor or SensorConfig(),
-                         SensorDrift.random(np.random.default_rng(drift_ss)), noise_ss)
+                         SensorDrift.random(np.random.default_rng(streams["drift"])), streams["noise"])
 
 
-def sequence_poses(name: str, setup: SequenceSetup, frames: int | None = None,
+def sequence_poses(setup: SequenceSetup, *, frames: int | None = None,
                    motion: str | Path | None = None) -> tuple[np.ndarray, dict | None]:
     """Ground-truth poses of a sequence: procedural, or a retargeted motion clip.
+
+    Parameters
+    ----------
+    setup : SequenceSetup
+        The sequence (its name and seed fix the procedural motion; its actor the collision
+        checks).
+    frames : int, optional
+        Frame count (default: the sequence's own, or the whole clip).
+    motion : str or Path, optional
+        A motion clip (:func:`~mocap.synth.retarget.load_clip`) instead of the procedural motion.
 
     Returns
     -------
@@ -262,7 +277,7 @@ def sequence_poses(name: str, setup: SequenceSetup, frames: int | None = None,
     motion_info : dict or None
         Description of the clip used (file name, hash, frames, convention).
     """
-    spec = _check_name(name)
+    spec = _check_name(setup.name)
     if frames is not None and (isinstance(frames, bool) or not isinstance(frames, (int, np.integer))
                                or not 1 <= frames <= MAX_FRAMES):
         raise ValueError(f"frames must be an integer in [1, {MAX_FRAMES}], got {frames!r}")
@@ -270,8 +285,7 @@ def sequence_poses(name: str, setup: SequenceSetup, frames: int | None = None,
     info = None
     if motion is None:
         n = spec.frames if frames is None else int(frames)
-        motion_ss = np.random.SeedSequence([setup.seed, spec.index]).spawn(1)[0]
-        poses = spec.motion(np.random.default_rng(motion_ss), n, FPS)
+        poses = spec.motion(np.random.default_rng(_streams(setup.seed, spec)["motion"]), n, FPS)
     else:
         path = Path(motion)
         clip = load_clip(path)
@@ -352,7 +366,7 @@ def generate_sequence(name: str, out_dir: str | Path, *, frames: int | None = No
     if frame_format not in FRAME_FORMATS:
         raise ValueError(f"frame format must be one of {', '.join(FRAME_FORMATS)}, got {frame_format!r}")
     setup = setup_sequence(name, seed=seed, size=size)
-    poses, motion_info = sequence_poses(name, setup, frames, motion)
+    poses, motion_info = sequence_poses(setup, frames=frames, motion=motion)
     out = Path(out_dir)
     _prepare_folder(out)
     (out / "meta.json").unlink(missing_ok=True)       # written last: its presence marks a finished folder

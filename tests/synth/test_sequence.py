@@ -7,7 +7,7 @@ import pytest
 from scipy import ndimage
 
 from mocap import cli
-from mocap.body import BodyDimensions, BodyModel, JOINT_LIMITS
+from mocap.body import PART_NAMES, BodyDimensions, BodyModel, JOINT_LIMITS
 from mocap.calibrate import Calibration
 from mocap.io.pose_table import PoseTable
 from mocap.render import render
@@ -77,7 +77,7 @@ def test_foreground_matches_the_tracker_model_but_not_exactly():
     (it is the same body) but never identical (another mesh, shape and tessellation)."""
     for name in ("gestures-1", "not-facing", "turning"):
         setup = setup_sequence(name, seed=2)
-        poses, _ = sequence_poses(name, setup, frames=100)
+        poses, _ = sequence_poses(setup, frames=100)
         model = BodyModel.build(setup.actor.dims, part_class=setup.actor.appearance.part_class())
         for i in (0, 40, 70, 99):
             _, coverage = setup.radiance(poses[i])
@@ -105,7 +105,7 @@ def test_frames_are_shaded_textured_and_noisy(sequence):
     gt = PoseTable.read(sequence / "ground_truth.csv")
     model = BodyModel.build(setup.actor.dims)
     frame = iio.imread(sequence / "frames" / "000000.png").astype(float)
-    torso = render(gt.poses[0], model, setup.camera).parts == 1            # part index 0 + 1: torso
+    torso = render(gt.poses[0], model, setup.camera).parts == PART_NAMES.index("torso") + 1
     inner = ndimage.binary_erosion(torso, iterations=2)
     assert inner.sum() > 50
     assert frame[inner].std(axis=0).mean() > 3.0                            # not a flat class colour
@@ -133,7 +133,7 @@ def test_actor_mesh_is_finer_than_the_tracker_mesh():
 
 def test_surface_kernel_matches_its_naive_twin():
     setup = setup_sequence("gestures-2", seed=1)
-    poses, _ = sequence_poses("gestures-2", setup, frames=20)
+    poses, _ = sequence_poses(setup, frames=20)
     _, verts, normals = setup.actor.posed(poses[10])
     mesh = setup.actor.mesh
     from mocap.render import rasterize_mesh
