@@ -38,6 +38,7 @@ DEFAULT_FAILURE_MM: float = 100.0
 SUMMARY_KEYS: tuple[str, ...] = ("mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg", "reprojection_px",
                                  "failure_rate")
 _ANGLE_COLUMNS = np.array([PARAMETER_INDEX[name] for name in ANGLE_NAMES])
+_ANGLE_COLUMNS.setflags(write=False)
 
 
 def _joint_pair(pred, true, min_joints: int = 1) -> tuple[np.ndarray, np.ndarray]:
@@ -83,7 +84,11 @@ def mpjpe(pred, true, *, per_frame: bool = False):
 
 
 def _procrustes_align(p: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """``p`` (J, 3) moved by the similarity transform that best fits it to ``t`` (least squares)."""
+    """``p`` (J, 3) moved by the similarity transform that best fits it to ``t`` (least squares).
+
+    (:func:`scipy.spatial.procrustes` normalises both sets to unit size, which loses the
+    millimetres; the rotation comes from scipy's Kabsch solver instead.)
+    """
     pc, tc = p - p.mean(axis=0), t - t.mean(axis=0)
     norm = float(np.sum(pc * pc))
     if norm == 0.0:  # all predicted joints at one point: only the translation can be fitted

@@ -231,6 +231,7 @@ class Appearance:
         return out
 
     def to_dict(self) -> dict:
+        """JSON-ready description, colours as sRGB 0-255 (for ``meta.json``)."""
         def rgb(c):
             return [int(round(255 * v)) for v in c]
         return {"skin_srgb": rgb(self.skin), "clothes_srgb": rgb(self.clothes),

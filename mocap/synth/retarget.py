@@ -22,9 +22,11 @@ rotations and root positions. :func:`retarget` then, per output frame:
    ``Ry(yaw) Rx(pitch) Rz(roll)``, head ``Rx(flex) Rz(tilt) Ry(turn)``, shoulder
    ``Rx(-flex) Rz(m abd) Ry(m rot)``, elbow ``Rx(-flex) Ry(m twist)``, wrist
    ``Rx(-flex) Rz(m dev)`` (``m`` = +1 right, -1 left). Of the two Euler solutions the one
-   nearer the joint limits is taken. The hand's rotation about its own long axis (which our
-   wrist cannot do) is moved into the forearm twist, as anatomy has it (pronation is a forearm
-   motion); a residual sideways bend of the elbow, which our hinge cannot do, is dropped;
+   nearer the joint limits is taken. Our elbow is a hinge: the upper arm is first turned about
+   its own axis (shoulder rotation) until the clip's elbow bends in the hinge plane, which
+   keeps both arm bones pointing exactly where the clip's do (nearly straight arms keep the
+   clip's twist). The hand's rotation about its own long axis (which our wrist cannot do) is
+   moved into the forearm twist, as anatomy has it (pronation is a forearm motion);
 6. clamps every parameter into :data:`~mocap.body.pose.JOINT_LIMITS` (joint limits always
    hold) and wraps the chest yaw into [-180, 180) degrees;
 7. places the root: the clip's root trajectory, in metres (``unit_m`` per clip unit; CMU
@@ -95,6 +97,8 @@ _ARM_CHAIN = ("upper_arm", "forearm", "hand")
 # half turn about x: clip world (y up, facing +z) <-> camera (y down, facing the camera = -z)
 _FLIP = np.diag([1.0, -1.0, -1.0])
 _DOWN = np.array([0.0, -1.0, 0.0])   # our arms' zero-pose direction in clip coordinates
+_FLIP.setflags(write=False)
+_DOWN.setflags(write=False)
 
 
 @dataclass(frozen=True)
@@ -164,6 +168,7 @@ class MotionClip:
         return (self.n_frames - 1) * self.frame_time
 
     def index(self, name: str) -> int:
+        """Index of joint ``name`` (ValueError when absent)."""
         return self.names.index(name)
 
     def rest_positions(self) -> np.ndarray:

@@ -67,16 +67,19 @@ class SensorConfig:
             raise ValueError(f"JPEG quality must be an integer in [1, 100] or None, got {self.jpeg_quality!r}")
 
     def to_dict(self) -> dict:
+        """JSON-ready settings."""
         return asdict(self)
 
     @classmethod
     def from_dict(cls, data: dict) -> "SensorConfig":
+        """Inverse of :meth:`to_dict`; unknown keys are an error."""
         extra = set(data) - set(cls.__dataclass_fields__)
         if extra:
             raise ValueError(f"unknown sensor settings: {', '.join(sorted(extra))}")
         return cls(**data)
 
     def to_json(self) -> str:
+        """:meth:`to_dict` as JSON text."""
         return json.dumps(self.to_dict(), indent=2)
 
 
@@ -96,6 +99,7 @@ class SensorDrift:
 
     @classmethod
     def random(cls, rng: np.random.Generator) -> "SensorDrift":
+        """Periods of 4 to 33 seconds, random phases."""
         return cls(rng.uniform(0.03, 0.25, size=(4, 2)), rng.uniform(0.0, 2 * np.pi, size=(4, 2)))
 
     def gains(self, t: float, config: SensorConfig) -> np.ndarray:

@@ -26,8 +26,8 @@ from mocap.synth.actor import LOWER_BODY, Actor, srgb_to_linear
 __all__ = ["Light", "downsample", "render_actor"]
 
 _HEAD = PART_NAMES.index("head")
-_SKIN_PARTS = {PART_NAMES.index(p) for p in ("neck", "head", "r_hand", "l_hand")}
-_FOREARMS = {PART_NAMES.index(p) for p in ("r_forearm", "l_forearm")}
+_SKIN_PARTS = frozenset(PART_NAMES.index(p) for p in ("neck", "head", "r_hand", "l_hand"))
+_FOREARMS = frozenset(PART_NAMES.index(p) for p in ("r_forearm", "l_forearm"))
 
 
 @dataclass(frozen=True)
@@ -53,11 +53,13 @@ class Light:
 
     @classmethod
     def random(cls, rng: np.random.Generator) -> "Light":
+        """A key light from above and in front, left or right at random, with fill and ambient."""
         side = 1.0 if rng.uniform() < 0.5 else -1.0
         return cls((side * rng.uniform(0.2, 0.8), -rng.uniform(0.5, 1.0), -rng.uniform(0.5, 1.0)),
                    float(rng.uniform(0.65, 0.9)), float(rng.uniform(0.15, 0.35)), float(rng.uniform(0.15, 0.28)))
 
     def to_dict(self) -> dict:
+        """JSON-ready settings (for ``meta.json``)."""
         return {"key_direction": [round(float(v), 6) for v in self.key_direction], "key": self.key,
                 "fill": self.fill, "ambient": self.ambient}
 
@@ -122,7 +124,7 @@ def _albedo(actor: Actor, part: np.ndarray, local: np.ndarray, noise: np.ndarray
     k = part.shape[0]
     albedo = np.empty((k, 3))
     spec = np.zeros(k)
-    is_skin = np.isin(part, list(_SKIN_PARTS | (_FOREARMS if app.bare_forearms else set())))
+    is_skin = np.isin(part, sorted(_SKIN_PARTS | (_FOREARMS if app.bare_forearms else frozenset())))
     is_lower = part == LOWER_BODY
     is_cloth = ~is_skin & ~is_lower
     # skin: slight mottling, faint highlight
