@@ -52,13 +52,18 @@ def grid_specs(config: SweepConfig, data: DataSpec, region_budgets=None, edge_bu
 def convergence_specs(config: SweepConfig, data: DataSpec) -> dict:
     """Figs. 4 and 6: region-only and two-step runs, converged and limited.
 
-    Keys: ``region_converged``, ``region_limited`` (edge budget 0), ``both_converged``,
-    ``both_limited`` (the same budget for each step). All use ``converged_ftol`` so that only
-    the budget differs.
+    Keys: ``region_converged``, ``region_limited`` (edge budget 0); ``both_converged``,
+    ``both_limited`` (the same budget for each step, edge step from the region step's final
+    simplex); ``both_converged_fresh``, ``both_limited_fresh`` (edge step from a large fresh
+    simplex, as before the paper's section 4.2 fix: a fully converged region simplex has
+    collapsed, and an edge step started from it cannot move). All use ``converged_ftol`` so
+    that only the budget differs.
     """
     big, small, tol = config.converged_budget, config.limited_budget, config.converged_ftol
     return {"region_converged": RunSpec(data, big, 0, ftol=tol), "region_limited": RunSpec(data, small, 0, ftol=tol),
-            "both_converged": RunSpec(data, big, big, ftol=tol), "both_limited": RunSpec(data, small, small, ftol=tol)}
+            "both_converged": RunSpec(data, big, big, ftol=tol), "both_limited": RunSpec(data, small, small, ftol=tol),
+            "both_converged_fresh": RunSpec(data, big, big, edge_start="fresh", ftol=tol),
+            "both_limited_fresh": RunSpec(data, small, small, edge_start="fresh", ftol=tol)}
 
 
 def handoff_specs(config: SweepConfig, data: DataSpec) -> dict:

@@ -1,0 +1,16 @@
+"""Fig. 10: mean residual edge distance vs region and edge budgets (figure sequence as a surface, all sequences as a heat map)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from experiments.figures._common import surface_figure
+from experiments.results import Results
+
+NAME = "fig10"
+STAT = "mean_D"
+TITLE = "Fig. 10 — mean residual edge distance vs region and edge budgets"
+
+
+def main(results: Results | str | Path, out: str | Path) -> list[Path]:
+    """Write ``fig10.png`` and ``fig10.pdf`` into ``out`` from the results folder ``results``."""
+    return surface_figure(results, out, NAME, STAT, TITLE)

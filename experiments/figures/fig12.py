@@ -1,0 +1,16 @@
+"""Fig. 12: failures of the mean edge distance vs region and edge budgets (figure sequence as a surface, all sequences as a heat map)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from experiments.figures._common import surface_figure
+from experiments.results import Results
+
+NAME = "fig12"
+STAT = "fail_D"
+TITLE = "Fig. 12 — failures of the mean edge distance vs region and edge budgets"
+
+
+def main(results: Results | str | Path, out: str | Path) -> list[Path]:
+    """Write ``fig12.png`` and ``fig12.pdf`` into ``out`` from the results folder ``results``."""
+    return surface_figure(results, out, NAME, STAT, TITLE)
