@@ -166,15 +166,24 @@ def _nm_tell(simplex, values, lower, upper, coef, work, ist, fst, f):
 
 
 @jit
-def _nm_run_costs(kind, region_args, edge_args, simplex, values, lower, upper, coef, work, ist, fst, budget):
-    """Drive the state machine with a mocap cost: kind 0 region (eq. 1), 1 edge (eq. 2)."""
-    x = np.empty(simplex.shape[1])
+def _nm_run_costs(kind, region_args, edge_args, prior_centre, prior_weight, base, active, simplex, values, lower,
+                  upper, coef, work, ist, fst, budget):
+    """Drive the state machine with a mocap cost: kind 0 region (eq. 1), 1 edge (eq. 2), plus the
+    quadratic prior ``sum(prior_weight * (x - prior_centre)**2)`` (zero weights: the plain cost).
+
+    The simplex lives in the subspace of the parameters ``active``; the others keep the values
+    of ``base`` (the full pose vector the cost is evaluated on)."""
+    x = base.copy()
     while ist[_EVALS] < budget and ist[_PHASE] != _DONE:
-        x[:] = work[_TRIAL]
+        for i in range(active.shape[0]):
+            x[active[i]] = work[_TRIAL, i]
         if kind == 0:
             f = _region_cost_kernel(x, *region_args)
         else:
             f = _edge_cost_kernel(x, *edge_args)
+        for i in range(x.shape[0]):
+            d = x[i] - prior_centre[i]
+            f += prior_weight[i] * d * d
         _nm_tell(simplex, values, lower, upper, coef, work, ist, fst, f)
 
 
@@ -336,9 +345,22 @@ def minimize(fun: Callable[[np.ndarray], float], simplex, lower, upper, *, budge
 
 
 def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-3,
-                  adaptive: bool = False) -> SimplexResult:
+                  adaptive: bool = False, prior: tuple[np.ndarray, np.ndarray] | None = None,
+                  active: np.ndarray | None = None, base: np.ndarray | None = None) -> SimplexResult:
     """As :func:`minimize` for a :class:`~mocap.cost.RegionCost` or :class:`~mocap.cost.EdgeCost`,
-    with the whole loop compiled (no Python per evaluation)."""
+    with the whole loop compiled (no Python per evaluation).
+
+    Parameters
+    ----------
+    prior : (centre, weight), each ndarray of shape (23,), optional
+        Minimise ``cost(x) + sum(weight * (x - centre)**2)`` instead of ``cost(x)`` (a
+        temporal prior around the predicted pose; ``fun`` and ``values`` then include it).
+    active : ndarray of int, shape (k,), optional
+        Optimise only these parameters (the simplex, bounds and result are k-dimensional);
+        the others keep their values in ``base``. Default: all 23.
+    base : ndarray, shape (23,), optional
+        Full pose the inactive parameters are taken from (needed with ``active``).
+    """
     from mocap.cost import EdgeCost, RegionCost
 
     budget = _check_budget(budget)
@@ -350,9 +372,29 @@ def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-
     else:
         raise ValueError(f"minimize_cost takes a RegionCost or EdgeCost, got {type(cost).__name__}; "
                          "use minimize() for other callables")
-    if st.simplex.shape[1] != 23:
-        raise ValueError(f"mocap costs take 23 parameters, the simplex has {st.simplex.shape[1]}")
-    _nm_run_costs(kind, region_args, edge_args, *st.args(), budget)
+    k = st.simplex.shape[1]
+    n = 23
+    if active is None:
+        active = np.arange(n)
+        base = np.zeros(n)
+    else:
+        active = np.asarray(active, dtype=np.int64)
+        if base is None or np.shape(base) != (n,):
+            raise ValueError("optimising a subset of the parameters needs the full (23,) base pose")
+        base = np.ascontiguousarray(base, dtype=np.float64)
+        if active.ndim != 1 or len(np.unique(active)) != len(active) or active.min() < 0 or active.max() >= n:
+            raise ValueError("active must list distinct parameter indices in 0..22")
+    if active.shape[0] != k:
+        raise ValueError(f"mocap costs take 23 parameters: the simplex has {k} columns for {active.shape[0]} "
+                         "active parameters")
+    if prior is None:
+        centre, weight = np.zeros(n), np.zeros(n)
+    else:
+        centre, weight = (np.ascontiguousarray(a, dtype=np.float64) for a in prior)
+        if centre.shape != (n,) or weight.shape != (n,) or not (np.isfinite(centre).all() and np.isfinite(weight).all()) \
+                or (weight < 0).any():
+            raise ValueError("prior must be (centre, weight): finite (23,) arrays, weights >= 0")
+    _nm_run_costs(kind, region_args, edge_args, centre, weight, base, active, *st.args(), budget)
     return st.result()
 
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mocap.body.model import BodyModel
-from mocap.body.pose import JOINT_LIMITS, N_PARAMETERS, check_pose, clamp_to_limits
+from mocap.body.pose import JOINT_LIMITS, N_PARAMETERS, PARAMETER_INDEX, PARAMETER_NAMES, check_pose, clamp_to_limits
 from mocap.config import JsonConfig
 from mocap.cost import EdgeCost, RegionCost
 from mocap.optimize import SimplexResult, initial_simplex, minimize_cost
@@ -70,6 +70,30 @@ class TrackerConfig(JsonConfig):
         Mesh level of detail; 0 chooses it from the image size.
     edge_gap_m : float, metres
         Depth step that makes an occluding contour between parts.
+    blocks : str
+        ``"all"``: one simplex over the 23 parameters (the paper). ``"torso-arms"`` (beyond the
+        paper): root, torso and head first, then each arm, each in its own smaller simplex with
+        a share of the step's budget proportional to its size; lower-dimensional simplices
+        converge in far fewer evaluations and one arm's error cannot leak into the others.
+    arm_search : bool
+        Beyond the paper: before the region step's arm blocks, score a coarse grid of arm
+        postures (:data:`ARM_SEARCH_GRID_DEG`) with F and start the arm's simplex from the best
+        one when it beats the predicted arm. Re-finds an arm lost after fast motion; the
+        evaluations count against the region budget, and the search is skipped when the arm's
+        share of it cannot pay for the grid and a simplex. Needs ``blocks="torso-arms"``.
+    prior_weight_region, prior_weight_edge : float
+        Weight of a temporal prior added to the region cost (F units) and to the edge cost
+        (pixels) while optimising: ``weight * mean(((q - q_predicted) / sigma)**2)``. 0 (the
+        default) is the paper's method; the reported residuals never include the prior.
+        Beyond the paper: it keeps the weakly observed directions (depth above all) from
+        drifting.
+    prior_sigma_position_m, prior_sigma_angle_deg : float
+        Expected frame-to-frame change of the root position (metres) and of the angles (degrees).
+    pose_prior_weight, pose_prior_sigma_deg : float
+        Beyond the paper: a weak prior pulling the 20 angles towards the neutral pose,
+        ``weight * mean(((angle - neutral) / sigma)**2)``, added to both steps. It breaks the
+        monocular forward/backward ties (an arm pointing back looks like one pointing sideways)
+        in favour of common postures. 0 is the paper's method.
     """
 
     evaluations: int = 500
@@ -87,6 +111,14 @@ class TrackerConfig(JsonConfig):
     recovery_step_scale: float = 2.5
     mesh_resolution: int = 0
     edge_gap_m: float = 0.03
+    blocks: str = "all"
+    arm_search: bool = False
+    prior_weight_region: float = 0.0
+    prior_weight_edge: float = 0.0
+    prior_sigma_position_m: float = 0.05
+    prior_sigma_angle_deg: float = 15.0
+    pose_prior_weight: float = 0.0
+    pose_prior_sigma_deg: float = 45.0
 
     def __post_init__(self) -> None:
         if isinstance(self.evaluations, bool) or not isinstance(self.evaluations, int) or self.evaluations < 0:
@@ -94,10 +126,14 @@ class TrackerConfig(JsonConfig):
         split_budget(self.evaluations, self.split)          # validates the split
         if self.edge_start not in EDGE_STARTS:
             raise ValueError(f"edge_start must be one of {EDGE_STARTS}, got {self.edge_start!r}")
+        block_indices(self.blocks)                           # validates the strategy
+        if self.arm_search and self.blocks != "torso-arms":
+            raise ValueError("arm_search needs blocks='torso-arms'")
         if self.prediction not in PREDICTIONS:
             raise ValueError(f"prediction must be one of {PREDICTIONS}, got {self.prediction!r}")
         for name in ("position_step_m", "angle_step_deg", "fresh_step_scale", "recovery_step_scale",
-                     "edge_failure_threshold_px", "region_failure_threshold"):
+                     "edge_failure_threshold_px", "region_failure_threshold", "prior_sigma_position_m",
+                     "prior_sigma_angle_deg", "pose_prior_sigma_deg"):
             v = getattr(self, name)
             if not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be a finite positive number, got {v!r}")
@@ -105,8 +141,32 @@ class TrackerConfig(JsonConfig):
             raise ValueError(f"ftol must be finite and non-negative, got {self.ftol!r}")
         if not isinstance(self.mesh_resolution, int) or self.mesh_resolution < 0:
             raise ValueError(f"mesh_resolution must be 0 (automatic) or a positive integer, got {self.mesh_resolution!r}")
-        if not (isinstance(self.edge_gap_m, (int, float)) and math.isfinite(self.edge_gap_m) and self.edge_gap_m >= 0):
-            raise ValueError(f"edge_gap_m must be finite and non-negative, got {self.edge_gap_m!r}")
+        for name in ("edge_gap_m", "prior_weight_region", "prior_weight_edge", "pose_prior_weight"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be finite and non-negative, got {v!r}")
+
+    def prior(self, centre: np.ndarray, weight: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """(centre, per-parameter weights) of the quadratic prior of a step, or None if there is none.
+
+        The temporal prior (around ``centre``, the predicted pose, with ``weight``) and the pose
+        prior (angles around the neutral pose) add up to one quadratic: its weights are the sum
+        and its centre the weighted mean of theirs.
+        """
+        from mocap.body.pose import neutral_pose
+
+        sigma = np.r_[np.full(3, self.prior_sigma_position_m),
+                      np.full(N_PARAMETERS - 3, math.radians(self.prior_sigma_angle_deg))]
+        w_time = weight / (N_PARAMETERS * sigma**2)
+        w_pose = np.zeros(N_PARAMETERS)
+        w_pose[3:] = self.pose_prior_weight / ((N_PARAMETERS - 3) * math.radians(self.pose_prior_sigma_deg) ** 2)
+        total = w_time + w_pose
+        if not total.any():
+            return None
+        neutral = neutral_pose()
+        centre = np.asarray(centre, dtype=np.float64)
+        mixed = np.where(total > 0, (w_time * centre + w_pose * neutral) / np.where(total > 0, total, 1.0), centre)
+        return mixed, total
 
     def steps(self) -> np.ndarray:
         """Initial simplex steps, shape (23,): metres for the root, radians for the angles."""
@@ -145,6 +205,40 @@ def split_budget(total: int, split: str) -> tuple[int, int]:
     return region, total - region
 
 
+#: Parameter blocks of the ``"torso-arms"`` strategy: root, torso and head first, then each arm.
+PARAMETER_BLOCKS: dict[str, tuple[tuple[str, ...], ...]] = {
+    "all": (PARAMETER_NAMES,),
+    "torso-arms": (
+        tuple(n for n in PARAMETER_NAMES if n.startswith(("root_", "chest_", "head_"))),
+        tuple(n for n in PARAMETER_NAMES if n.startswith("r_")),
+        tuple(n for n in PARAMETER_NAMES if n.startswith("l_")),
+    ),
+}
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """One registration step (region or edge) over one or more parameter blocks.
+
+    Attributes
+    ----------
+    x : ndarray, shape (23,), float64
+        Pose after the step (metres, radians).
+    evaluations, iterations : int
+        Summed over the blocks.
+    converged : bool
+        Every block stopped on the spread test.
+    blocks : tuple of SimplexResult
+        Each block's run; its ``simplex`` is in that block's parameters.
+    """
+
+    x: np.ndarray
+    evaluations: int
+    iterations: int
+    converged: bool
+    blocks: tuple[SimplexResult, ...]
+
+
 @dataclass(frozen=True)
 class Registration:
     """Result of registering the model on one prepared frame.
@@ -159,24 +253,94 @@ class Registration:
         Mean edge distance at ``pose``.
     edge_residual_after_region : float, pixels
         Mean edge distance at the region step's result (the paper's Fig. 6 grey line).
-    region : SimplexResult or None
-    edge : SimplexResult or None
+    region : StepResult or None
+    edge : StepResult or None
     """
 
     pose: np.ndarray
     region_residual: float
     edge_residual: float
     edge_residual_after_region: float
-    region: SimplexResult | None
-    edge: SimplexResult | None
+    region: StepResult | None
+    edge: StepResult | None
 
     @property
     def evaluations(self) -> int:
         return sum(r.evaluations for r in (self.region, self.edge) if r is not None)
 
 
+def block_indices(strategy: str) -> tuple[np.ndarray, ...]:
+    """Parameter indices of each block of a block strategy (see :data:`PARAMETER_BLOCKS`)."""
+    if strategy not in PARAMETER_BLOCKS:
+        raise ValueError(f"blocks must be one of {tuple(PARAMETER_BLOCKS)}, got {strategy!r}")
+    return tuple(np.array([PARAMETER_INDEX[n] for n in block]) for block in PARAMETER_BLOCKS[strategy])
+
+
+def _block_budgets(total: int, blocks: tuple[np.ndarray, ...]) -> list[int]:
+    """Split ``total`` evaluations over blocks in proportion to their simplex size (k + 1)."""
+    sizes = np.array([len(b) + 1 for b in blocks], dtype=float)
+    budgets = np.floor(total * sizes / sizes.sum()).astype(int)
+    budgets[0] += total - budgets.sum()
+    return budgets.tolist()
+
+
+#: Arm postures tried by the arm search: shoulder flexion, abduction and elbow flexion (degrees).
+ARM_SEARCH_GRID_DEG = {"shoulder_flex": (0.0, 60.0, 120.0, 170.0),
+                       "shoulder_abd": (10.0, 60.0, 120.0),
+                       "elbow_flex": (20.0, 100.0)}
+#: Evaluations of one arm search (the grid and the current arm).
+ARM_SEARCH_EVALUATIONS = 1 + int(np.prod([len(v) for v in ARM_SEARCH_GRID_DEG.values()]))
+
+
+def _arm_candidates(side: str, x: np.ndarray) -> list[np.ndarray]:
+    out = []
+    for flex in ARM_SEARCH_GRID_DEG["shoulder_flex"]:
+        for abd in ARM_SEARCH_GRID_DEG["shoulder_abd"]:
+            for elbow in ARM_SEARCH_GRID_DEG["elbow_flex"]:
+                q = x.copy()
+                q[PARAMETER_INDEX[f"{side}_shoulder_flex"]] = math.radians(flex)
+                q[PARAMETER_INDEX[f"{side}_shoulder_abd"]] = math.radians(abd)
+                q[PARAMETER_INDEX[f"{side}_elbow_flex"]] = math.radians(elbow)
+                out.append(q)
+    return out
+
+
+def _search_arm(cost, x: np.ndarray, block: np.ndarray) -> tuple[np.ndarray, int]:
+    """Best of the arm grid and the current arm under ``cost``; returns (pose, evaluations)."""
+    side = PARAMETER_NAMES[block[0]][0]
+    best, best_f = x, cost.evaluate_unchecked(x)
+    candidates = _arm_candidates(side, x)
+    for q in candidates:
+        f = cost.evaluate_unchecked(q)
+        if f < best_f:
+            best, best_f = q, f
+    return best.copy(), len(candidates) + 1
+
+
+def _run_step(cost, pose, simplices, budget, config, lower, upper, prior, blocks, arm_search=False) -> StepResult:
+    x = pose.copy()
+    runs = []
+    searched = 0
+    for block, block_budget, simplex in zip(blocks, _block_budgets(budget, blocks), simplices):
+        if simplex is None:
+            continue
+        if (arm_search and PARAMETER_NAMES[block[0]][:2] in ("r_", "l_")
+                and block_budget >= ARM_SEARCH_EVALUATIONS + len(block) + 1):
+            x, used = _search_arm(cost, x, block)
+            block_budget = max(block_budget - used, 0)
+            searched += used
+        res = minimize_cost(cost, simplex(x, block) if callable(simplex) else simplex, lower[block], upper[block],
+                            budget=block_budget, ftol=config.ftol, adaptive=config.adaptive, prior=prior,
+                            active=block, base=x)
+        if res.evaluations > 0:
+            x[block] = res.x
+        runs.append(res)
+    return StepResult(x, searched + sum(r.evaluations for r in runs), sum(r.iterations for r in runs),
+                      all(r.converged for r in runs), tuple(runs))
+
+
 def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: TrackerConfig, *,
-             step_scale: float = 1.0, limits: np.ndarray = JOINT_LIMITS) -> Registration:
+             step_scale: float = 1.0, limits: np.ndarray = JOINT_LIMITS, prior_centre=None) -> Registration:
     """Two-step registration of one frame: region step, then edge step.
 
     Parameters
@@ -186,34 +350,39 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
     start_pose : array_like, shape (23,)
         Where the region step's simplex starts (metres, radians).
     config : TrackerConfig
-        Budget, split, simplex steps, edge-step start.
+        Budget, split, simplex steps, edge-step start, parameter blocks, prior.
     step_scale : float
         Multiplies the initial simplex steps (wider for recovery).
+    prior_centre : array_like, shape (23,), optional
+        Centre of the temporal prior (default: ``start_pose``); used when the config's prior
+        weights are not 0.
 
     Returns
     -------
     Registration
     """
     q0 = clamp_to_limits(check_pose(start_pose, name="start pose"), limits)
+    prior_centre = q0 if prior_centre is None else check_pose(prior_centre, name="prior centre")
     lower, upper = limits[:, 0], limits[:, 1]
     n_region, n_edge = split_budget(config.evaluations, config.split)
     steps = config.steps() * step_scale
+    blocks = block_indices(config.blocks)
+    fresh = lambda scale: (lambda x, block: initial_simplex(x[block], steps[block] * scale, lower[block], upper[block]))
     pose = q0
     region = edge = None
     if n_region > 0:
-        region = minimize_cost(region_cost, initial_simplex(q0, steps, lower, upper), lower, upper,
-                               budget=n_region, ftol=config.ftol, adaptive=config.adaptive)
+        region = _run_step(region_cost, q0, [fresh(1.0)] * len(blocks), n_region, config, lower, upper,
+                           config.prior(prior_centre, config.prior_weight_region), blocks, config.arm_search)
         pose = region.x
     edge_after_region = edge_cost(pose)
     if n_edge > 0:
-        if region is not None and config.edge_start == "region_simplex":
-            simplex = region.simplex
+        if region is not None and config.edge_start == "region_simplex" and len(region.blocks) == len(blocks):
+            simplices = [r.simplex for r in region.blocks]
         else:
-            simplex = initial_simplex(pose, steps * config.fresh_step_scale, lower, upper)
-        edge = minimize_cost(edge_cost, simplex, lower, upper, budget=n_edge, ftol=config.ftol,
-                             adaptive=config.adaptive)
-        if edge.evaluations > 0:
-            pose = edge.x
+            simplices = [fresh(config.fresh_step_scale)] * len(blocks)
+        edge = _run_step(edge_cost, pose, simplices, n_edge, config, lower, upper,
+                         config.prior(prior_centre, config.prior_weight_edge), blocks)
+        pose = edge.x
     return Registration(pose.copy(), region_cost(pose), edge_cost(pose), edge_after_region, region, edge)
 
 
@@ -320,7 +489,7 @@ class Tracker:
                     or (edge_checked and reg.edge_residual > cfg.edge_failure_threshold_px))
 
 
-def _share(part: SimplexResult | None, reg: Registration) -> float:
+def _share(part: StepResult | None, reg: Registration) -> float:
     """Fraction of the registration's evaluations spent in ``part`` (to apportion its time)."""
     if part is None or reg.evaluations == 0:
         return 0.0

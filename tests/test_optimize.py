@@ -161,3 +161,30 @@ def test_compiled_cost_loop_equals_python_loop():
     np.testing.assert_array_equal(a.simplex, b.simplex)
     assert a.evaluations == b.evaluations == 150 and a.iterations == b.iterations
     assert a.fun < cost(start)
+
+
+def test_subset_optimisation_keeps_the_other_parameters_and_prior_pulls():
+    model, camera = BodyModel.build(resolution=6), Camera.default(80, 60)
+    q = neutral_pose()
+    cost = RegionCost(render(q, model, camera).labels, model, camera)
+    start = q.copy()
+    start[9:16] += 0.15
+    block = np.arange(9, 16)                               # right arm only
+    lo, hi = JOINT_LIMITS[block, 0], JOINT_LIMITS[block, 1]
+    simplex = initial_simplex(start[block], np.full(7, 0.1), lo, hi)
+    res = minimize_cost(cost, simplex, lo, hi, budget=120, active=block, base=start)
+    assert res.x.shape == (7,) and res.simplex.shape == (8, 7)
+    full = start.copy()
+    full[block] = res.x
+    assert cost(full) == pytest.approx(res.fun) and res.fun < cost(start)
+    # an overwhelming prior centred elsewhere wins over the data
+    centre = start.copy()
+    centre[block] = lo + 0.3 * (hi - lo)
+    pulled = minimize_cost(cost, simplex, lo, hi, budget=400, active=block, base=start, ftol=1e-12,
+                           prior=(centre, np.full(23, 1e4)))
+    np.testing.assert_allclose(pulled.x, centre[block], atol=0.02)
+    with pytest.raises(ValueError, match="base"):
+        minimize_cost(cost, simplex, lo, hi, budget=10, active=block)
+    with pytest.raises(ValueError, match="prior"):
+        minimize_cost(cost, initial_simplex(start, np.full(23, 0.1), JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1]),
+                      JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1], budget=10, prior=(start, -np.ones(23)))

@@ -95,3 +95,40 @@ def test_fresh_edge_simplex_option_starts_elsewhere():
     fresh = register(region, edge, start, TrackerConfig(evaluations=300, split="1:1", edge_start="fresh"))
     np.testing.assert_array_equal(handed.region.x, fresh.region.x)
     assert not np.array_equal(handed.pose, fresh.pose)
+
+
+def test_block_strategy_and_arm_search_respect_the_budget():
+    truth = neutral_pose()
+    truth[P["l_shoulder_abd"]] = 1.4                   # arm raised far from where tracking starts
+    region, edge = clean_frame(truth)
+    start = neutral_pose()
+    cfg = TrackerConfig(evaluations=400, blocks="torso-arms", arm_search=True)
+    reg = register(region, edge, start, cfg)
+    assert reg.region.evaluations <= 200 and reg.edge.evaluations <= 200
+    assert len(reg.region.blocks) == 3
+    # the arm search re-finds the raised arm that a local search from the start cannot reach
+    plain = register(region, edge, start, TrackerConfig(evaluations=400))
+    assert joint_error(reg.pose, truth) < 0.5 * joint_error(plain.pose, truth)
+    with pytest.raises(ValueError, match="torso-arms"):
+        TrackerConfig(arm_search=True)
+    with pytest.raises(ValueError, match="blocks"):
+        TrackerConfig(blocks="legs")
+
+
+def test_priors_combine_into_one_quadratic():
+    cfg = TrackerConfig(pose_prior_weight=0.1, prior_weight_region=0.2)
+    centre = neutral_pose() + 0.3
+    mixed, weights = cfg.prior(centre, cfg.prior_weight_region)
+    x = neutral_pose() + 0.1
+    sigma_t = np.r_[np.full(3, cfg.prior_sigma_position_m), np.full(20, np.radians(cfg.prior_sigma_angle_deg))]
+    sigma_p = np.radians(cfg.pose_prior_sigma_deg)
+    direct = (0.2 * np.mean(((x - centre) / sigma_t) ** 2)
+              + 0.1 * np.mean(((x - neutral_pose())[3:] / sigma_p) ** 2))
+    ref = np.sum(weights * (mixed - centre) ** 2) * 0 + np.sum(weights * (x - mixed) ** 2)
+    # the two forms differ by a constant: compare differences between two points
+    y = neutral_pose() - 0.05
+    direct_y = (0.2 * np.mean(((y - centre) / sigma_t) ** 2)
+                + 0.1 * np.mean(((y - neutral_pose())[3:] / sigma_p) ** 2))
+    ref_y = np.sum(weights * (y - mixed) ** 2)
+    assert ref - ref_y == pytest.approx(direct - direct_y)
+    assert TrackerConfig().prior(centre, 0.0) is None      # the paper's method: no prior at all
