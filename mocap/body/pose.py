@@ -28,7 +28,8 @@ Joint limits are the normal active ranges of motion of adult joints from the Ame
 of Orthopaedic Surgeons (AAOS, *Joint Motion: Method of Measuring and Recording*, 1965; the
 values as tabulated in Norkin & White, *Measurement of Joint Motion*, 5th ed., 2016,
 Appendix A), rounded to 5 degrees. The chest (global torso orientation) is not a joint: its yaw
-covers a full turn so that an actor may turn around; its pitch and roll allow leaning.
+covers two full turns either way so that an actor turning around is followed continuously
+(no wrap at ±180°); its pitch and roll allow leaning.
 """
 from __future__ import annotations
 
@@ -70,7 +71,8 @@ _LIMITS_HUMAN: dict[str, tuple[float, float]] = {
     "root_x": (-3.0, 3.0),
     "root_y": (-3.0, 3.0),
     "root_z": (0.3, 10.0),
-    "chest_yaw": (-180.0, 180.0),
+    "chest_yaw": (-720.0, 720.0),     # global orientation: two full turns each way, so that a
+                                       # turning actor is followed without a jump at +-180
     "chest_pitch": (-30.0, 60.0),
     "chest_roll": (-40.0, 40.0),
     "head_flex": (-50.0, 60.0),        # cervical extension 50 (limited by the head), flexion 60 (AAOS 45-60)
