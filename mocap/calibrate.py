@@ -5,7 +5,6 @@
 """
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
@@ -81,17 +80,16 @@ class Calibration:
 
     def to_json(self, path: str | Path) -> None:
         """Save (atomically) as JSON."""
-        from mocap.io.atomic import write_text_atomic
-        write_text_atomic(path, json.dumps(self.to_dict(), indent=2))
+        from mocap.io.jsonfile import write_json
+        write_json(path, self.to_dict())
 
     @classmethod
     def from_json(cls, path: str | Path) -> "Calibration":
         """Load a file written by :meth:`to_json`; raises ValueError with the file name on bad content."""
-        path = Path(path)
+        from mocap.io.jsonfile import read_json
+        data = read_json(path)
         try:
-            return cls.from_dict(json.loads(path.read_text()))
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{path}: not valid JSON ({exc})") from None
+            return cls.from_dict(data)
         except (ValueError, TypeError, KeyError) as exc:
             raise ValueError(f"{path}: {exc}") from None
 

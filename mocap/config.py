@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -32,14 +31,12 @@ class JsonConfig:
         return cls(**values)
 
     def to_json(self, path: str | Path) -> None:
-        from mocap.io.atomic import write_text_atomic
-        write_text_atomic(path, json.dumps(self.to_dict(), indent=2))
+        """Write as JSON, atomically."""
+        from mocap.io.jsonfile import write_json
+        write_json(path, self.to_dict())
 
     @classmethod
     def from_json(cls: type[T], path: str | Path) -> T:
-        path = Path(path)
-        try:
-            data = json.loads(path.read_text())
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{path}: not valid JSON ({exc})") from None
-        return cls.from_dict(data)
+        """Read a file written by :meth:`to_json` (FileNotFoundError, ValueError)."""
+        from mocap.io.jsonfile import read_json
+        return cls.from_dict(read_json(path))

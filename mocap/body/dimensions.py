@@ -4,7 +4,6 @@ These are the calibration of the paper's section 3.1 and are saved as JSON.
 """
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -123,14 +122,11 @@ class BodyDimensions:
 
     def to_json(self, path: str | Path) -> None:
         """Save as JSON (written atomically)."""
-        from mocap.io.atomic import write_text_atomic
-        write_text_atomic(path, json.dumps(self.to_dict(), indent=2))
+        from mocap.io.jsonfile import write_json
+        write_json(path, self.to_dict())
 
     @classmethod
     def from_json(cls, path: str | Path) -> "BodyDimensions":
         """Load from JSON written by :meth:`to_json`."""
-        try:
-            data = json.loads(Path(path).read_text())
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{path}: not valid JSON ({exc})") from None
-        return cls.from_dict(data)
+        from mocap.io.jsonfile import read_json
+        return cls.from_dict(read_json(path))

@@ -9,7 +9,6 @@ from a box under the face; or from boxes the user gives.
 """
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -21,6 +20,7 @@ from skimage import color, data, feature, transform
 from mocap._numba import jit
 from mocap.imaging._validate import Box, check_box, check_mask, check_rgb, check_same_size
 from mocap.imaging.config import DEFAULT_COLOUR_THRESHOLD, ImagingConfig
+from mocap.io.jsonfile import read_json, write_json
 from mocap.labels import DEFAULT_CLASS_NAMES, MAX_CLASSES, UNKNOWN
 
 __all__ = ["ColourModel", "learn_colour_model", "detect_face", "rgb_to_hsv", "skin_box_of_face",
@@ -392,18 +392,13 @@ class ColourModel:
         return cls(data["names"], data["means"], data["covariances"])  # type: ignore[arg-type]
 
     def to_json(self, path: str | Path) -> None:
-        """Write the model to a JSON file."""
-        Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n", encoding="utf-8")
+        """Write the model to a JSON file (atomically)."""
+        write_json(path, self.to_dict())
 
     @classmethod
     def from_json(cls, path: str | Path) -> ColourModel:
         """Read a model written by :meth:`to_json` (FileNotFoundError, ValueError)."""
-        text = Path(path).read_text(encoding="utf-8")
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{path}: not valid JSON ({exc})") from None
-        return cls.from_dict(data)
+        return cls.from_dict(read_json(path))
 
 
 # --------------------------------------------------------------------------- face & learning

@@ -2,9 +2,9 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
-from pathlib import Path
+
+from mocap.config import JsonConfig
 
 #: Default squared-Mahalanobis limit of a colour class: the 99.9 % quantile of a chi-square
 #: with 3 degrees of freedom (scipy.stats.chi2.ppf(0.999, 3)).
@@ -15,7 +15,7 @@ DISTANCE_METHODS: tuple[str, ...] = ("edt", "chamfer")
 
 
 @dataclasses.dataclass(frozen=True)
-class ImagingConfig:
+class ImagingConfig(JsonConfig):
     """Parameters of :func:`mocap.imaging.prepare_frame` (background, colour, edges, distance).
 
     Intensities are on the 0-255 scale whatever the image dtype; lengths are in pixels.
@@ -129,32 +129,3 @@ class ImagingConfig:
             raise ValueError(
                 f"distance_method must be one of {DISTANCE_METHODS}, got {self.distance_method!r}")
 
-    def to_dict(self) -> dict[str, object]:
-        """All parameters as a JSON-ready dictionary."""
-        return dataclasses.asdict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict[str, object]) -> ImagingConfig:
-        """Build from a dictionary; missing keys take defaults, unknown keys raise ValueError."""
-        if not isinstance(data, dict):
-            raise ValueError(f"imaging config must be a JSON object, got {type(data).__name__}")
-        known = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(data) - known)
-        if unknown:
-            raise ValueError(f"unknown imaging config key(s): {', '.join(unknown)}; "
-                             f"known: {', '.join(sorted(known))}")
-        return cls(**data)
-
-    def to_json(self, path: str | Path) -> None:
-        """Write the parameters to a JSON file."""
-        Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n", encoding="utf-8")
-
-    @classmethod
-    def from_json(cls, path: str | Path) -> ImagingConfig:
-        """Read parameters written by :meth:`to_json` (FileNotFoundError, ValueError)."""
-        text = Path(path).read_text(encoding="utf-8")
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{path}: not valid JSON ({exc})") from None
-        return cls.from_dict(data)

@@ -1,7 +1,6 @@
 """Pinhole camera: intrinsics in pixels, camera coordinates in metres (x right, y down, z forward)."""
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -108,12 +107,15 @@ class Camera:
         return cls(**data)
 
     def to_json(self, path: str | Path) -> None:
-        from mocap.io.atomic import write_text_atomic
-        write_text_atomic(path, json.dumps(self.to_dict(), indent=2))
+        """Save as JSON (atomically)."""
+        from mocap.io.jsonfile import write_json
+        write_json(path, self.to_dict())
 
     @classmethod
     def from_json(cls, path: str | Path) -> "Camera":
-        return cls.from_dict(json.loads(Path(path).read_text()))
+        """Load a file written by :meth:`to_json` (FileNotFoundError, ValueError)."""
+        from mocap.io.jsonfile import read_json
+        return cls.from_dict(read_json(path))
 
     def as_array(self) -> np.ndarray:
         """``[fx, fy, cx, cy, near]`` as float64, the form the compiled kernels take."""

@@ -23,7 +23,7 @@ def test_missing_keys_take_defaults():
 
 
 def test_unknown_keys_are_rejected(tmp_path):
-    with pytest.raises(ValueError, match="unknown imaging config key.*max_distnace"):
+    with pytest.raises(ValueError, match="unknown ImagingConfig option.*max_distnace"):
         ImagingConfig.from_dict({"max_distnace": 9})
     path = tmp_path / "bad.json"
     path.write_text("[1, 2]")

@@ -70,7 +70,7 @@ def test_segment_with_median_background_and_saved_model(clip):
     (["--background", "small.png"], "background is 40x30 but the video is 96x72"),
     (["--background", "gray.png"], "grayscale"),
     (["--background", "background.png", "--start", "99"], "past the end"),
-    (["--background", "background.png", "--config", "bad.json"], "unknown imaging config"),
+    (["--background", "background.png", "--config", "bad.json"], "unknown ImagingConfig option"),
     (["--background", "background.png"], "no face found"),
 ])
 def test_segment_errors_exit_2_with_one_line(clip, capsys, monkeypatch, extra, message):
