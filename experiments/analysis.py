@@ -152,7 +152,9 @@ def stability(res: Results) -> dict:
     Compares, over all sequences (percent of frames): failures of F with the region step
     alone (edge budget 0, region budget > 0) against failures of the edge distance with the
     edge step alone (region budget 0, edge budget > 0); and ground-truth failures and MPJPE of
-    the all-region and all-edge policies at the same totals.
+    the all-region and all-edge policies at the same totals; and how often, along each axis,
+    the failures rise although the budget rises (the paper reads instability off the bumps of
+    Figs. 11 and 12).
     """
     _, _, ff = res.mean_surface(named(res), "fail_F")
     _, _, fd = res.mean_surface(named(res), "fail_D")
@@ -160,6 +162,14 @@ def stability(res: Results) -> dict:
     out = {"fail_F_region_only": _nanmean(ff[1:, 0]), "fail_D_edge_only": _nanmean(fd[0, 1:]),
            "fail_gt_region_only": _nanmean(fg[1:, 0]), "fail_gt_edge_only": _nanmean(fg[0, 1:]),
            "fail_F_at_0_0": float(ff[0, 0]), "fail_D_at_0_0": float(fd[0, 0]), "fail_gt_at_0_0": float(fg[0, 0])}
+    ups_f = ups_d = steps = 0
+    for d in named(res):                 # "instability": failures that rise although the budget rises
+        _, _, zf = res.surface(d, "fail_F")
+        _, _, zd = res.surface(d, "fail_D")
+        ups_f += int(np.count_nonzero(np.diff(zf[:, 0]) > 0))
+        ups_d += int(np.count_nonzero(np.diff(zd[0, :]) > 0))
+        steps += zf.shape[0] - 1
+    out.update(rises_fail_F_region_axis=ups_f, rises_fail_D_edge_axis=ups_d, rises_steps=steps)
     pol = policy_summary(res)
     if "1:0" in pol and "0:1" in pol:
         out["policy_fail_gt_all_region"] = _nanmean(pol["1:0"]["fail_gt"])
@@ -167,6 +177,7 @@ def stability(res: Results) -> dict:
         out["policy_mpjpe_all_region"] = _nanmean(pol["1:0"]["mpjpe"])
         out["policy_mpjpe_all_edge"] = _nanmean(pol["0:1"]["mpjpe"])
     out["holds_truth"] = bool(out["fail_gt_edge_only"] > out["fail_gt_region_only"])
+    out["holds_image"] = bool(ups_d > ups_f)
     return out
 
 

@@ -126,12 +126,12 @@ class SweepConfig(JsonConfig):
     table2_frames: int = 3
     table2_min_runs: int = 50
     table2_min_seconds: float = 0.5
-    motion_actors: tuple[str, ...] = ("gestures-1",)
+    motion_actors: tuple[str, ...] = ("gestures-1", "gestures-2")
     motion_frames: int = 150
     motion_budgets: tuple[int, ...] = (0, 50, 100, 200, 300, 500)
     figure_sequence: str = "gestures-2"
     region_failure_threshold: float = 0.3
-    edge_failure_threshold_px: float = 2.0
+    edge_failure_threshold_px: float = 1.0
     mpjpe_failure_mm: float = 100.0
 
     def __post_init__(self) -> None:

@@ -175,7 +175,10 @@ def build_report(res: Results, figures_rel: str) -> str:
              f"F failures, {_f(stab['fail_gt_region_only'], 1)}% ground-truth failures; edge step alone (R=0, E>0): "
              f"{_f(stab['fail_D_edge_only'], 1)}% edge failures, {_f(stab['fail_gt_edge_only'], 1)}% ground-truth "
              f"failures; policies all-region vs all-edge: {_f(stab.get('policy_fail_gt_all_region'), 1)}% vs "
-             f"{_f(stab.get('policy_fail_gt_all_edge'), 1)}% ground-truth failures | {_verdict(stab['holds_truth'])} |")
+             f"{_f(stab.get('policy_fail_gt_all_edge'), 1)}% ground-truth failures; failures rise with a larger budget at "
+             f"{stab['rises_fail_F_region_axis']} of {stab['rises_steps']} steps along the region axis (F) and "
+             f"{stab['rises_fail_D_edge_axis']} of {stab['rises_steps']} along the edge axis (edge distance) | "
+             f"image: {_verdict(stab['holds_image'])}; ground truth: {_verdict(stab['holds_truth'])} |")
     if "n_below" in pol:
         L.append(f"| All evaluations to the region step below 200, 50/50 from 200 on (section 5) | all-region beats 50/50 "
                  f"(MPJPE) at {pol['below_region_better_mpjpe']} of {pol['n_below']} totals below 200; 50/50 beats "

@@ -123,6 +123,22 @@ class _Backend:
             self.client.close()
 
 
+def code_version() -> str:
+    """Commit of the checkout the sweep runs from (``+dirty`` with uncommitted changes), or ``unknown``."""
+    import subprocess
+
+    here = Path(__file__).resolve().parent
+    try:
+        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True, timeout=10)
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=here,
+                               capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    if commit.returncode != 0:
+        return "unknown"
+    return commit.stdout.strip() + ("+dirty" if dirty.stdout.strip() else "")
+
+
 def _log_invocation(out: Path, entry: dict, clips) -> None:
     path = out / SWEEP_FILE
     log = json.loads(path.read_text()) if path.is_file() else {"invocations": []}
@@ -177,6 +193,7 @@ def run_sweep(config: SweepConfig, out: str | Path, *, workers: int = 2, schedul
     summary = SweepSummary()
     started = time.perf_counter()
     when = datetime.now(timezone.utc).isoformat(timespec="seconds")
+    version = code_version()
     backend = _Backend(workers, scheduler)
     futures: dict = {}
     try:
@@ -199,7 +216,8 @@ def run_sweep(config: SweepConfig, out: str | Path, *, workers: int = 2, schedul
     finally:
         backend.close(futures)
         summary.wall_s = time.perf_counter() - started
-        _log_invocation(out, {"started_utc": when, "backend": backend.description, **asdict(summary)}, clips)
+        _log_invocation(out, {"started_utc": when, "backend": backend.description, "code": version,
+                              **asdict(summary)}, clips)
     return summary
 
 

@@ -42,6 +42,10 @@ FRAME_ARRAYS: tuple[str, ...] = (
     "mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg", "reprojection_px")
 EDGE_STARTS = ("region_simplex", "fresh")
 RUN_KINDS = ("run", "timing")
+#: Tracker settings of the paper's method, pinned so that options added beyond the paper (and
+#: their defaults) never leak into the experiments; only fields the tracker has are passed.
+PAPER_TRACKER = {"prediction": "previous", "adaptive": False, "recovery": False, "blocks": "all",
+                 "arm_search": False, "prior_weight_region": 0.0, "prior_weight_edge": 0.0, "pose_prior_weight": 0.0}
 
 
 @dataclass(frozen=True)
@@ -133,13 +137,18 @@ class RunSpec:
         return Path(root) / UNITS_DIR / self.data.key / f"{self.key}.npz"
 
     def tracker_config(self):
-        """The :class:`mocap.track.TrackerConfig` of this run (no recovery: the paper had none)."""
+        """The :class:`mocap.track.TrackerConfig` of this run: the paper's method (:data:`PAPER_TRACKER`,
+        no recovery: the paper had none) with this unit's budgets, edge start and ``ftol``."""
+        import dataclasses
+
         from mocap.track import TrackerConfig
 
         total = self.region + self.edge
         split = f"{self.region}:{self.edge}" if total else "1:0"
-        return TrackerConfig(evaluations=total, split=split, edge_start=self.edge_start, ftol=self.ftol,
-                             recovery=False)
+        known = {f.name for f in dataclasses.fields(TrackerConfig)}
+        paper = {k: v for k, v in PAPER_TRACKER.items() if k in known}
+        return TrackerConfig.from_dict({**paper, "evaluations": total, "split": split, "edge_start": self.edge_start,
+                                        "ftol": self.ftol})
 
 
 # ----------------------------------------------------------------------------- data units

@@ -54,24 +54,30 @@ def heatmap(ax, rs, es, z, label: str, *, annotate: bool = True, fig=None, lower
     if not np.isfinite(z).any():
         placeholder(ax, "no results")
         return
-    im = ax.imshow(np.ma.masked_invalid(z.T), origin="lower", cmap=CMAP, aspect="auto")
+    vmin, vmax = float(np.nanmin(z)), float(np.nanmax(z))
+    high = float(np.nanpercentile(z, 95))
+    clipped = vmax - vmin > 2.0 * (high - vmin) > 0          # a few outliers would wash out the rest
+    if clipped:
+        vmax = high
+    im = ax.imshow(np.ma.masked_invalid(z.T), origin="lower", cmap=CMAP, aspect="auto", vmin=vmin, vmax=vmax)
     ax.set_xticks(range(len(rs)), [str(r) for r in rs])
     ax.set_yticks(range(len(es)), [str(e) for e in es])
     ax.set_xlabel("region-step evaluations")
     ax.set_ylabel("edge-step evaluations")
     ax.grid(False)
     if annotate:
-        lo, hi = np.nanmin(z), np.nanmax(z)
+        lo, hi = vmin, vmax
         for i in range(len(rs)):
             for j in range(len(es)):
                 v = z[i, j]
-                bright = np.isfinite(v) and hi > lo and (v - lo) / (hi - lo) > 0.6
+                bright = np.isfinite(v) and hi > lo and min(v - lo, hi - lo) / (hi - lo) > 0.6
                 ax.text(i, j, _fmt(v), ha="center", va="center", fontsize=6, color="k" if bright else "w")
     best = np.nanargmin(z) if lower_is_better else np.nanargmax(z)
     i, j = np.unravel_index(best, z.shape)
     ax.add_patch(_frame((i, j)))
     if fig is not None:
-        fig.colorbar(im, ax=ax, label=label, shrink=0.9)
+        fig.colorbar(im, ax=ax, label=label + (" (colour clipped at 95th pct.)" if clipped else ""), shrink=0.9,
+                     extend="max" if clipped else "neither")
 
 
 def _frame(cell):
