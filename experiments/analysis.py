@@ -19,6 +19,7 @@ import numpy as np
 
 from experiments.plan import convergence_specs, handoff_specs, policy_specs
 from experiments.results import Results
+from mocap.track import split_budget
 
 #: Fraction of the total improvement that counts as "converged" along a budget axis.
 CONVERGED_FRACTION = 0.9
@@ -213,9 +214,10 @@ def policy(res: Results) -> dict:
     totals = list(cfg.policy_totals)
     rows = []
     for k, t in enumerate(totals):
-        by_mpjpe = {p: pol[p]["mpjpe"][k] for p in pol}
-        valid = {p: v for p, v in by_mpjpe.items() if np.isfinite(v)}
-        rows.append({"total": t, "best_mpjpe": min(valid, key=valid.get) if valid else None,
+        fixed = {p: pol[p]["mpjpe"][k] for p in pol if p != "auto" and np.isfinite(pol[p]["mpjpe"][k])}
+        same = [p for p in pol if p != "auto" and split_budget(t, p) == split_budget(t, "auto")] if "auto" in pol else []
+        rows.append({"total": t, "best_mpjpe": min(fixed, key=fixed.get) if fixed else None,
+                     "auto_same_as": same[0] if same else None,
                      **{f"{p}_mpjpe": pol[p]["mpjpe"][k] for p in pol},
                      **{f"{p}_fail_F": pol[p]["fail_F"][k] for p in pol},
                      **{f"{p}_fail_gt": pol[p]["fail_gt"][k] for p in pol},
@@ -235,11 +237,8 @@ def policy(res: Results) -> dict:
     if "auto" in pol:
         means = {p: _nanmean(pol[p]["mpjpe"]) for p in pol}
         out["mean_mpjpe_over_totals"] = means
-        ranks = []
-        for k in range(len(totals)):
-            vals = sorted((pol[p]["mpjpe"][k], p) for p in pol if np.isfinite(pol[p]["mpjpe"][k]))
-            ranks.append([p for _, p in vals].index("auto") + 1 if any(p == "auto" for _, p in vals) else None)
-        out["auto_rank"] = ranks
+        out["auto_rank"] = [1 + sum(pol[p]["mpjpe"][k] < pol["auto"]["mpjpe"][k] for p in pol if p != "auto")
+                            for k in range(len(totals))]          # 1 = no fixed split is better
     return out
 
 

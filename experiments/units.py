@@ -171,19 +171,16 @@ def prepare_data(spec: DataSpec, root: str) -> str:
     str
         The sequence folder.
     """
-    from mocap.synth import generate_sequence, sequence_poses, setup_sequence
+    from mocap.synth import generate_sequence
 
     folder = data_folder(spec, root)
     if not (folder / "meta.json").is_file():          # meta.json is written last by the generator
-        frames = spec.frames
-        if spec.motion is not None:
-            setup = setup_sequence(spec.actor, seed=spec.seed, size=(spec.width, spec.height))
-            frames = min(frames, len(sequence_poses(spec.actor, setup, None, spec.motion)[0]))
-        generate_sequence(spec.actor, folder, frames=frames, seed=spec.seed, size=(spec.width, spec.height),
-                          motion=spec.motion, progress=False)
+        # a clip is generated whole (its length is only known once retargeted) and used up to spec.frames
+        generate_sequence(spec.actor, folder, frames=spec.frames if spec.motion is None else None, seed=spec.seed,
+                          size=(spec.width, spec.height), motion=spec.motion, progress=False)
         (folder / PREPARED_FILE).unlink(missing_ok=True)
     if not (folder / PREPARED_FILE).is_file():
-        sequence = load_sequence(folder)
+        sequence = load_sequence(folder, spec.frames)
         prepared = [sequence.prepare(f) for f in sequence.frames]
         keys = tuple(prepared[0].timings)
         buf = io.BytesIO()
@@ -216,11 +213,17 @@ class LoadedSequence:
         return prepare_frame(frame, self.background, self.colour_model)
 
 
-def load_sequence(folder: str | Path) -> LoadedSequence:
+def load_sequence(folder: str | Path, frames: int | None = None) -> LoadedSequence:
     """Read a synthetic sequence folder and build its model and colour model.
 
     The colour classes are learnt from the first frame inside the calibrated (true) pose, as
     ``python -m mocap track`` does by default.
+
+    Parameters
+    ----------
+    folder : str or Path
+    frames : int, optional
+        Read only the first ``frames`` frames (all when None or when the sequence is shorter).
     """
     from mocap.body import resolution_for_image
     from mocap.calibrate import Calibration, colour_model_from_pose
@@ -234,7 +237,7 @@ def load_sequence(folder: str | Path) -> LoadedSequence:
     calibration = Calibration.from_json(paths.calibration)
     camera = calibration.camera
     model = calibration.body_model(resolution_for_image(camera.width, camera.height))
-    frames = list(iter_frames(paths.frames))
+    frames = list(iter_frames(paths.frames, 0, frames))
     background = read_image(paths.background) if paths.background is not None else None
     colour = colour_model_from_pose(frames[0], background, model, camera, calibration.initial_pose)
     meta = json.loads(paths.meta.read_text()) if paths.meta is not None else {}
@@ -280,7 +283,7 @@ def run_unit(spec: RunSpec, root: str) -> dict:
 
     started = time.perf_counter()
     folder = data_folder(spec.data, root)
-    seq = load_sequence(folder)
+    seq = load_sequence(folder, spec.data.frames)
     if spec.kind == "timing":
         prepared = [seq.prepare(f) for f in seq.frames]
     else:
@@ -370,7 +373,7 @@ def measure_table2(sizes: tuple[tuple[int, int], ...], sequence: str, frames: in
     for width, height in sizes:
         spec = DataSpec(sequence, None, frames, seed, width, height)
         folder = Path(prepare_data(spec, root))
-        seq = load_sequence(folder)
+        seq = load_sequence(folder, frames)
         camera = seq.calibration.camera
         parts: dict[str, list[float]] = {}
 

@@ -145,3 +145,22 @@ def test_cli_runs_a_sweep_with_a_unit_limit(tiny_config, tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "2 units computed" in proc.stdout
     assert len(stored_units(out)) == 2
+
+
+@pytest.mark.shared_data
+def test_motion_dir_drives_the_actors_with_every_clip(shared_data, tiny_config, tmp_path):
+    clips = tmp_path / "clips"
+    clips.mkdir()
+    (clips / "walk.bvh").symlink_to(shared_data / "mocap" / "cmu_12_01_walk.bvh")
+    (clips / "notes.txt").write_text("not a clip")
+    config = tiny_config.with_changes({"sequences": ("gestures-2",), "timing_sequences": ("gestures-2",),
+                                       "motion_actors": ("gestures-1",)})
+    summary = run_sweep(config, tmp_path / "r", workers=0, motion_dir=clips, progress=False, table2=False)
+    assert summary.errors == []
+    folders = sorted(p.name for p in (tmp_path / "r" / "units").iterdir())
+    assert folders == ["gestures-1+walk-s0-max3f-160x120", "gestures-2-s0-3f-160x120"]
+    clip_units = sorted((tmp_path / "r" / "units" / folders[0]).glob("*.npz"))
+    assert len(clip_units) == len(config.motion_budgets) ** 2
+    u = load_unit(clip_units[0])
+    assert u["frame"].size == 3 and u["meta"]["motion"]["file"] == "walk.bvh"
+    assert json.loads((tmp_path / "r" / "sweep.json").read_text())["clips"] == [str((clips / "walk.bvh").resolve())]
