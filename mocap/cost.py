@@ -27,7 +27,7 @@ from mocap.body.kinematics import _segment_transforms
 from mocap.body.model import BodyModel
 from mocap.body.pose import check_pose
 from mocap.body.skeleton import SEGMENT_NAMES
-from mocap.labels import MAX_CLASSES
+from mocap.labels import MAX_CLASSES, UNKNOWN
 from mocap.render import _raster
 from mocap.render.camera import Camera
 from mocap.render.rasterize import EDGE_DEPTH_GAP_M, _check_gap
@@ -50,8 +50,9 @@ def _render_pose(pose, scene, buffers):
 
 @jit
 def _region_counts_and_clear(part_buf, depth_buf, part_label, width, bbox, target, n_classes,
-                             model_count, overlap_count):
+                             model_count, overlap_count, ignore_unknown):
     """|B_c| and |A_c ∩ B_c| for c = 1..m (index c) over the model's box; clears the box.
+    With ``ignore_unknown`` model pixels over UNKNOWN image pixels are not counted in B_c.
 
     Along a row the part changes rarely, so counts accumulate in registers over each run of
     one part and reach the count arrays only at the run's end (index 0 collects background).
@@ -90,8 +91,9 @@ def _region_counts_and_clear(part_buf, depth_buf, part_label, width, bbox, targe
                     c = part_label[p - 1] if p != 0 else 0
                     run = 0
                     hit = 0
-                run += 1
-                hit += target[idx] == c
+                t = target[idx]
+                run += 1 - (ignore_unknown & (t == UNKNOWN))
+                hit += t == c
         model_count[c] += run
         overlap_count[c] += hit
         part_buf[row + x0: row + x1 + 1] = 0
@@ -118,11 +120,12 @@ def _non_overlapping_ratio(target_count, model_count, overlap_count, n_classes):
 
 
 @jit
-def _region_cost(pose, scene, buffers, target, target_count, n_classes, model_count, overlap_count):
+def _region_cost(pose, scene, buffers, target, target_count, n_classes, model_count, overlap_count,
+                 ignore_unknown):
     _render_pose(pose, scene, buffers)
     part_buf, depth_buf, bbox = buffers[0], buffers[1], buffers[6]
     _region_counts_and_clear(part_buf, depth_buf, scene[5], scene[7], bbox, target, n_classes,
-                             model_count, overlap_count)
+                             model_count, overlap_count, ignore_unknown)
     return _non_overlapping_ratio(target_count, model_count, overlap_count, n_classes)
 
 
@@ -218,12 +221,20 @@ class RegionCost:
         Its ``class_names`` give m.
     camera : Camera
         Must match the image size.
+    ignore_unknown : bool
+        Model pixels over image pixels labelled unknown (255) are left out of B_c (default).
+        The paper's segmentation puts every foreground pixel in a class; ours leaves the ones no
+        class explains (blurred boundaries, colours of unmodelled parts) unknown. Counting a
+        model pixel over them as a mismatch, while the unknown pixels the model leaves uncovered
+        cost nothing, rewards a shrunken model: a steady drift away from the camera when
+        tracking. With ``False``, eq. (1) is applied literally to the label image.
 
     Calling ``cost(pose)`` with a (23,) pose (metres, radians) returns F in [0, 1]:
     0 for a perfect match of every class, 1 for no overlap.
     """
 
-    def __init__(self, target_labels: np.ndarray, model: BodyModel, camera: Camera) -> None:
+    def __init__(self, target_labels: np.ndarray, model: BodyModel, camera: Camera, *,
+                 ignore_unknown: bool = True) -> None:
         _check_image(target_labels, camera, "target label image")
         if target_labels.dtype != np.uint8:
             raise ValueError(f"target label image must be uint8, got {target_labels.dtype}")
@@ -239,19 +250,19 @@ class RegionCost:
         self._buffers = _buffers(model, camera)
         self._model_count = np.zeros(m + 1, np.int64)
         self._overlap_count = np.zeros(m + 1, np.int64)
+        self.ignore_unknown = bool(ignore_unknown)
 
     def __call__(self, pose) -> float:
         return float(self.evaluate_unchecked(check_pose(pose)))
 
     def evaluate_unchecked(self, pose: np.ndarray) -> float:
         """As calling, without validating ``pose`` (a float64 (23,) array): for optimiser loops."""
-        return _region_cost(pose, self._scene, self._buffers, self._target, self.target_count,
-                            self.n_classes, self._model_count, self._overlap_count)
+        return _region_cost(pose, *self.kernel_args())
 
     def kernel_args(self) -> tuple:
         """Arguments after ``pose`` of the compiled kernel (for compiled optimiser loops)."""
         return (self._scene, self._buffers, self._target, self.target_count, self.n_classes,
-                self._model_count, self._overlap_count)
+                self._model_count, self._overlap_count, self.ignore_unknown)
 
 
 class EdgeCost:
@@ -301,7 +312,8 @@ class EdgeCost:
         return (self._scene, self._buffers, self._distance, self._marks, self.edge_gap, self.no_edge_penalty)
 
 
-def non_overlapping_ratio(target_labels: np.ndarray, model_labels: np.ndarray, n_classes: int) -> float:
+def non_overlapping_ratio(target_labels: np.ndarray, model_labels: np.ndarray, n_classes: int, *,
+                          ignore_unknown: bool = True) -> float:
     """Eq. (1) between two label images (no rendering), with the same empty-union rule.
 
     Parameters
@@ -309,6 +321,8 @@ def non_overlapping_ratio(target_labels: np.ndarray, model_labels: np.ndarray, n
     target_labels, model_labels : ndarray, shape (H, W), uint8
     n_classes : int
         m; labels 1..m are classes, anything else is ignored.
+    ignore_unknown : bool
+        Leave model pixels over unknown (255) target pixels out, as :class:`RegionCost` does.
 
     Returns
     -------
@@ -321,7 +335,8 @@ def non_overlapping_ratio(target_labels: np.ndarray, model_labels: np.ndarray, n
         raise ValueError(f"n_classes must be in 1..{MAX_CLASSES}, got {n_classes}")
     cls = np.arange(n_classes + 1)
     ta = np.array([np.count_nonzero(a == c) for c in cls], np.int64)
-    mb = np.array([np.count_nonzero(b == c) for c in cls], np.int64)
+    counted = (a != UNKNOWN) if ignore_unknown else np.ones(a.shape, bool)
+    mb = np.array([np.count_nonzero((b == c) & counted) for c in cls], np.int64)
     ov = np.array([np.count_nonzero((a == c) & (b == c)) for c in cls], np.int64)
     return float(_non_overlapping_ratio(ta, mb, ov, n_classes))
 

@@ -405,7 +405,7 @@ class _DummyArgs:
     def region(cost) -> tuple:
         scene, buffers = cost.kernel_args()[:2]
         return (scene, buffers, np.zeros(0, np.uint8), np.zeros(1, np.int64), 0,
-                np.zeros(1, np.int64), np.zeros(1, np.int64))
+                np.zeros(1, np.int64), np.zeros(1, np.int64), True)
 
     @staticmethod
     def edge(cost) -> tuple:

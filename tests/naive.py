@@ -100,12 +100,13 @@ def naive_nelder_mead(f, simplex, lower, upper, budget, ftol, coef=(1.0, 2.0, 0.
 # --- costs ---
 
 
-def naive_non_overlapping_ratio(target, model, n_classes):
-    """Eq. (1) with Python sets of pixel coordinates; empty unions drop out, all empty gives 1."""
+def naive_non_overlapping_ratio(target, model, n_classes, ignore_unknown=True):
+    """Eq. (1) with Python sets of pixel coordinates; empty unions drop out, all empty gives 1.
+    With ``ignore_unknown``, model pixels over unknown (255) target pixels are not in B_c."""
     terms = []
     for c in range(1, n_classes + 1):
         a = set(zip(*np.nonzero(target == c)))
-        b = set(zip(*np.nonzero(model == c)))
+        b = set(zip(*np.nonzero((model == c) & ((target != 255) if ignore_unknown else True))))
         union, inter = len(a | b), len(a & b)
         if union:
             terms.append((union - inter) / union)

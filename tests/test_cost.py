@@ -172,3 +172,28 @@ def test_pose_far_outside_limits_still_renders_finitely():
     q[0] = 1e3
     target = render(neutral_pose(), MODEL, CAMERA).labels
     assert np.isfinite(RegionCost(target, MODEL, CAMERA)(q))
+
+
+def test_unknown_pixels_count_on_neither_side_by_default():
+    # class 1: image 2 px + 2 unknown px; the model covers all 4 -> literally (4 - 2) / 4 = 1/2,
+    # ignoring the unknown pixels the model covers: union 2, overlap 2 -> 0
+    a = np.zeros((2, 4), np.uint8)
+    a[0, :2] = 1
+    a[0, 2:] = 255
+    b = np.zeros_like(a)
+    b[0, :] = 1
+    assert non_overlapping_ratio(a, b, 1) == 0.0
+    assert non_overlapping_ratio(a, b, 1, ignore_unknown=False) == pytest.approx(0.5)
+    assert naive_non_overlapping_ratio(a, b, 1, ignore_unknown=False) == pytest.approx(0.5)
+
+
+@pytest.mark.parametrize("ignore", [True, False])
+def test_region_cost_with_unknown_pixels_matches_the_twin(ignore):
+    rng = np.random.default_rng(11)
+    q_true, q = random_pose(rng), random_pose(rng)
+    target = render(q_true, MODEL, CAMERA).labels.copy()
+    target[rng.random(target.shape) < 0.2] = 255          # a fifth of the image unexplained
+    cost = RegionCost(target, MODEL, CAMERA, ignore_unknown=ignore)
+    for pose in (q_true, q):
+        expect = naive_non_overlapping_ratio(target, render(pose, MODEL, CAMERA).labels, 2, ignore_unknown=ignore)
+        assert cost(pose) == pytest.approx(expect, abs=1e-12)
