@@ -7,6 +7,7 @@ policy at 200 evaluations is the grid cell 100 x 100).
 """
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -19,7 +20,7 @@ CLIP_SUFFIXES: tuple[str, ...] = (".bvh", ".amc")
 
 
 def find_clips(motion_dir: str | Path) -> tuple[str, ...]:
-    """Motion-capture clips in a folder (``*.bvh``, ``*.amc``), sorted, as absolute paths.
+    """Motion-capture clips in a folder (``*.bvh``, ``*.amc``), sorted, as absolute paths (links kept).
 
     Raises
     ------
@@ -29,7 +30,7 @@ def find_clips(motion_dir: str | Path) -> tuple[str, ...]:
     folder = Path(motion_dir)
     if not folder.is_dir():
         raise ValueError(f"motion folder {folder} does not exist")
-    clips = sorted(str(p.resolve()) for p in folder.iterdir() if p.suffix.lower() in CLIP_SUFFIXES)
+    clips = sorted(os.path.abspath(p) for p in folder.iterdir() if p.suffix.lower() in CLIP_SUFFIXES)
     if not clips:
         raise ValueError(f"motion folder {folder} holds no .bvh or .amc clip")
     return tuple(clips)
