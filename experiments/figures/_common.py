@@ -76,7 +76,7 @@ def heatmap(ax, rs, es, z, label: str, *, annotate: bool = True, fig=None, lower
     i, j = np.unravel_index(best, z.shape)
     ax.add_patch(_frame((i, j)))
     if fig is not None:
-        fig.colorbar(im, ax=ax, label=label + (" (colour clipped at 95th pct.)" if clipped else ""), shrink=0.9,
+        fig.colorbar(im, ax=ax, label=label + (" (clipped)" if clipped else ""), shrink=0.9,
                      extend="max" if clipped else "neither")
 
 
