@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from types import MappingProxyType
 
 from mocap.config import JsonConfig
 from mocap.synth import SEQUENCE_NAMES
@@ -20,7 +21,7 @@ TABLE1_TOTALS: tuple[int, ...] = (40, 100, 200, 300, 400, 500)
 #: Split policies compared beyond the paper: its ``auto`` policy, 50/50, all-region, all-edge.
 POLICIES: tuple[str, ...] = ("auto", "1:1", "1:0", "0:1")
 #: Human names of :data:`POLICIES`.
-POLICY_LABELS = {"auto": "auto (paper)", "1:1": "50/50", "1:0": "all region", "0:1": "all edge"}
+POLICY_LABELS = MappingProxyType({"auto": "auto (paper)", "1:1": "50/50", "1:0": "all region", "0:1": "all edge"})
 PRESETS: tuple[str, ...] = ("full", "quick")
 
 

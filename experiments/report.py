@@ -13,6 +13,7 @@ import math
 import os
 import sys
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 
@@ -42,8 +43,8 @@ def _verdict(*flags: bool) -> str:
 
 
 #: How each surface's values are written: (digits, unit) on the figure sequence and over all sequences.
-_UNITS = {"mean_F": ((3, ""), (3, "")), "mean_D": ((3, " px"), (3, " px")), "mpjpe": ((1, " mm"), (1, " mm")),
-          "fail_F": ((0, " frames"), (1, "%")), "fail_D": ((0, " frames"), (1, "%")), "fail_gt": ((0, " frames"), (1, "%"))}
+_UNITS = MappingProxyType({"mean_F": ((3, ""), (3, "")), "mean_D": ((3, " px"), (3, " px")), "mpjpe": ((1, " mm"), (1, " mm")),
+          "fail_F": ((0, " frames"), (1, "%")), "fail_D": ((0, " frames"), (1, "%")), "fail_gt": ((0, " frames"), (1, "%"))})
 
 
 def _value(v, stat: str, scope: str) -> str:

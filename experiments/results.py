@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 
@@ -19,7 +20,7 @@ from experiments.sweep import CONFIG_FILE, SWEEP_FILE, TABLE2_FILE
 from experiments.units import DataSpec, RunSpec, clip_name, load_unit
 
 #: Statistic name -> (label with unit, short description).
-STATS = {
+STATS = MappingProxyType({
     "mean_F": ("mean F", "mean non-overlapping ratio F over frames"),
     "mean_D": ("mean edge distance (px)", "mean of the per-frame mean edge distance, pixels"),
     "fail_F": ("failures of F (frames)", "frames whose F exceeds the region threshold"),
@@ -32,7 +33,7 @@ STATS = {
     "ms_median": ("median time per frame (ms)", "median time per frame, image processing included, ms"),
     "ms_registration": ("registration time per frame (ms)", "mean time of region + edge steps per frame, ms"),
     "frames": ("frames", "frames tracked"),
-}
+})
 
 
 class Results:

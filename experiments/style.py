@@ -7,6 +7,7 @@ Files carry no time stamps, so the same results give the same PNG bytes.
 from __future__ import annotations
 
 from pathlib import Path
+from types import MappingProxyType
 
 import matplotlib
 from matplotlib.figure import Figure
@@ -14,16 +15,16 @@ from matplotlib.figure import Figure
 #: Seed of anything random in figures (jitter, sampling).
 SEED = 0
 #: rcParams of every figure.
-STYLE = {
+STYLE = MappingProxyType({
     "font.size": 8.5, "axes.titlesize": 9, "axes.labelsize": 8.5, "legend.fontsize": 7.5,
     "xtick.labelsize": 7.5, "ytick.labelsize": 7.5, "axes.grid": True, "grid.alpha": 0.3,
     "axes.spines.top": False, "axes.spines.right": False, "lines.linewidth": 1.2,
     "figure.dpi": 100, "savefig.dpi": 130, "savefig.bbox": "tight", "pdf.fonttype": 42,
-}
+})
 #: The paper's line colours: black at convergence / with the hand-off, grey otherwise.
 BLACK, GREY = "#000000", "#8c8c8c"
 #: Colours of the split policies (colour-blind safe).
-POLICY_COLOURS = {"auto": "#000000", "1:1": "#0072B2", "1:0": "#D55E00", "0:1": "#009E73"}
+POLICY_COLOURS = MappingProxyType({"auto": "#000000", "1:1": "#0072B2", "1:0": "#D55E00", "0:1": "#009E73"})
 #: Colour map of surfaces and heat maps.
 CMAP = "viridis"
 #: File formats written for every figure and table.

@@ -8,6 +8,7 @@ resolution) comes from ``table2.json``.
 from __future__ import annotations
 
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 
@@ -16,12 +17,12 @@ from experiments.results import Results
 from experiments.style import new_figure, save, style_context
 
 #: The paper's Table 1: total -> (platform 1 mean, std, platform 2 mean, std), milliseconds.
-PAPER_TABLE1 = {40: (22.34, 6.58, 88.18, 9.16), 100: (35.61, 6.68, 137.24, 16.07), 200: (57.99, 6.84, 223.30, 27.51),
-                300: (78.69, 6.90, 300.13, 32.74), 400: (97.25, 7.12, 370.06, 35.81), 500: (100.59, 9.80, 436.21, 48.72)}
+PAPER_TABLE1 = MappingProxyType({40: (22.34, 6.58, 88.18, 9.16), 100: (35.61, 6.68, 137.24, 16.07), 200: (57.99, 6.84, 223.30, 27.51),
+                300: (78.69, 6.90, 300.13, 32.74), 400: (97.25, 7.12, 370.06, 35.81), 500: (100.59, 9.80, 436.21, 48.72)})
 #: The paper's Table 2: (width, height) -> (image processing, F, edge distance), milliseconds.
 #: The paper prints "326 x 240"; we read it as 320 x 240.
-PAPER_TABLE2 = {(160, 120): (92.45, 1.05, 0.97), (256, 256): (323.53, 1.89, 1.86), (320, 240): (381.19, 2.08, 2.09),
-                (480, 480): (1187.92, 3.09, 3.05), (512, 512): (1353.84, 3.74, 3.82), (640, 480): (1581.86, 5.29, 5.58)}
+PAPER_TABLE2 = MappingProxyType({(160, 120): (92.45, 1.05, 0.97), (256, 256): (323.53, 1.89, 1.86), (320, 240): (381.19, 2.08, 2.09),
+                (480, 480): (1187.92, 3.09, 3.05), (512, 512): (1353.84, 3.74, 3.82), (640, 480): (1581.86, 5.29, 5.58)})
 
 TABLE1_HEADER = ("evaluations (R+E)", "ours: frame ms\n(mean ± sd)", "ours: registration ms\n(mean ± sd)",
                  "ours: evaluations\nused (mean)", "paper P1 ms\n(mean ± sd)", "paper P2 ms\n(mean ± sd)")

@@ -26,6 +26,7 @@ import platform
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 
@@ -44,8 +45,8 @@ EDGE_STARTS = ("region_simplex", "fresh")
 RUN_KINDS = ("run", "timing")
 #: Tracker settings of the paper's method, pinned so that options added beyond the paper (and
 #: their defaults) never leak into the experiments; only fields the tracker has are passed.
-PAPER_TRACKER = {"prediction": "previous", "adaptive": False, "recovery": False, "blocks": "all",
-                 "arm_search": False, "prior_weight_region": 0.0, "prior_weight_edge": 0.0, "pose_prior_weight": 0.0}
+PAPER_TRACKER = MappingProxyType({"prediction": "previous", "adaptive": False, "recovery": False, "blocks": "all",
+                 "arm_search": False, "prior_weight_region": 0.0, "prior_weight_edge": 0.0, "pose_prior_weight": 0.0})
 
 
 @dataclass(frozen=True)
