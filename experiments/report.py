@@ -79,10 +79,11 @@ def _coverage(res: Results) -> list[str]:
                  f"{cfg.table2_frames} frame(s) of `{cfg.figure_sequence}` per resolution.")
     clips = res.clip_data()
     if clips:
-        frames = []
+        frames = {}
         for d in clips:
             u = res.unit(grid_specs(cfg, d, cfg.motion_budgets, cfg.motion_budgets)[(0, 0)])
-            frames.append(f"`{clip_name(d.motion)}` ({u['frame'].size if u is not None else 0} frames)")
+            frames.setdefault(d.motion, f"`{clip_name(d.motion)}` ({u['frame'].size if u is not None else 0} frames)")
+        frames = list(frames.values())
         lines.append(f"- **Motion-capture clips** (`--motion-dir`): actor(s) {', '.join(cfg.motion_actors)} driven by "
                      + ", ".join(frames) + f" (CMU, retargeted to 25 fps), on the coarser grid {list(cfg.motion_budgets)}"
                      " on both axes.")
@@ -125,7 +126,8 @@ def build_report(res: Results, figures_rel: str) -> str:
     L.append(f"- **Coverage**: {stored} of {planned} planned run units stored"
              + ("." if stored == planned else " (the others are missing: their cells show as holes / n/a)."))
     wall = res.wall_time_s()
-    runs = "; ".join(f"{i.get('backend')}: {i.get('computed')} units in {i.get('wall_s', 0) / 60:.1f} min" for i in inv)
+    runs = "; ".join(f"{i.get('backend')}: {i.get('computed')} units in {i.get('wall_s', 0) / 60:.1f} min, code "
+                     f"{str(i.get('code', 'unknown'))[:12]}" for i in inv)
     L.append(f"- **Wall time**: {wall / 60:.1f} min over {len(inv)} invocation(s) ({runs}), "
              f"CPU {t2.get('cpu', 'n/a')}, 2 cores shared with other work (timings are therefore noisy).")
     L.append("")
@@ -179,7 +181,8 @@ def build_report(res: Results, figures_rel: str) -> str:
              f"R={_f(conv['region_budget_90'], 0)} (E=0); 90% of the drop of mean edge distance at "
              f"E={_f(conv['edge_budget_90'], 0)} (R=0); to meet the convergence test the region step takes a median "
              f"{_f(conv['region_iterations_median'], 0)} iterations, the edge step (fresh simplex) "
-             f"{_f(conv['edge_iterations_median'], 0)} | {_verdict(conv['holds'])} |")
+             f"{_f(conv['edge_iterations_median'], 0)} | budget to 90%: {_verdict(conv['holds_budget'])}; iterations to "
+             f"converge: {_verdict(conv['holds_iterations'])} |")
     L.append(f"| Edge step is more precise (Figs. 6, 7) | converged: edge distance {_f(prec['D_after_region'], 3)} px after "
              f"the region step, {_f(prec['D_after_edge'], 3)} px after the edge step (lower on {prec['frames_improved']} of "
              f"{prec['frames']} frames); MPJPE {_f(prec['mpjpe_region_converged'], 1)} mm region only vs "
@@ -282,9 +285,7 @@ def build_report(res: Results, figures_rel: str) -> str:
     L.append("")
     L.append(fig("ext_thresholds"))
     L.append("")
-    L.append("Each point is one frame of one grid run. A frame whose image residual exceeds the threshold is a "
-             "\"peak\" in the paper's sense; the titles give how many of those peaks are real 3D failures and how "
-             "many real failures they catch.")
+    L.append(_threshold_text(res))
     L.append("")
     L.append("### Every sequence")
     L.append("")
@@ -322,9 +323,12 @@ def _summary(res: Results, claims: dict) -> list[str]:
              f"(MPJPE minimum {_value(m['mpjpe']['all'][0], 'mpjpe', 'all')}; without optimisation "
              f"{_value(m['mpjpe']['all_at_0_0'], 'mpjpe', 'all')}). The paper's claims are about residuals and failure "
              "counts, so they are tested in that regime; ground truth says which residual differences matter.")
-    L.append(f"- **Region converges faster than edge: {yes(conv['holds'])}** by our measure — 90% of the mean-F drop "
-             f"needs R={_f(conv['region_budget_90'], 0)} evaluations, 90% of the edge-distance drop E="
-             f"{_f(conv['edge_budget_90'], 0)}.")
+    L.append(f"- **Region converges faster than edge: {yes(conv['holds_budget'])} on the budget surfaces, "
+             f"{yes(conv['holds_iterations'])} in iterations to convergence** — 90% of the mean-F drop needs "
+             f"R={_f(conv['region_budget_90'], 0)} evaluations but 90% of the edge-distance drop only "
+             f"E={_f(conv['edge_budget_90'], 0)}; to meet the convergence test the region step needs a median "
+             f"{_f(conv['region_iterations_median'], 0)} iterations, the edge step "
+             f"{_f(conv['edge_iterations_median'], 0)}.")
     L.append(f"- **Edge step more precise: {yes(prec['holds_image'])} on the image** (converged: "
              f"{_f(prec['D_after_region'], 3)} -> {_f(prec['D_after_edge'], 3)} px) **and "
              f"{yes(prec['holds_truth'])} against ground truth** (MPJPE {_f(prec['mpjpe_region_converged'], 1)} -> "
@@ -334,9 +338,13 @@ def _summary(res: Results, claims: dict) -> list[str]:
              f"{yes(stab['holds_truth'])} against ground truth** (edge step alone {_f(stab['fail_gt_edge_only'], 1)}% vs "
              f"region step alone {_f(stab['fail_gt_region_only'], 1)}% of frames over {t['mpjpe']:g} mm).")
     if "n_below" in pol:
-        L.append(f"- **200-evaluation policy: {yes(pol.get('holds_truth', False))} by MPJPE** (all-region better than 50/50 "
+        verdict = _verdict(pol["below_region_better_mpjpe"] > pol["n_below"] / 2,
+                           pol["above_half_better_mpjpe"] > pol["n_above"] / 2).strip("*")
+        diffs = ", ".join(f"{r['total']}: {_f(r['1:0_mpjpe'] - r['1:1_mpjpe'], 1)}" for r in pol["rows"])
+        L.append(f"- **200-evaluation policy: {verdict} by MPJPE** (all-region better than 50/50 "
                  f"at {pol['below_region_better_mpjpe']}/{pol['n_below']} totals below 200, 50/50 better than all-region "
-                 f"at {pol['above_half_better_mpjpe']}/{pol['n_above']} from 200 on); averaged over totals the paper's "
+                 f"at {pol['above_half_better_mpjpe']}/{pol['n_above']} from 200 on; MPJPE of all-region minus 50/50, mm, "
+                 f"per total: {diffs}); averaged over totals the paper's "
                  f"auto policy has MPJPE {_f(pol['mean_mpjpe_over_totals'].get('auto'), 1)} mm vs "
                  + ", ".join(f"{POLICY_LABELS.get(p, p)} {_f(v, 1)}" for p, v in pol['mean_mpjpe_over_totals'].items()
                              if p != "auto") + " mm.")
@@ -458,6 +466,31 @@ def _policy_text(res: Results, pol: dict) -> str:
             + f"); the paper's auto policy is at least as good as every fixed split at {n_best} of "
             f"{len(pol['rows'])} totals. Times on the x axis were measured while the sweep kept two workers busy on a shared machine "
             "(medians per frame); Table 1 has the cleaner timings.")
+
+
+def _threshold_text(res: Results) -> str:
+    from experiments.figures.ext_thresholds import pooled
+    t = res.thresholds()
+    data = pooled(res)
+    bad = data["mpjpe_mm"] > t["mpjpe"]
+    parts = []
+    for key, thr, name in (("region_residual", t["F"], "F"), ("edge_residual", t["D"], "the edge distance (px)")):
+        above = data[key] > thr
+        if above.any():
+            parts.append(f"{name} > {thr:g} flags {100 * above.mean():.1f}% of the frames, "
+                         f"{100 * np.count_nonzero(above & bad) / np.count_nonzero(above):.0f}% of which are more than "
+                         f"{t['mpjpe']:g} mm off, and catches {100 * np.count_nonzero(above & bad) / max(1, np.count_nonzero(bad)):.0f}% "
+                         "of those")
+    first = [res.unit(grid_specs(res.config, res.data(n))[(0, 0)]) for n in res.sequences]
+    f0 = [float(u["region_residual"][0]) for u in first if u is not None]
+    d0 = [float(u["edge_residual"][0]) for u in first if u is not None]
+    at_truth = (f"F is {_f(min(f0), 2)}-{_f(max(f0), 2)} and the edge distance {_f(min(d0), 2)}-{_f(max(d0), 2)} px at the "
+                "true pose of frame 0" if f0 else "the residuals are not zero even at the true pose")
+    return ("Each point is one frame of one grid run ("
+            f"{data['mpjpe_mm'].size} frames). The thresholds were chosen so that a \"peak\" in the paper's sense is "
+            "almost always a real 3D failure: " + "; ".join(parts) + ". Lower thresholds catch more failures but flag "
+            "frames that are in fact tracked well: " + at_truth + " of the sequences, because the rendered actor "
+            "(shading, texture, clothes, camera noise) and the model differ.")
 
 
 def _sequences_text(hard: dict) -> str:

@@ -23,14 +23,13 @@ def threshold_text(results: Results, stat: str) -> str:
             "fail_gt": f"failure: MPJPE > {t['mpjpe']:g} mm"}.get(stat, "")
 
 
-def _fmt(v: float) -> str:
+def _fmt(v: float, integers: bool = False) -> str:
+    """A cell value: integers as such, otherwise 3 significant digits or so."""
     if not np.isfinite(v):
         return "–"
-    if abs(v) >= 100:
+    if integers or abs(v) >= 100:
         return f"{v:.0f}"
-    if abs(v) >= 10:
-        return f"{v:.1f}" if v != round(v) else f"{v:.0f}"
-    return f"{v:.2f}" if v != round(v) else f"{v:.0f}"
+    return f"{v:.1f}" if abs(v) >= 10 else f"{v:.2f}"
 
 
 def surface3d(ax, rs, es, z, zlabel: str) -> None:
@@ -66,12 +65,14 @@ def heatmap(ax, rs, es, z, label: str, *, annotate: bool = True, fig=None, lower
     ax.set_ylabel("edge-step evaluations")
     ax.grid(False)
     if annotate:
+        finite = z[np.isfinite(z)]
+        integers = bool(np.all(finite == np.round(finite)))
         lo, hi = vmin, vmax
         for i in range(len(rs)):
             for j in range(len(es)):
                 v = z[i, j]
                 bright = np.isfinite(v) and hi > lo and min(v - lo, hi - lo) / (hi - lo) > 0.6
-                ax.text(i, j, _fmt(v), ha="center", va="center", fontsize=6, color="k" if bright else "w")
+                ax.text(i, j, _fmt(v, integers), ha="center", va="center", fontsize=6, color="k" if bright else "w")
     best = np.nanargmin(z) if lower_is_better else np.nanargmax(z)
     i, j = np.unravel_index(best, z.shape)
     ax.add_patch(_frame((i, j)))

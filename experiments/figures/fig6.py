@@ -53,11 +53,11 @@ def main(results: Results | str | Path, out: str | Path) -> list[Path]:
             x = np.arange(len(names))
             ax.bar(x - 0.27, before, 0.27, color=GREY, label="after region step")
             ax.bar(x, after, 0.27, color=BLACK, label="after edge step (fresh simplex)")
-            ax.bar(x + 0.27, handed, 0.27, color="#0072B2", label="after edge step (converged region simplex)")
+            ax.bar(x + 0.27, handed, 0.27, color="#0072B2", label="after edge step handed the converged\nregion simplex (separate run)")
             ax.set_xticks(x, names, rotation=20)
             ax.set_ylabel("mean edge distance (px)")
             ax.set_title("every sequence (mean over frames)")
-            ax.legend()
+            ax.legend(loc="upper left")
         else:
             placeholder(ax, "no converged runs")
         fig.suptitle(f"Fig. 6 — residual edge distance after the region step vs after the edge step "
