@@ -291,6 +291,14 @@ def hardest(res: Results) -> dict:
     return {"per_sequence": out, "rank": rank, "holds_truth": bool(rank["fail_gt"] and rank["fail_gt"][0] == "turning")}
 
 
+def stalled_edge_share(res: Results, region: int, edge: int) -> float:
+    """Share of frames (all sequences) in grid cell (region, edge) where the edge step made no iteration."""
+    from experiments.plan import grid_specs
+    parts = [u["edge_iterations"] for d in named(res)
+             if (u := res.unit(grid_specs(res.config, d, (region,), (edge,))[(region, edge)])) is not None]
+    return float(np.mean(np.concatenate(parts) == 0)) if parts else math.nan
+
+
 def all_claims(res: Results) -> dict:
     """Every analysis above in one dict."""
     return {"minima": surface_minima(res), "convergence": convergence(res), "precision": precision(res),

@@ -180,17 +180,17 @@ class SweepConfig(JsonConfig):
     def preset(cls, name: str) -> "SweepConfig":
         """The ``full`` (default) or ``quick`` preset.
 
-        ``quick``: grid {0, 100, 250}^2 on two sequences of 20 frames with reduced
+        ``quick``: grid {0, 100, 250}^2 on two sequences of 40 frames with reduced
         Fig. 4/6/8, policy and timing runs (a few minutes on two cores).
         """
         if name == "full":
             return cls()
         if name == "quick":
-            return cls(sequences=("gestures-2", "turning"), frames=20, region_budgets=(0, 100, 250),
+            return cls(sequences=("gestures-2", "turning"), frames=40, region_budgets=(0, 100, 250),
                        edge_budgets=(0, 100, 250), converged_budget=1000, handoff_total=250,
                        handoff_edge_budgets=(0, 125, 250), policy_totals=(40, 200, 500),
                        timing_sequences=("gestures-2",), table2_frames=1, table2_min_runs=5,
-                       table2_min_seconds=0.05, motion_frames=20, motion_budgets=(0, 250))
+                       table2_min_seconds=0.05, motion_frames=40, motion_budgets=(0, 250))
         raise ValueError(f"unknown preset {name!r}; choose from {', '.join(PRESETS)}")
 
     def with_changes(self, changes: dict) -> "SweepConfig":
