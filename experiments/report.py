@@ -430,8 +430,8 @@ def _surface_text(res: Results, name: str, m: dict, conv: dict, stab: dict) -> s
         return (f"Mean F falls from {_f(e['all_at_0_0'], 3)} without optimisation to a minimum of {_cell(e['all'], 'mean_F', 'all')} "
                 f"(all sequences). Along the region axis (E=0) 90% of the drop is reached at R={_f(conv['region_budget_90'], 0)} "
                 f"and F is {_f(zf[-1, 0], 3)} at R={rs[-1]}; the edge step alone (R=0) brings F to {_f(zf[0, -1], 3)} at "
-                f"E={es[-1]}. Beyond R=200 the edge budget changes mean F by at most "
-                f"{_f(float(np.nanmax(np.ptp(zf[rs >= 200], axis=1))), 3)}.")
+                + (f"E={es[-1]}. From R=200 on the edge budget changes mean F by at most "
+                   f"{_f(float(np.nanmax(np.ptp(zf[rs >= 200], axis=1))), 3)}." if (rs >= 200).any() else f"E={es[-1]}."))
     if name == "fig10":
         e = m["mean_D"]
         return (f"Mean edge distance falls from {_f(e['all_at_0_0'], 3)} px to a minimum of {_cell(e['all'], 'mean_D', 'all')} (all "
