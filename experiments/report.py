@@ -335,8 +335,14 @@ def _summary(res: Results, claims: dict) -> list[str]:
              f"{_f(prec['mpjpe_both_converged'], 1)} mm); on the budget grid the best MPJPE with an edge step is "
              f"{_f(prec['mpjpe_best_with_edge'], 1)} mm, without {_f(prec['mpjpe_best_without_edge'], 1)} mm.")
     L.append(f"- **Edge step less stable: {yes(stab['holds_image'])} on the image failure surfaces, "
-             f"{yes(stab['holds_truth'])} against ground truth** (edge step alone {_f(stab['fail_gt_edge_only'], 1)}% vs "
-             f"region step alone {_f(stab['fail_gt_region_only'], 1)}% of frames over {t['mpjpe']:g} mm).")
+             f"{yes(stab['holds_truth'])} against ground truth** (failures rise with a larger budget at "
+             f"{stab['rises_fail_D_edge_axis']} of {stab['rises_steps']} steps along the edge axis vs "
+             f"{stab['rises_fail_F_region_axis']} along the region axis"
+             + (" — a small difference" if abs(stab['rises_fail_D_edge_axis'] - stab['rises_fail_F_region_axis']) <= 3 else "")
+             + f"; edge step alone "
+             f"{_f(stab['fail_gt_edge_only'], 1)}% vs region step alone {_f(stab['fail_gt_region_only'], 1)}% of frames "
+             f"over {t['mpjpe']:g} mm, all-edge vs all-region policy {_f(stab.get('policy_fail_gt_all_edge'), 1)}% vs "
+             f"{_f(stab.get('policy_fail_gt_all_region'), 1)}%).")
     if "n_below" in pol:
         verdict = _verdict(pol["below_region_better_mpjpe"] > pol["n_below"] / 2,
                            pol["above_half_better_mpjpe"] > pol["n_above"] / 2).strip("*")
