@@ -405,4 +405,24 @@ def measure_table2(sizes: tuple[tuple[int, int], ...], sequence: str, frames: in
                      "cost_edge_ms_mean": float(t_edge.mean()), "cost_edge_ms_median": float(np.median(t_edge)),
                      "runs": int(min(t_prepare.size, t_region.size, t_edge.size))})
     versions, cpu = environment()
-    return {"rows": rows, "cpu": cpu, "versions": versions, "sequence": sequence, "frames": frames}
+    return {"rows": rows, "cpu": cpu, "versions": versions, "sequence": sequence, "frames": frames,
+            "bench": bench_imaging(min_runs, min_seconds)}
+
+
+def bench_imaging(min_runs: int, min_seconds: float) -> dict | None:
+    """``mocap bench``'s own image-processing rows (its synthetic scene, the Table 2 sizes), or None.
+
+    A cross-check of :func:`measure_table2`'s image-processing column. ``mocap bench`` pins the
+    process to one CPU; the CPU set is restored afterwards.
+    """
+    from mocap.bench import run_benchmark
+
+    affinity = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else None
+    try:
+        result = run_benchmark(quick=min_runs < 30, with_llvmpipe=False, stages=("imaging",), progress=False)
+    except ValueError:                      # an older mocap without the imaging group
+        return None
+    finally:
+        if affinity is not None:
+            os.sched_setaffinity(0, affinity)
+    return result
