@@ -394,7 +394,10 @@ def _table2_text(res: Results) -> str:
             f"the paper: x{_f(1581.86 / 92.45, 1)}); one evaluation of F {_f(a['cost_region_ms_mean'], 3)} -> "
             f"{_f(b['cost_region_ms_mean'], 3)} ms and of the edge distance {_f(a['cost_edge_ms_mean'], 3)} -> "
             f"{_f(b['cost_edge_ms_mean'], 3)} ms (the paper: 1.05 -> 5.29 and 0.97 -> 5.58 ms on a GPU). As in the "
-            "paper, the two costs take about the same time at every resolution.")
+            "paper, the two costs take about the same time at every resolution."
+            + (f" `mocap bench` times image processing on its own synthetic test scene at "
+               f"{_f(a['bench_prepare_ms'])} -> {_f(b['bench_prepare_ms'])} ms (median, one pinned core): the same "
+               "order; our column uses frames of the benchmark actor." if a.get("bench_prepare_ms") and b.get("bench_prepare_ms") else ""))
 
 
 def _fig4_text(res: Results) -> str:
