@@ -166,10 +166,12 @@ def _nm_tell(simplex, values, lower, upper, coef, work, ist, fst, f):
 
 
 @jit
-def _nm_run_costs(kind, region_args, edge_args, prior_centre, prior_weight, base, active, simplex, values, lower,
-                  upper, coef, work, ist, fst, budget):
+def _nm_run_costs(kind, region_args, edge_args, prior_centre, prior_weight, posture, base, active, simplex, values,
+                  lower, upper, coef, work, ist, fst, budget):
     """Drive the state machine with a mocap cost: kind 0 region (eq. 1), 1 edge (eq. 2), plus the
-    quadratic prior ``sum(prior_weight * (x - prior_centre)**2)`` (zero weights: the plain cost).
+    quadratic prior ``sum(prior_weight * (x - prior_centre)**2)`` (zero weights: the plain cost),
+    plus ``posture[0]`` times the arm posture penalty with margin ``posture[1]`` and sigma
+    ``posture[2]`` (:mod:`mocap.body.posture`; weight 0: none).
 
     The simplex lives in the subspace of the parameters ``active``; the others keep the values
     of ``base`` (the full pose vector the cost is evaluated on)."""
@@ -184,9 +186,14 @@ def _nm_run_costs(kind, region_args, edge_args, prior_centre, prior_weight, base
         for i in range(x.shape[0]):
             d = x[i] - prior_centre[i]
             f += prior_weight[i] * d * d
+        if posture[0] > 0.0:
+            # the cost kernel has just posed the segments into its buffers
+            transforms = region_args[1][5] if kind == 0 else edge_args[1][5]
+            f += posture[0] * _arm_behind_penalty(transforms, _ARMS, posture[1], posture[2])
         _nm_tell(simplex, values, lower, upper, coef, work, ist, fst, f)
 
 
+from mocap.body.posture import _ARMS, _arm_behind_penalty  # noqa: E402
 from mocap.cost import _edge_cost as _edge_cost_kernel  # noqa: E402  (compiled into the loop above)
 from mocap.cost import _region_cost as _region_cost_kernel  # noqa: E402
 
@@ -346,7 +353,8 @@ def minimize(fun: Callable[[np.ndarray], float], simplex, lower, upper, *, budge
 
 def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-3,
                   adaptive: bool = False, prior: tuple[np.ndarray, np.ndarray] | None = None,
-                  active: np.ndarray | None = None, base: np.ndarray | None = None) -> SimplexResult:
+                  active: np.ndarray | None = None, base: np.ndarray | None = None,
+                  posture: tuple[float, float, float] | None = None) -> SimplexResult:
     """As :func:`minimize` for a :class:`~mocap.cost.RegionCost` or :class:`~mocap.cost.EdgeCost`,
     with the whole loop compiled (no Python per evaluation).
 
@@ -360,6 +368,9 @@ def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-
         the others keep their values in ``base``. Default: all 23.
     base : ndarray, shape (23,), optional
         Full pose the inactive parameters are taken from (needed with ``active``).
+    posture : (weight, margin_m, sigma_m), optional
+        Add ``weight`` (cost units) times the arm posture penalty
+        (:func:`mocap.body.posture.arm_behind_penalty`, margin and sigma in metres).
     """
     from mocap.cost import EdgeCost, RegionCost
 
@@ -394,7 +405,14 @@ def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-
         if centre.shape != (n,) or weight.shape != (n,) or not (np.isfinite(centre).all() and np.isfinite(weight).all()) \
                 or (weight < 0).any():
             raise ValueError("prior must be (centre, weight): finite (23,) arrays, weights >= 0")
-    _nm_run_costs(kind, region_args, edge_args, centre, weight, base, active, *st.args(), budget)
+    if posture is None:
+        posture_args = np.array([0.0, 0.0, 1.0])
+    else:
+        posture_args = np.asarray(posture, dtype=np.float64)
+        if posture_args.shape != (3,) or not np.isfinite(posture_args).all() or posture_args[0] < 0 \
+                or posture_args[1] < 0 or posture_args[2] <= 0:
+            raise ValueError("posture must be (weight >= 0, margin_m >= 0, sigma_m > 0)")
+    _nm_run_costs(kind, region_args, edge_args, centre, weight, posture_args, base, active, *st.args(), budget)
     return st.result()
 
 

@@ -94,6 +94,15 @@ class TrackerConfig(JsonConfig):
         ``weight * mean(((angle - neutral) / sigma)**2)``, added to both steps. It breaks the
         monocular forward/backward ties (an arm pointing back looks like one pointing sideways)
         in favour of common postures. 0 is the paper's method.
+    posture_weight_region, posture_weight_edge : float
+        Beyond the paper: weight (F units, pixels) of the arm posture penalty
+        (:func:`mocap.body.posture.arm_behind_penalty`) added to the region and edge costs while
+        optimising: elbows and wrists behind the chest plane by more than
+        ``posture_margin_m`` cost ``((behind - margin) / posture_sigma_m)**2`` each. It settles
+        the forward/backward tie of an arm in favour of the front, where people gesture.
+        0 is the paper's method.
+    posture_margin_m, posture_sigma_m : float, metres
+        Free distance behind the shoulder, and the distance beyond it that costs the weight.
     """
 
     evaluations: int = 500
@@ -119,6 +128,10 @@ class TrackerConfig(JsonConfig):
     prior_sigma_angle_deg: float = 15.0
     pose_prior_weight: float = 0.0
     pose_prior_sigma_deg: float = 45.0
+    posture_weight_region: float = 0.0
+    posture_weight_edge: float = 0.0
+    posture_margin_m: float = 0.05
+    posture_sigma_m: float = 0.1
 
     def __post_init__(self) -> None:
         if isinstance(self.evaluations, bool) or not isinstance(self.evaluations, int) or self.evaluations < 0:
@@ -133,7 +146,7 @@ class TrackerConfig(JsonConfig):
             raise ValueError(f"prediction must be one of {PREDICTIONS}, got {self.prediction!r}")
         for name in ("position_step_m", "angle_step_deg", "fresh_step_scale", "recovery_step_scale",
                      "edge_failure_threshold_px", "region_failure_threshold", "prior_sigma_position_m",
-                     "prior_sigma_angle_deg", "pose_prior_sigma_deg"):
+                     "prior_sigma_angle_deg", "pose_prior_sigma_deg", "posture_sigma_m"):
             v = getattr(self, name)
             if not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be a finite positive number, got {v!r}")
@@ -141,7 +154,8 @@ class TrackerConfig(JsonConfig):
             raise ValueError(f"ftol must be finite and non-negative, got {self.ftol!r}")
         if not isinstance(self.mesh_resolution, int) or self.mesh_resolution < 0:
             raise ValueError(f"mesh_resolution must be 0 (automatic) or a positive integer, got {self.mesh_resolution!r}")
-        for name in ("edge_gap_m", "prior_weight_region", "prior_weight_edge", "pose_prior_weight"):
+        for name in ("edge_gap_m", "prior_weight_region", "prior_weight_edge", "pose_prior_weight",
+                     "posture_weight_region", "posture_weight_edge", "posture_margin_m"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be finite and non-negative, got {v!r}")
@@ -317,7 +331,8 @@ def _search_arm(cost, x: np.ndarray, block: np.ndarray) -> tuple[np.ndarray, int
     return best.copy(), len(candidates) + 1
 
 
-def _run_step(cost, pose, simplices, budget, config, lower, upper, prior, blocks, arm_search=False) -> StepResult:
+def _run_step(cost, pose, simplices, budget, config, lower, upper, prior, posture_weight, blocks,
+              arm_search=False) -> StepResult:
     x = pose.copy()
     runs = []
     searched = 0
@@ -331,7 +346,8 @@ def _run_step(cost, pose, simplices, budget, config, lower, upper, prior, blocks
             searched += used
         res = minimize_cost(cost, simplex(x, block) if callable(simplex) else simplex, lower[block], upper[block],
                             budget=block_budget, ftol=config.ftol, adaptive=config.adaptive, prior=prior,
-                            active=block, base=x)
+                            active=block, base=x,
+                            posture=(posture_weight, config.posture_margin_m, config.posture_sigma_m))
         if res.evaluations > 0:
             x[block] = res.x
         runs.append(res)
@@ -372,7 +388,8 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
     region = edge = None
     if n_region > 0:
         region = _run_step(region_cost, q0, [fresh(1.0)] * len(blocks), n_region, config, lower, upper,
-                           config.prior(prior_centre, config.prior_weight_region), blocks, config.arm_search)
+                           config.prior(prior_centre, config.prior_weight_region), config.posture_weight_region,
+                           blocks, config.arm_search)
         pose = region.x
     edge_after_region = edge_cost(pose)
     if n_edge > 0:
@@ -381,7 +398,7 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
         else:
             simplices = [fresh(config.fresh_step_scale)] * len(blocks)
         edge = _run_step(edge_cost, pose, simplices, n_edge, config, lower, upper,
-                         config.prior(prior_centre, config.prior_weight_edge), blocks)
+                         config.prior(prior_centre, config.prior_weight_edge), config.posture_weight_edge, blocks)
         pose = edge.x
     return Registration(pose.copy(), region_cost(pose), edge_cost(pose), edge_after_region, region, edge)
 

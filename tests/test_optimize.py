@@ -188,3 +188,25 @@ def test_subset_optimisation_keeps_the_other_parameters_and_prior_pulls():
     with pytest.raises(ValueError, match="prior"):
         minimize_cost(cost, initial_simplex(start, np.full(23, 0.1), JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1]),
                       JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1], budget=10, prior=(start, -np.ones(23)))
+
+
+def test_posture_penalty_is_added_to_the_compiled_cost():
+    from mocap.body.posture import arm_behind_penalty
+
+    model, camera = BodyModel.build(resolution=6), Camera.default(80, 60)
+    q = neutral_pose()
+    cost = RegionCost(render(q, model, camera).labels, model, camera)
+    start = q.copy()
+    start[9] = np.radians(-50.0)                           # right arm swung back
+    block = np.arange(9, 16)
+    lo, hi = JOINT_LIMITS[block, 0], JOINT_LIMITS[block, 1]
+    simplex = initial_simplex(start[block], np.full(7, 0.05), lo, hi)
+    weight, margin, sigma = 0.3, 0.02, 0.1
+    res = minimize_cost(cost, simplex, lo, hi, budget=60, active=block, base=start, posture=(weight, margin, sigma))
+    full = start.copy()
+    full[block] = res.x
+    expected = cost(full) + weight * arm_behind_penalty(full, model.skeleton, margin_m=margin, sigma_m=sigma)
+    assert res.fun == pytest.approx(expected, rel=1e-12)
+    assert arm_behind_penalty(start, model.skeleton, margin_m=margin, sigma_m=sigma) > 0.0
+    with pytest.raises(ValueError, match="posture"):
+        minimize_cost(cost, simplex, lo, hi, budget=10, active=block, base=start, posture=(1.0, 0.0, 0.0))
