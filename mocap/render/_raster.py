@@ -84,25 +84,10 @@ def _rasterize(xs, ys, iz, triangles, triangle_part, width, height, cull,
 
 
 @jit
-def _upper(w, m, inv_m, n):
-    """Largest k in [-1, n + 1] with ``w - m * k >= 0`` for m > 0 (exact; -1 when none in 0..n)."""
-    k = np.int64(np.floor(min(max(w * inv_m, -1.0), n + 1.0)))
-    if w - m * k < 0:
-        k -= 1
-    elif w - m * (k + 1) >= 0:
-        k += 1
-    return k
-
-
-@jit
-def _lower(w, m, inv_m, n):
-    """Smallest k in [-1, n + 1] with ``w - m * k >= 0`` for m < 0 (exact; n + 1 when none in 0..n)."""
-    k = np.int64(np.ceil(min(max(w * inv_m, -1.0), n + 1.0)))
-    if w - m * k < 0:
-        k += 1
-    elif w - m * (k - 1) >= 0:
-        k -= 1
-    return k
+def _floor_divmod(a, b):
+    """``(q, r)`` with ``a = q * b + r`` and ``0 <= r < b``, for integers a and b > 0 (exact)."""
+    q = a // b                  # Numba's integer // is floor division, as Python's
+    return q, a - q * b
 
 
 @jit
@@ -112,12 +97,15 @@ def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
     ``row_lo[y] .. row_hi[y]`` (when those arrays are non-empty; the caller initialises them
     to ``width`` and -1).
 
-    Each edge function is affine in the column, so on a pixel row the pixels where all three
-    are >= 0 form one run: its ends are estimated in floating point and then corrected with
-    the exact integer edge functions, so exactly the pixels of the per-pixel test are drawn.
-    Boxes narrower than :data:`_NARROW` pixels (most triangles at 160x120) are cheaper to test
-    pixel by pixel with the same integer edge functions, and are (unless a row range, triangle
-    ids or coverage counts are asked for).
+    Each edge function is affine in the column: on a pixel row it is ``w - m * k`` at column
+    ``px0 + k`` (``w``, ``m`` in 1/SUBPIXEL² pixel units), so the pixels where all three are >= 0
+    form one run. An edge with m > 0 ends the run at ``k = floor(w / m)``, one with m < 0 starts
+    it at ``k = -floor(w / |m|)``; that quotient and its remainder are carried from row to row by
+    an exact integer DDA (add the row step's quotient and remainder, carry one when the remainder
+    overflows), so exactly the pixels of the per-pixel test are drawn. A horizontal edge (m = 0)
+    depends on the row only: it cuts the triangle's rows at set-up. Boxes narrower than
+    :data:`_NARROW` pixels are cheaper to test pixel by pixel with the same integer edge
+    functions, and are (unless a row range, triangle ids or coverage counts are asked for).
     """
     S = SUBPIXEL
     half = S // 2
@@ -166,11 +154,35 @@ def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
         w0_row = a12x * (sy - y1) - a12y * (sx - x1) + b0
         w1_row = a20x * (sy - y2) - a20y * (sx - x2) + b1
         w2_row = a01x * (sy - y0) - a01y * (sx - x0) + b2
-        # per pixel step to the right: E -= m
+        # per pixel step to the right: E -= m; per row step down: E += d
         m0, m1, m2 = a12y * S, a20y * S, a01y * S
-        inv0 = 1.0 / m0 if m0 != 0 else 0.0
-        inv1 = 1.0 / m1 if m1 != 0 else 0.0
-        inv2 = 1.0 / m2 if m2 != 0 else 0.0
+        d0, d1, d2 = a12x * S, a20x * S, a01x * S
+        # a horizontal edge keeps rows j (from py0) with w + j * d >= 0
+        j_first, j_last = np.int64(0), py1 - py0
+        if m0 == 0:
+            if d0 > 0:
+                j_first = max(j_first, -(w0_row // d0))
+            else:
+                j_last = min(j_last, w0_row // -d0)
+        if m1 == 0:
+            if d1 > 0:
+                j_first = max(j_first, -(w1_row // d1))
+            else:
+                j_last = min(j_last, w1_row // -d1)
+        if m2 == 0:
+            if d2 > 0:
+                j_first = max(j_first, -(w2_row // d2))
+            else:
+                j_last = min(j_last, w2_row // -d2)
+        if j_first > j_last:
+            continue
+        py1 = py0 + j_last
+        if j_first > 0:
+            py0 += j_first
+            sy = py0 * S + half
+            w0_row += j_first * d0
+            w1_row += j_first * d1
+            w2_row += j_first * d2
         n = px1 - px0
         # inverse depth is affine in screen space: iz = z0 + dzdx * dx + dzdy * dy
         fa = float(area)
@@ -199,32 +211,37 @@ def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
                     w1 -= m1
                     w2 -= m2
                     zz += dzdx
-                w0_row += a12x * S
-                w1_row += a20x * S
-                w2_row += a01x * S
+                w0_row += d0
+                w1_row += d1
+                w2_row += d2
                 z_row += dzdy
             py1 = py0 - 1           # rows done
+        # run ends by DDA: q = floor(w / M), r = w - q * M in [0, M), M = |m| (1 for m = 0,
+        # whose q is never used)
+        mm0 = abs(m0) if m0 != 0 else np.int64(1)
+        mm1 = abs(m1) if m1 != 0 else np.int64(1)
+        mm2 = abs(m2) if m2 != 0 else np.int64(1)
+        q0, r0 = _floor_divmod(w0_row, mm0)
+        q1, r1 = _floor_divmod(w1_row, mm1)
+        q2, r2 = _floor_divmod(w2_row, mm2)
+        dq0, dr0 = _floor_divmod(d0, mm0)
+        dq1, dr1 = _floor_divmod(d1, mm1)
+        dq2, dr2 = _floor_divmod(d2, mm2)
         for py in range(py0, py1 + 1):
             lo = np.int64(0)
             hi = n
             if m0 > 0:
-                hi = min(hi, _upper(w0_row, m0, inv0, n))
+                hi = min(hi, q0)
             elif m0 < 0:
-                lo = max(lo, _lower(w0_row, m0, inv0, n))
-            elif w0_row < 0:
-                hi = np.int64(-1)
+                lo = max(lo, -q0)
             if m1 > 0:
-                hi = min(hi, _upper(w1_row, m1, inv1, n))
+                hi = min(hi, q1)
             elif m1 < 0:
-                lo = max(lo, _lower(w1_row, m1, inv1, n))
-            elif w1_row < 0:
-                hi = np.int64(-1)
+                lo = max(lo, -q1)
             if m2 > 0:
-                hi = min(hi, _upper(w2_row, m2, inv2, n))
+                hi = min(hi, q2)
             elif m2 < 0:
-                lo = max(lo, _lower(w2_row, m2, inv2, n))
-            elif w2_row < 0:
-                hi = np.int64(-1)
+                lo = max(lo, -q2)
             if lo <= hi:
                 drawn = True
                 row = py * width + px0
@@ -252,9 +269,18 @@ def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
                 if want_rows:
                     row_lo[py] = min(row_lo[py], px0 + lo)
                     row_hi[py] = max(row_hi[py], px0 + hi)
-            w0_row += a12x * S
-            w1_row += a20x * S
-            w2_row += a01x * S
+            r0 += dr0
+            carry = np.int64(r0 >= mm0)
+            q0 += dq0 + carry
+            r0 -= mm0 & -carry
+            r1 += dr1
+            carry = np.int64(r1 >= mm1)
+            q1 += dq1 + carry
+            r1 -= mm1 & -carry
+            r2 += dr2
+            carry = np.int64(r2 >= mm2)
+            q2 += dq2 + carry
+            r2 -= mm2 & -carry
             z_row += dzdy
         if drawn:
             bx0 = min(bx0, px0)
