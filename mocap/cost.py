@@ -140,28 +140,24 @@ def _edge_cost(pose, scene, buffers, distance, mark_buf, min_gap, no_edge_penalt
 
 
 @jit
-def _render_labels(pose, scene, buffers, out):
-    """Render class labels into the flat uint8 ``out`` (fully overwritten) and reset the buffers."""
-    _render_pose(pose, scene, buffers)
+def _render_labels(pose, scene, buffers, out_box):
+    """Render class labels straight into the part buffer ``buffers[0]`` (the scene's
+    triangle parts must be each triangle's label - 1) and reset the depth buffer.
+
+    The part buffer must be 0 outside the inclusive pixel box ``out_box`` (x0, y0, x1, y1;
+    x0 > x1 for none), as this function leaves it: the previous render is cleared from that
+    box first, and the box becomes the new render's one.
+    """
     part_buf, depth_buf, bbox = buffers[0], buffers[1], buffers[6]
-    part_label, width, height = scene[5], scene[7], scene[8]
-    lut = np.zeros(256, np.uint8)
-    for p in range(part_label.size):
-        lut[p + 1] = part_label[p]
-    x0, y0, x1, y1 = bbox[0], bbox[1], bbox[2], bbox[3]
-    if x0 > x1:
-        out[:] = 0
-        return
-    out[: y0 * width] = 0
-    out[(y1 + 1) * width:] = 0
-    for py in range(y0, y1 + 1):
+    width = scene[7]
+    for py in range(out_box[1], out_box[3] + 1):
         row = py * width
-        out[row: row + x0] = 0
-        for x in range(np.uint64(row + x0), np.uint64(row + x1 + 1)):
-            out[x] = lut[part_buf[x]]
-        out[row + x1 + 1: row + width] = 0
-        part_buf[row + x0: row + x1 + 1] = 0
-        depth_buf[row + x0: row + x1 + 1] = 0.0
+        part_buf[row + out_box[0]: row + out_box[2] + 1] = 0
+    _render_pose(pose, scene, buffers)
+    for py in range(bbox[1], bbox[3] + 1):
+        row = py * width
+        depth_buf[row + bbox[0]: row + bbox[2] + 1] = 0.0
+    out_box[0], out_box[1], out_box[2], out_box[3] = bbox[0], bbox[1], bbox[2], bbox[3]
 
 
 # ----------------------------------------------------------------------------- public
@@ -173,20 +169,27 @@ class LabelRenderer:
     model : BodyModel
     camera : Camera
 
-    ``renderer(pose)`` returns the class-label image, uint8 (height, width); the array is reused
-    by the next call (copy it to keep it). Not thread-safe: one object per thread.
+    ``renderer(pose)`` returns the class-label image, uint8 (height, width), as a read-only view
+    of the buffer the next call renders into (copy it to keep it). The labels are rasterized
+    straight into that buffer, and each call clears only the previous render's bounding box,
+    so the buffer must not be changed from outside: that is why the view is read-only. Not
+    thread-safe: one object per thread.
     """
 
     def __init__(self, model: BodyModel, camera: Camera) -> None:
         self.model, self.camera = model, camera
-        self._scene = _scene(model, camera)
+        scene = _scene(model, camera)
+        # rasterize labels, not parts: triangle "part" = label - 1, which the rasterizer draws as label
+        triangle_label = model.part_label[model.mesh.triangle_part].astype(np.int64) - 1
+        self._scene = scene[:4] + (triangle_label,) + scene[5:]
         self._buffers = _buffers(model, camera)
-        self._out = np.zeros(camera.width * camera.height, np.uint8)
+        self._out_box = np.array([camera.width, camera.height, -1, -1], np.int64)   # nothing drawn
+        self._labels = self._buffers[0].reshape(camera.shape)
+        self._labels.flags.writeable = False
 
     def __call__(self, pose) -> np.ndarray:
-        _render_labels(check_pose(pose), self._scene, self._buffers, self._out)
-        return self._out.reshape(self.camera.shape)
-
+        _render_labels(check_pose(pose), self._scene, self._buffers, self._out_box)
+        return self._labels
 
 
 def _scene(model: BodyModel, camera: Camera) -> tuple:

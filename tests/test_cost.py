@@ -5,7 +5,8 @@ from hypothesis.extra import numpy as hnp
 from scipy import ndimage
 
 from mocap.body import JOINT_LIMITS, PARAMETER_INDEX as P, BodyModel, neutral_pose
-from mocap.cost import EMPTY_REGION_COST, EdgeCost, RegionCost, mean_edge_distance, non_overlapping_ratio
+from mocap.cost import (EMPTY_REGION_COST, EdgeCost, LabelRenderer, RegionCost, mean_edge_distance,
+                        non_overlapping_ratio)
 from mocap.render import Camera, render
 from tests.naive import naive_mean_edge_distance, naive_non_overlapping_ratio
 
@@ -17,6 +18,31 @@ def random_pose(rng):
     q = rng.uniform(JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1])
     q[:3] = rng.uniform([-0.3, 0.0, 1.5], [0.3, 0.4, 2.5])
     return q
+
+
+# ------------------------------------------------------------------ label renderer
+def test_label_renderer_matches_render_over_a_sequence_of_poses():
+    # each call clears only the previous render's box: a sequence with renders that are
+    # empty, small, large and shifted must still equal a fresh render every time
+    rng = np.random.default_rng(5)
+    renderer = LabelRenderer(MODEL, CAMERA)
+    away = neutral_pose()
+    away[2] = -2.0                                   # behind the camera: nothing drawn
+    near = neutral_pose()
+    near[2] = 0.8
+    poses = [random_pose(rng), away, near, random_pose(rng), away, away, neutral_pose()]
+    poses += [random_pose(rng) for _ in range(10)]
+    for q in poses:
+        got = renderer(q)
+        np.testing.assert_array_equal(got, render(q, MODEL, CAMERA).labels)
+    assert got.shape == CAMERA.shape and got.dtype == np.uint8
+
+
+def test_label_renderer_output_is_read_only():
+    got = LabelRenderer(MODEL, CAMERA)(neutral_pose())
+    assert got.any()
+    with pytest.raises(ValueError):
+        got[0, 0] = 1
 
 
 # ------------------------------------------------------------------ non-overlapping ratio

@@ -33,6 +33,7 @@ covers two full turns either way so that an actor turning around is followed con
 """
 from __future__ import annotations
 
+import math
 from types import MappingProxyType
 
 import numpy as np
@@ -149,6 +150,10 @@ def check_pose(pose, *, name: str = "pose") -> np.ndarray:
         raise ValueError(f"{name} must be 23 numbers: {exc}") from None
     if arr.shape != (N_PARAMETERS,):
         raise ValueError(f"{name} must have shape ({N_PARAMETERS},), got {arr.shape}")
+    # the sum is NaN or infinite when a value is (a cheap test: 0.4 µs against 1.2; it may also
+    # overflow on huge finite values, which the exact test below then lets through)
+    if math.isfinite(sum(arr.tolist())):
+        return arr
     bad = ~np.isfinite(arr)
     if bad.any():
         names = ", ".join(PARAMETER_NAMES[i] for i in np.flatnonzero(bad))

@@ -84,25 +84,18 @@ def _rasterize(xs, ys, iz, triangles, triangle_part, width, height, cull,
 
 
 @jit
-def _upper(w, m, inv_m, n):
-    """Largest k in [-1, n + 1] with ``w - m * k >= 0`` for m > 0 (exact; -1 when none in 0..n)."""
-    k = np.int64(np.floor(min(max(w * inv_m, -1.0), n + 1.0)))
-    if w - m * k < 0:
-        k -= 1
-    elif w - m * (k + 1) >= 0:
-        k += 1
-    return k
-
-
-@jit
-def _lower(w, m, inv_m, n):
-    """Smallest k in [-1, n + 1] with ``w - m * k >= 0`` for m < 0 (exact; n + 1 when none in 0..n)."""
-    k = np.int64(np.ceil(min(max(w * inv_m, -1.0), n + 1.0)))
-    if w - m * k < 0:
-        k += 1
-    elif w - m * (k - 1) >= 0:
-        k -= 1
-    return k
+def _floor_div(w, m, inv_m):
+    """``(q, r)`` with ``w = q * m + r`` and ``0 <= r < m``, for integers w and m > 0 (exact);
+    ``inv_m = 1.0 / m`` gives the estimate, integer arithmetic the correction."""
+    q = np.int64(np.floor(w * inv_m))
+    r = w - q * m
+    while r < 0:
+        q -= 1
+        r += m
+    while r >= m:
+        q += 1
+        r -= m
+    return q, r
 
 
 @jit
@@ -112,12 +105,19 @@ def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
     ``row_lo[y] .. row_hi[y]`` (when those arrays are non-empty; the caller initialises them
     to ``width`` and -1).
 
-    Each edge function is affine in the column, so on a pixel row the pixels where all three
-    are >= 0 form one run: its ends are estimated in floating point and then corrected with
-    the exact integer edge functions, so exactly the pixels of the per-pixel test are drawn.
-    Boxes narrower than :data:`_NARROW` pixels (most triangles at 160x120) are cheaper to test
-    pixel by pixel with the same integer edge functions, and are (unless a row range, triangle
-    ids or coverage counts are asked for).
+    Each edge function is affine in the column: on a pixel row it is ``w - m * k`` at column
+    ``px0 + k`` (``w``, ``m`` in 1/SUBPIXEL² pixel units), so the pixels where all three are
+    >= 0 form one run. An edge with m > 0 (going down) ends the run at ``k = floor(w / m)``, one
+    with m < 0 (going up) starts it at ``k = -floor(w / |m|)``; that quotient and its remainder
+    are carried from row to row by an exact integer DDA (add the row step's quotient and
+    remainder, carry one when the remainder reaches |m|), so exactly the pixels of the
+    per-pixel test are drawn. A horizontal edge (m = 0) depends on the row only: it cuts the
+    triangle's rows at set-up. When two edges go the same way, the triangle is drawn in two
+    parts split at their shared vertex: above its row only the upper edge of the two can bind,
+    from its row on only the lower one (on the vertex's own row both give the same bound),
+    so each row tracks just one starting and one ending edge. Boxes narrower than
+    :data:`_NARROW` pixels are cheaper to test pixel by pixel with the same integer edge
+    functions, and are (unless a row range, triangle ids or coverage counts are asked for).
     """
     S = SUBPIXEL
     half = S // 2
@@ -153,34 +153,54 @@ def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
         py1 = min((maxy - half) // S, height - 1)
         if px0 > px1 or py0 > py1:
             continue
-        # edge functions E_ab(p) = (xb-xa)(py-ya) - (yb-ya)(px-xa), >= 0 inside;
-        # top-left rule: bias -1 on edges that are neither top nor left
+        sx = px0 * S + half
+        sy = py0 * S + half
+        # inverse depth is affine in screen space: iz = z0 + dzdx * dx + dzdy * dy
+        fa = float(area)
+        z0, z1, z2 = iz[i0], iz[i1], iz[i2]
+        dzdx = ((z1 - z0) * (y2 - y0) - (z2 - z0) * (y1 - y0)) / fa * S
+        dzdy = ((x1 - x0) * (z2 - z0) - (x2 - x0) * (z1 - z0)) / fa * S
+        # renumber the vertices cyclically (same triangle, same orientation) so that edge 0,
+        # the one opposite vertex 0, is horizontal or the only one going its way (up or down)
+        up01, up12, up20 = y1 < y0, y2 < y1, y0 < y2
+        if y1 == y0 or (y2 != y1 and y0 != y2 and up12 == up20):
+            x0, y0, x1, y1, x2, y2 = x2, y2, x0, y0, x1, y1        # edge 01 becomes edge 0
+        elif y0 == y2 or (y2 != y1 and up01 == up12):
+            x0, y0, x1, y1, x2, y2 = x1, y1, x2, y2, x0, y0        # edge 20 becomes edge 0
+        # edge functions E_ab(p) = (xb-xa)(py-ya) - (yb-ya)(px-xa), >= 0 inside; edge i is the
+        # one opposite vertex i; top-left rule: bias -1 on edges that are neither top nor left
         a01x, a01y = x1 - x0, y1 - y0
         a12x, a12y = x2 - x1, y2 - y1
         a20x, a20y = x0 - x2, y0 - y2
         b0 = 0 if (a12y < 0 or (a12y == 0 and a12x > 0)) else -1
         b1 = 0 if (a20y < 0 or (a20y == 0 and a20x > 0)) else -1
         b2 = 0 if (a01y < 0 or (a01y == 0 and a01x > 0)) else -1
-        sx = px0 * S + half
-        sy = py0 * S + half
         w0_row = a12x * (sy - y1) - a12y * (sx - x1) + b0
         w1_row = a20x * (sy - y2) - a20y * (sx - x2) + b1
         w2_row = a01x * (sy - y0) - a01y * (sx - x0) + b2
-        # per pixel step to the right: E -= m
+        # per pixel step to the right: E -= m; per row step down: E += d
         m0, m1, m2 = a12y * S, a20y * S, a01y * S
-        inv0 = 1.0 / m0 if m0 != 0 else 0.0
-        inv1 = 1.0 / m1 if m1 != 0 else 0.0
-        inv2 = 1.0 / m2 if m2 != 0 else 0.0
+        d0, d1, d2 = a12x * S, a20x * S, a01x * S
         n = px1 - px0
-        # inverse depth is affine in screen space: iz = z0 + dzdx * dx + dzdy * dy
-        fa = float(area)
-        z0, z1, z2 = iz[i0], iz[i1], iz[i2]
-        dzdx = ((z1 - z0) * (y2 - y0) - (z2 - z0) * (y1 - y0)) / fa * S
-        dzdy = ((x1 - x0) * (z2 - z0) - (x2 - x0) * (z1 - z0)) / fa * S
-        z_row = z0 + (dzdx * (sx - x0) + dzdy * (sy - y0)) / S
+        if m0 == 0:
+            # horizontal edge 0 keeps rows j (from py0) with w0 + j * d0 >= 0
+            if d0 > 0:
+                j_first = max(-(w0_row // d0), np.int64(0))
+                if j_first > py1 - py0:
+                    continue
+                py0 += j_first
+                sy = py0 * S + half
+                w0_row += j_first * d0
+                w1_row += j_first * d1
+                w2_row += j_first * d2
+            else:
+                py1 = min(py1, py0 + w0_row // -d0)
+                if py1 < py0:
+                    continue
+        n_rows = py1 - py0 + 1
+        z_row = z0 + (dzdx * (sx - xs[i0]) + dzdy * (sy - ys[i0])) / S
         part_id = np.uint8(triangle_part[t] + 1)
         drawn = False
-        py_last = py1
         if n < _NARROW and not (want_tri or want_count or want_rows):
             # narrow box: testing every pixel of the row is cheaper than finding the run's ends
             for py in range(py0, py1 + 1):
@@ -199,68 +219,102 @@ def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
                     w1 -= m1
                     w2 -= m2
                     zz += dzdx
-                w0_row += a12x * S
-                w1_row += a20x * S
-                w2_row += a01x * S
+                w0_row += d0
+                w1_row += d1
+                w2_row += d2
                 z_row += dzdy
-            py1 = py0 - 1           # rows done
-        for py in range(py0, py1 + 1):
-            lo = np.int64(0)
-            hi = n
-            if m0 > 0:
-                hi = min(hi, _upper(w0_row, m0, inv0, n))
-            elif m0 < 0:
-                lo = max(lo, _lower(w0_row, m0, inv0, n))
-            elif w0_row < 0:
-                hi = np.int64(-1)
-            if m1 > 0:
-                hi = min(hi, _upper(w1_row, m1, inv1, n))
-            elif m1 < 0:
-                lo = max(lo, _lower(w1_row, m1, inv1, n))
-            elif w1_row < 0:
-                hi = np.int64(-1)
-            if m2 > 0:
-                hi = min(hi, _upper(w2_row, m2, inv2, n))
-            elif m2 < 0:
-                lo = max(lo, _lower(w2_row, m2, inv2, n))
-            elif w2_row < 0:
-                hi = np.int64(-1)
-            if lo <= hi:
-                drawn = True
-                row = py * width + px0
-                zz = z_row + dzdx * lo
-                if want_tri or want_count:
-                    for k in range(lo, hi + 1):
-                        idx = row + k
-                        old_z = depth_buf[idx]
-                        win = zz > old_z
-                        depth_buf[idx] = np.float32(zz) if win else old_z
-                        part_buf[idx] = part_id if win else part_buf[idx]
-                        if want_tri:
-                            tri_buf[idx] = t if win else tri_buf[idx]
-                        if want_count:
-                            count_buf[idx] += 1
-                        zz += dzdx
+            if drawn:
+                bx0 = min(bx0, px0)
+                by0 = min(by0, py0)
+                bx1 = max(bx1, px1)
+                by1 = max(by1, py1)
+            continue
+        # the edge starting the runs (lo, m < 0) and the one ending them (hi, m > 0) on rows
+        # before j_split, and the edge (``next``) that takes over one of those roles from there
+        if m0 == 0:
+            j_split = n_rows
+            if m1 < 0:
+                w_lo, m_lo, d_lo, w_hi, m_hi, d_hi = w1_row, m1, d1, w2_row, m2, d2
+            else:
+                w_lo, m_lo, d_lo, w_hi, m_hi, d_hi = w2_row, m2, d2, w1_row, m1, d1
+            w_next, m_next, d_next = w0_row, np.int64(1), d0
+        else:
+            # edges 1 and 2 meet at vertex 0: rows whose centre is above it are the first part
+            j_split = min(max((y0 - sy + S - 1) // S, np.int64(0)), n_rows)
+            if m0 < 0:          # edge 0 starts the runs; edge 1 (upper) then 2 (lower) end them
+                w_lo, m_lo, d_lo, w_hi, m_hi, d_hi = w0_row, m0, d0, w1_row, m1, d1
+                w_next, m_next, d_next = w2_row, m2, d2
+            else:               # edge 0 ends the runs; edge 2 (upper) then 1 (lower) start them
+                w_lo, m_lo, d_lo, w_hi, m_hi, d_hi = w2_row, m2, d2, w0_row, m0, d0
+                w_next, m_next, d_next = w1_row, m1, d1
+        # run ends by DDA: q = floor(w / |m|), r = w - q * |m| in [0, |m|)
+        m_lo = -m_lo
+        inv_lo, inv_hi = 1.0 / m_lo, 1.0 / m_hi
+        q_lo, r_lo = _floor_div(w_lo, m_lo, inv_lo)
+        dq_lo, dr_lo = _floor_div(d_lo, m_lo, inv_lo)
+        q_hi, r_hi = _floor_div(w_hi, m_hi, inv_hi)
+        dq_hi, dr_hi = _floor_div(d_hi, m_hi, inv_hi)
+        j_from = np.int64(0)
+        j_to = j_split
+        row = py0 * width + px0
+        for part in range(2):
+            if part == 1:
+                if j_split >= n_rows:
+                    break
+                # the next edge takes over from row j_split
+                mm = abs(m_next)
+                inv = 1.0 / mm
+                q, r = _floor_div(w_next + j_split * d_next, mm, inv)
+                dq, dr = _floor_div(d_next, mm, inv)
+                if m_next < 0:
+                    q_lo, r_lo, dq_lo, dr_lo, m_lo = q, r, dq, dr, mm
                 else:
-                    for k in range(lo, hi + 1):
-                        idx = np.uint64(row + k)     # unsigned: no negative-index wrap-around
-                        old_z = depth_buf[idx]
-                        win = zz > old_z
-                        depth_buf[idx] = np.float32(zz) if win else old_z
-                        part_buf[idx] = part_id if win else part_buf[idx]
-                        zz += dzdx
-                if want_rows:
-                    row_lo[py] = min(row_lo[py], px0 + lo)
-                    row_hi[py] = max(row_hi[py], px0 + hi)
-            w0_row += a12x * S
-            w1_row += a20x * S
-            w2_row += a01x * S
-            z_row += dzdy
+                    q_hi, r_hi, dq_hi, dr_hi, m_hi = q, r, dq, dr, mm
+                j_from, j_to = j_split, n_rows
+            for j in range(j_from, j_to):
+                lo = max(-q_lo, np.int64(0))
+                hi = min(q_hi, n)
+                if lo <= hi:
+                    drawn = True
+                    zz = z_row + dzdx * lo
+                    if want_tri or want_count:
+                        for k in range(lo, hi + 1):
+                            idx = row + k
+                            old_z = depth_buf[idx]
+                            win = zz > old_z
+                            depth_buf[idx] = np.float32(zz) if win else old_z
+                            part_buf[idx] = part_id if win else part_buf[idx]
+                            if want_tri:
+                                tri_buf[idx] = t if win else tri_buf[idx]
+                            if want_count:
+                                count_buf[idx] += 1
+                            zz += dzdx
+                    else:
+                        for k in range(lo, hi + 1):
+                            idx = np.uint64(row + k)     # unsigned: no negative-index wrap-around
+                            old_z = depth_buf[idx]
+                            win = zz > old_z
+                            depth_buf[idx] = np.float32(zz) if win else old_z
+                            part_buf[idx] = part_id if win else part_buf[idx]
+                            zz += dzdx
+                    if want_rows:
+                        row_lo[py0 + j] = min(row_lo[py0 + j], px0 + lo)
+                        row_hi[py0 + j] = max(row_hi[py0 + j], px0 + hi)
+                r_lo += dr_lo
+                carry = np.int64(r_lo >= m_lo)
+                q_lo += dq_lo + carry
+                r_lo -= m_lo & -carry
+                r_hi += dr_hi
+                carry = np.int64(r_hi >= m_hi)
+                q_hi += dq_hi + carry
+                r_hi -= m_hi & -carry
+                row += width
+                z_row += dzdy
         if drawn:
             bx0 = min(bx0, px0)
             by0 = min(by0, py0)
             bx1 = max(bx1, px1)
-            by1 = max(by1, py_last)
+            by1 = max(by1, py1)
     bbox[0], bbox[1], bbox[2], bbox[3] = bx0, by0, bx1, by1
 
 

@@ -154,6 +154,45 @@ def test_arm_across_chest_gives_an_internal_contour_but_creases_do_not():
     assert not np.any(out.edges & neck & head_below & ~touches_bg)
 
 
+def random_triangle(rng, cam):
+    """One triangle in camera coordinates at z = 1, of a random kind that stresses the run
+    ends: vertices on pixel centres or on a 1/16-pixel grid, horizontal or vertical edges,
+    one-row slivers, or coordinates far outside the image (up to 1e5 pixels)."""
+    kind = rng.integers(5)
+    if kind == 0:                                   # vertices on pixel centres
+        uv = rng.integers(-3, 24, (3, 2)) + 0.5
+    elif kind == 1:                                 # 1/16-pixel grid, small
+        uv = rng.integers(-40, 400, (3, 2)) / 16.0
+    elif kind == 2:                                 # a horizontal edge
+        uv = rng.uniform(-5, 25, (3, 2))
+        uv[1, 1] = uv[0, 1]
+    elif kind == 3:                                 # thinner than a row
+        uv = rng.uniform(-5, 25, (3, 2))
+        uv[:, 1] = rng.uniform(9.3, 10.7) + rng.uniform(0, 0.4, 3)
+    else:                                           # huge, crossing the image
+        uv = rng.uniform(-1e5, 1e5, (3, 2))
+    xy = (uv - [cam.cx, cam.cy]) / [cam.fx, cam.fy]
+    return np.concatenate([xy, np.ones((3, 1))], axis=1)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_fill_rule_matches_the_per_pixel_edge_test_exactly(seed):
+    # each triangle alone: the run ends (and the narrow-box path) must give exactly the
+    # pixels of the reference's per-pixel edge test, in both orientations
+    rng = np.random.default_rng(seed)
+    cam = Camera(20, 20, 10.0, 10.0, 10.0, 10.0)
+    tri = np.array([[0, 1, 2]])
+    for _ in range(150):
+        v = random_triangle(rng, cam)
+        for t in (tri, tri[:, ::-1]):
+            expect = reference_rasterize(v, t, np.zeros(1, np.int64), cam, cull=False)[0]
+            fast = rasterize_mesh(v, t, cam, cull=False)
+            runs, cover = rasterize_mesh(v, t, cam, cull=False, triangle_ids=True, return_coverage=True)
+            np.testing.assert_array_equal(fast.parts, expect)
+            np.testing.assert_array_equal(runs.parts, expect)
+            np.testing.assert_array_equal(cover, expect)
+
+
 @settings(max_examples=40, deadline=None)
 @given(st.integers(0, 10**6), st.integers(1, 64), st.integers(1, 64))
 def test_any_pose_and_size_renders_without_crashing(seed, w, h):
