@@ -156,10 +156,10 @@ def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
         sx = px0 * S + half
         sy = py0 * S + half
         # inverse depth is affine in screen space: iz = z0 + dzdx * dx + dzdy * dy
-        fa = float(area)
+        s_area = S / float(area)
         z0, z1, z2 = iz[i0], iz[i1], iz[i2]
-        dzdx = ((z1 - z0) * (y2 - y0) - (z2 - z0) * (y1 - y0)) / fa * S
-        dzdy = ((x1 - x0) * (z2 - z0) - (x2 - x0) * (z1 - z0)) / fa * S
+        dzdx = ((z1 - z0) * (y2 - y0) - (z2 - z0) * (y1 - y0)) * s_area
+        dzdy = ((x1 - x0) * (z2 - z0) - (x2 - x0) * (z1 - z0)) * s_area
         # renumber the vertices cyclically (same triangle, same orientation) so that edge 0,
         # the one opposite vertex 0, is horizontal or the only one going its way (up or down)
         up01, up12, up20 = y1 < y0, y2 < y1, y0 < y2
