@@ -70,20 +70,6 @@ def _project_points(points, cam, xs, ys, iz):
 
 
 @jit
-def _rasterize(xs, ys, iz, triangles, triangle_part, width, height, cull,
-               part_buf, depth_buf, tri_buf, count_buf, bbox):
-    """Z-buffered rasterization of every triangle into the flat buffers.
-
-    With ``cull`` only front-facing triangles (counter-clockwise from outside, i.e. negative
-    signed area in y-down pixel coordinates) are drawn. ``bbox`` (int64[4]) receives the
-    inclusive pixel box ``x0, y0, x1, y1`` touched (x0 > x1 when nothing was drawn).
-    """
-    no_rows = np.empty(0, np.int64)
-    _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
-                     part_buf, depth_buf, tri_buf, count_buf, bbox, no_rows, no_rows)
-
-
-@jit
 def _floor_div(w, m, inv_m):
     """``(q, r)`` with ``w = q * m + r`` and ``0 <= r < m``, for integers w and m > 0 (exact);
     ``inv_m = 1.0 / m`` gives the estimate, integer arithmetic the correction."""
@@ -99,11 +85,13 @@ def _floor_div(w, m, inv_m):
 
 
 @jit
-def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
-                     part_buf, depth_buf, tri_buf, count_buf, bbox, row_lo, row_hi):
-    """:func:`_rasterize`, row span by row span; also widens the per-row drawn column range
-    ``row_lo[y] .. row_hi[y]`` (when those arrays are non-empty; the caller initialises them
-    to ``width`` and -1).
+def _rasterize(xs, ys, iz, triangles, triangle_part, width, height, cull,
+               part_buf, depth_buf, tri_buf, count_buf, bbox):
+    """Z-buffered rasterization of every triangle into the flat buffers, row span by row span.
+
+    With ``cull`` only front-facing triangles (counter-clockwise from outside, i.e. negative
+    signed area in y-down pixel coordinates) are drawn. ``bbox`` (int64[4]) receives the
+    inclusive pixel box ``x0, y0, x1, y1`` touched (x0 > x1 when nothing was drawn).
 
     Each edge function is affine in the column: on a pixel row it is ``w - m * k`` at column
     ``px0 + k`` (``w``, ``m`` in 1/SUBPIXEL² pixel units), so the pixels where all three are
@@ -117,13 +105,12 @@ def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
     from its row on only the lower one (on the vertex's own row both give the same bound),
     so each row tracks just one starting and one ending edge. Boxes narrower than
     :data:`_NARROW` pixels are cheaper to test pixel by pixel with the same integer edge
-    functions, and are (unless a row range, triangle ids or coverage counts are asked for).
+    functions, and are (unless triangle ids or coverage counts are asked for).
     """
     S = SUBPIXEL
     half = S // 2
     want_tri = tri_buf.size > 0
     want_count = count_buf.size > 0
-    want_rows = row_lo.size > 0
     bx0, by0, bx1, by1 = width, height, -1, -1
     for t in range(triangles.shape[0]):
         i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
@@ -201,7 +188,7 @@ def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
         z_row = z0 + (dzdx * (sx - xs[i0]) + dzdy * (sy - ys[i0])) / S
         part_id = np.uint8(triangle_part[t] + 1)
         drawn = False
-        if n < _NARROW and not (want_tri or want_count or want_rows):
+        if n < _NARROW and not (want_tri or want_count):
             # narrow box: testing every pixel of the row is cheaper than finding the run's ends
             for py in range(py0, py1 + 1):
                 w0, w1, w2 = w0_row, w1_row, w2_row
@@ -297,9 +284,6 @@ def _rasterize_spans(xs, ys, iz, triangles, triangle_part, width, height, cull,
                             depth_buf[idx] = np.float32(zz) if win else old_z
                             part_buf[idx] = part_id if win else part_buf[idx]
                             zz += dzdx
-                    if want_rows:
-                        row_lo[py0 + j] = min(row_lo[py0 + j], px0 + lo)
-                        row_hi[py0 + j] = max(row_hi[py0 + j], px0 + hi)
                 r_lo += dr_lo
                 carry = np.int64(r_lo >= m_lo)
                 q_lo += dq_lo + carry
