@@ -25,48 +25,39 @@ _NARROW = 4
 
 
 @jit
-def _project_vertices(transforms, vertices, vertex_segment, cam, xs, ys, iz):
-    """Transform segment-local vertices to the camera and project them to fixed point.
+def _project_point(x, y, z, cam, i, xs, ys, iz):
+    """Project the camera-space point (x, y, z) (metres) into slot ``i``: fixed-point pixel
+    coordinates ``xs``, ``ys`` and ``iz`` = 1/z, or -1 (and 0, 0) nearer than ``cam[4]``."""
+    if z < cam[4]:
+        iz[i] = -1.0
+        xs[i] = 0
+        ys[i] = 0
+        return
+    inv = 1.0 / z
+    u = min(max(cam[0] * x * inv + cam[2], -_COORD_LIMIT), _COORD_LIMIT)
+    v = min(max(cam[1] * y * inv + cam[3], -_COORD_LIMIT), _COORD_LIMIT)
+    iz[i] = inv
+    xs[i] = np.int64(np.floor(u * SUBPIXEL + 0.5))
+    ys[i] = np.int64(np.floor(v * SUBPIXEL + 0.5))
 
-    ``iz`` receives 1/z, or -1 for vertices nearer than the near plane ``cam[4]``.
-    """
-    fx, fy, cx, cy, near = cam[0], cam[1], cam[2], cam[3], cam[4]
+
+@jit
+def _project_vertices(transforms, vertices, vertex_segment, cam, xs, ys, iz):
+    """Transform segment-local vertices to the camera and project them (:func:`_project_point`)."""
     for i in range(vertices.shape[0]):
         s = vertex_segment[i]
         vx, vy, vz = vertices[i, 0], vertices[i, 1], vertices[i, 2]
         x = transforms[s, 0, 0] * vx + transforms[s, 0, 1] * vy + transforms[s, 0, 2] * vz + transforms[s, 0, 3]
         y = transforms[s, 1, 0] * vx + transforms[s, 1, 1] * vy + transforms[s, 1, 2] * vz + transforms[s, 1, 3]
         z = transforms[s, 2, 0] * vx + transforms[s, 2, 1] * vy + transforms[s, 2, 2] * vz + transforms[s, 2, 3]
-        if z < near:
-            iz[i] = -1.0
-            xs[i] = 0
-            ys[i] = 0
-            continue
-        inv = 1.0 / z
-        u = min(max(fx * x * inv + cx, -_COORD_LIMIT), _COORD_LIMIT)
-        v = min(max(fy * y * inv + cy, -_COORD_LIMIT), _COORD_LIMIT)
-        iz[i] = inv
-        xs[i] = np.int64(np.floor(u * SUBPIXEL + 0.5))
-        ys[i] = np.int64(np.floor(v * SUBPIXEL + 0.5))
+        _project_point(x, y, z, cam, i, xs, ys, iz)
 
 
 @jit
 def _project_points(points, cam, xs, ys, iz):
     """As :func:`_project_vertices` for points already in camera coordinates."""
-    fx, fy, cx, cy, near = cam[0], cam[1], cam[2], cam[3], cam[4]
     for i in range(points.shape[0]):
-        z = points[i, 2]
-        if z < near:
-            iz[i] = -1.0
-            xs[i] = 0
-            ys[i] = 0
-            continue
-        inv = 1.0 / z
-        u = min(max(fx * points[i, 0] * inv + cx, -_COORD_LIMIT), _COORD_LIMIT)
-        v = min(max(fy * points[i, 1] * inv + cy, -_COORD_LIMIT), _COORD_LIMIT)
-        iz[i] = inv
-        xs[i] = np.int64(np.floor(u * SUBPIXEL + 0.5))
-        ys[i] = np.int64(np.floor(v * SUBPIXEL + 0.5))
+        _project_point(points[i, 0], points[i, 1], points[i, 2], cam, i, xs, ys, iz)
 
 
 @jit
@@ -210,90 +201,85 @@ def _rasterize(xs, ys, iz, triangles, triangle_part, width, height, cull,
                 w1_row += d1
                 w2_row += d2
                 z_row += dzdy
-            if drawn:
-                bx0 = min(bx0, px0)
-                by0 = min(by0, py0)
-                bx1 = max(bx1, px1)
-                by1 = max(by1, py1)
-            continue
-        # the edge starting the runs (lo, m < 0) and the one ending them (hi, m > 0) on rows
-        # before j_split, and the edge (``next``) that takes over one of those roles from there
-        if m0 == 0:
-            j_split = n_rows
-            if m1 < 0:
-                w_lo, m_lo, d_lo, w_hi, m_hi, d_hi = w1_row, m1, d1, w2_row, m2, d2
-            else:
-                w_lo, m_lo, d_lo, w_hi, m_hi, d_hi = w2_row, m2, d2, w1_row, m1, d1
-            w_next, m_next, d_next = w0_row, np.int64(1), d0
         else:
-            # edges 1 and 2 meet at vertex 0: rows whose centre is above it are the first part
-            j_split = min(max((y0 - sy + S - 1) // S, np.int64(0)), n_rows)
-            if m0 < 0:          # edge 0 starts the runs; edge 1 (upper) then 2 (lower) end them
-                w_lo, m_lo, d_lo, w_hi, m_hi, d_hi = w0_row, m0, d0, w1_row, m1, d1
-                w_next, m_next, d_next = w2_row, m2, d2
-            else:               # edge 0 ends the runs; edge 2 (upper) then 1 (lower) start them
-                w_lo, m_lo, d_lo, w_hi, m_hi, d_hi = w2_row, m2, d2, w0_row, m0, d0
-                w_next, m_next, d_next = w1_row, m1, d1
-        # run ends by DDA: q = floor(w / |m|), r = w - q * |m| in [0, |m|)
-        m_lo = -m_lo
-        inv_lo, inv_hi = 1.0 / m_lo, 1.0 / m_hi
-        q_lo, r_lo = _floor_div(w_lo, m_lo, inv_lo)
-        dq_lo, dr_lo = _floor_div(d_lo, m_lo, inv_lo)
-        q_hi, r_hi = _floor_div(w_hi, m_hi, inv_hi)
-        dq_hi, dr_hi = _floor_div(d_hi, m_hi, inv_hi)
-        j_from = np.int64(0)
-        j_to = j_split
-        row = py0 * width + px0
-        for part in range(2):
-            if part == 1:
-                if j_split >= n_rows:
-                    break
-                # the next edge takes over from row j_split
-                mm = abs(m_next)
-                inv = 1.0 / mm
-                q, r = _floor_div(w_next + j_split * d_next, mm, inv)
-                dq, dr = _floor_div(d_next, mm, inv)
-                if m_next < 0:
-                    q_lo, r_lo, dq_lo, dr_lo, m_lo = q, r, dq, dr, mm
+            # the edge starting the runs (lo, m < 0) and the one ending them (hi, m > 0) on rows
+            # before j_split, and the edge (``next``) that takes over one of those roles from there
+            if m0 == 0:
+                j_split = n_rows
+                if m1 < 0:
+                    w_lo, m_lo, d_lo, w_hi, m_hi, d_hi = w1_row, m1, d1, w2_row, m2, d2
                 else:
-                    q_hi, r_hi, dq_hi, dr_hi, m_hi = q, r, dq, dr, mm
-                j_from, j_to = j_split, n_rows
-            for j in range(j_from, j_to):
-                lo = max(-q_lo, np.int64(0))
-                hi = min(q_hi, n)
-                if lo <= hi:
-                    drawn = True
-                    zz = z_row + dzdx * lo
-                    if want_tri or want_count:
-                        for k in range(lo, hi + 1):
-                            idx = row + k
-                            old_z = depth_buf[idx]
-                            win = zz > old_z
-                            depth_buf[idx] = np.float32(zz) if win else old_z
-                            part_buf[idx] = part_id if win else part_buf[idx]
-                            if want_tri:
-                                tri_buf[idx] = t if win else tri_buf[idx]
-                            if want_count:
-                                count_buf[idx] += 1
-                            zz += dzdx
+                    w_lo, m_lo, d_lo, w_hi, m_hi, d_hi = w2_row, m2, d2, w1_row, m1, d1
+                w_next, m_next, d_next = w0_row, np.int64(1), d0
+            else:
+                # edges 1 and 2 meet at vertex 0: rows whose centre is above it are the first part
+                j_split = min(max((y0 - sy + S - 1) // S, np.int64(0)), n_rows)
+                if m0 < 0:          # edge 0 starts the runs; edge 1 (upper) then 2 (lower) end them
+                    w_lo, m_lo, d_lo, w_hi, m_hi, d_hi = w0_row, m0, d0, w1_row, m1, d1
+                    w_next, m_next, d_next = w2_row, m2, d2
+                else:               # edge 0 ends the runs; edge 2 (upper) then 1 (lower) start them
+                    w_lo, m_lo, d_lo, w_hi, m_hi, d_hi = w2_row, m2, d2, w0_row, m0, d0
+                    w_next, m_next, d_next = w1_row, m1, d1
+            # run ends by DDA: q = floor(w / |m|), r = w - q * |m| in [0, |m|)
+            m_lo = -m_lo
+            inv_lo, inv_hi = 1.0 / m_lo, 1.0 / m_hi
+            q_lo, r_lo = _floor_div(w_lo, m_lo, inv_lo)
+            dq_lo, dr_lo = _floor_div(d_lo, m_lo, inv_lo)
+            q_hi, r_hi = _floor_div(w_hi, m_hi, inv_hi)
+            dq_hi, dr_hi = _floor_div(d_hi, m_hi, inv_hi)
+            j_from = np.int64(0)
+            j_to = j_split
+            row = py0 * width + px0
+            for part in range(2):
+                if part == 1:
+                    if j_split >= n_rows:
+                        break
+                    # the next edge takes over from row j_split
+                    mm = abs(m_next)
+                    inv = 1.0 / mm
+                    q, r = _floor_div(w_next + j_split * d_next, mm, inv)
+                    dq, dr = _floor_div(d_next, mm, inv)
+                    if m_next < 0:
+                        q_lo, r_lo, dq_lo, dr_lo, m_lo = q, r, dq, dr, mm
                     else:
-                        for k in range(lo, hi + 1):
-                            idx = np.uint64(row + k)     # unsigned: no negative-index wrap-around
-                            old_z = depth_buf[idx]
-                            win = zz > old_z
-                            depth_buf[idx] = np.float32(zz) if win else old_z
-                            part_buf[idx] = part_id if win else part_buf[idx]
-                            zz += dzdx
-                r_lo += dr_lo
-                carry = np.int64(r_lo >= m_lo)
-                q_lo += dq_lo + carry
-                r_lo -= m_lo & -carry
-                r_hi += dr_hi
-                carry = np.int64(r_hi >= m_hi)
-                q_hi += dq_hi + carry
-                r_hi -= m_hi & -carry
-                row += width
-                z_row += dzdy
+                        q_hi, r_hi, dq_hi, dr_hi, m_hi = q, r, dq, dr, mm
+                    j_from, j_to = j_split, n_rows
+                for j in range(j_from, j_to):
+                    lo = max(-q_lo, np.int64(0))
+                    hi = min(q_hi, n)
+                    if lo <= hi:
+                        drawn = True
+                        zz = z_row + dzdx * lo
+                        if want_tri or want_count:
+                            for k in range(lo, hi + 1):
+                                idx = row + k
+                                old_z = depth_buf[idx]
+                                win = zz > old_z
+                                depth_buf[idx] = np.float32(zz) if win else old_z
+                                part_buf[idx] = part_id if win else part_buf[idx]
+                                if want_tri:
+                                    tri_buf[idx] = t if win else tri_buf[idx]
+                                if want_count:
+                                    count_buf[idx] += 1
+                                zz += dzdx
+                        else:
+                            for k in range(lo, hi + 1):
+                                idx = np.uint64(row + k)     # unsigned: no negative-index wrap-around
+                                old_z = depth_buf[idx]
+                                win = zz > old_z
+                                depth_buf[idx] = np.float32(zz) if win else old_z
+                                part_buf[idx] = part_id if win else part_buf[idx]
+                                zz += dzdx
+                    r_lo += dr_lo
+                    carry = np.int64(r_lo >= m_lo)
+                    q_lo += dq_lo + carry
+                    r_lo -= m_lo & -carry
+                    r_hi += dr_hi
+                    carry = np.int64(r_hi >= m_hi)
+                    q_hi += dq_hi + carry
+                    r_hi -= m_hi & -carry
+                    row += width
+                    z_row += dzdy
         if drawn:
             bx0 = min(bx0, px0)
             by0 = min(by0, py0)
