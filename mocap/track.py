@@ -436,7 +436,8 @@ class Tracker:
     Parameters
     ----------
     model : BodyModel
-        The calibrated actor (its mesh level of detail is used as is).
+        The calibrated actor. Its mesh is used as is when ``config.mesh_resolution`` is 0, and
+        rebuilt at that level of detail otherwise.
     camera : Camera
     config : TrackerConfig
     initial_pose : array_like, shape (23,)
@@ -444,6 +445,8 @@ class Tracker:
     """
 
     def __init__(self, model: BodyModel, camera: Camera, config: TrackerConfig, initial_pose) -> None:
+        if config.mesh_resolution and model.mesh.resolution != config.mesh_resolution:
+            model = model.with_resolution(config.mesh_resolution)
         self.model, self.camera, self.config = model, camera, config
         q = clamp_to_limits(check_pose(initial_pose, name="initial pose"))
         self.history: list[np.ndarray] = [q]      # accepted poses, most recent last

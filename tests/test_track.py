@@ -132,3 +132,15 @@ def test_priors_combine_into_one_quadratic():
     ref_y = np.sum(weights * (y - mixed) ** 2)
     assert ref - ref_y == pytest.approx(direct - direct_y)
     assert TrackerConfig().prior(centre, 0.0) is None      # the paper's method: no prior at all
+
+
+def test_tracker_rebuilds_the_mesh_at_the_configured_resolution():
+    from mocap.track import Tracker
+    model = BodyModel.build(resolution=8)
+    camera = Camera.default(160, 120)
+    same = Tracker(model, camera, TrackerConfig(), neutral_pose())
+    assert same.model is model                      # 0: the calibrated mesh as is
+    coarse = Tracker(model, camera, TrackerConfig(mesh_resolution=6), neutral_pose())
+    assert coarse.model.mesh.resolution == 6
+    assert coarse.model.mesh.n_triangles == BodyModel.build(resolution=6).mesh.n_triangles
+    assert coarse.model.dims == model.dims
