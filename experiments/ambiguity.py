@@ -13,6 +13,13 @@ configuration and measures, against ground truth:
   a branch error. The oracle is applied after tracking (the tracker is not fed its choice), so
   it is a bound on the flip's share, not a tracker.
 
+With ``--from-truth LAGS`` it measures instead how good one frame's registration is when it
+starts close to the answer: every frame is registered (the same two-step registration, budget
+and costs) from the *true* pose ``lag`` frames earlier, and the result is compared with that
+frame's truth. Nothing carries over between frames, so this is the error of the costs and the
+optimiser on a pose displaced by ``lag`` frames of motion, without the tracker's accumulated
+losses; the gap between it and ``mpjpe_mm`` is what tracking loses on the way.
+
 Results go to ``--out`` (default ``experiments/results/ambiguity``): the generated sequences
 (reused, as by :mod:`experiments.sweep`) and one JSON file per sequence and configuration
 (written atomically; a second run reuses them). A Markdown table is printed.
@@ -33,7 +40,8 @@ from mocap.body import JOINT_NAMES
 from mocap.io.jsonfile import read_json, write_json
 from mocap.metrics import DEFAULT_FAILURE_MM, failure_rate, mpjpe, reprojection_error
 from mocap.synth import SEQUENCE_NAMES, SEQUENCES
-from mocap.track import Tracker, TrackerConfig, track_prepared
+from mocap.cost import EdgeCost, RegionCost
+from mocap.track import Tracker, TrackerConfig, register, track_prepared
 
 #: Image size of the benchmark (pixels).
 SIZE = (160, 120)
@@ -94,12 +102,16 @@ def flip_oracle(joints: np.ndarray, truth: np.ndarray) -> np.ndarray:
     return out
 
 
-def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0) -> dict:
-    """Track one benchmark sequence with ``config`` and measure its errors (see the module)."""
+def _benchmark_sequence(sequence: str, root: Path, seed: int):
+    """The generated, prepared benchmark sequence (loaded sequence, prepared frames)."""
     spec = DataSpec(sequence, None, SEQUENCES[sequence].frames, seed, *SIZE)
     folder = prepare_data(spec, str(root))
-    loaded = load_sequence(folder)
-    prepared = load_prepared(folder)
+    return load_sequence(folder), load_prepared(folder)
+
+
+def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0) -> dict:
+    """Track one benchmark sequence with ``config`` and measure its errors (see the module)."""
+    loaded, prepared = _benchmark_sequence(sequence, root, seed)
     camera = loaded.calibration.camera
     results = track_prepared(prepared, Tracker(loaded.model, camera, config, loaded.calibration.initial_pose))
     joints = np.array([r.joints for r in results])
@@ -110,6 +122,60 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0) -> 
             "reprojection_px": reprojection_error(joints, truth, camera),
             "flip_oracle_mpjpe_mm": mpjpe(oracle, truth), "flip_oracle_failure_rate": failure_rate(oracle, truth),
             "flip_oracle_reprojection_px": reprojection_error(oracle, truth, camera)}
+
+
+def register_from_truth(prepared, model, camera, true_poses: np.ndarray, config: TrackerConfig, lag: int,
+                        every: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """Register frames one by one, each from the true pose ``lag`` frames earlier.
+
+    Parameters
+    ----------
+    prepared : sequence of PreparedFrame
+    model : BodyModel
+        Rebuilt at ``config.mesh_resolution`` when that is not 0, as the tracker does.
+    camera : Camera
+    true_poses : ndarray, shape (frames, 23), metres and radians
+    config : TrackerConfig
+    lag : int
+        Frames between the start pose and the registered frame (>= 0; frame ``f < lag`` starts
+        from frame 0's truth).
+    every : int
+        Register every ``every``-th frame only (>= 1).
+
+    Returns
+    -------
+    frames : ndarray of int, shape (k,)
+    poses : ndarray, shape (k, 23)
+        The registered poses.
+    """
+    if lag < 0 or every < 1:
+        raise ValueError(f"lag must be >= 0 and every >= 1, got {lag} and {every}")
+    if config.mesh_resolution and model.mesh.resolution != config.mesh_resolution:
+        model = model.with_resolution(config.mesh_resolution)
+    frames = np.arange(0, min(len(prepared), len(true_poses)), every)
+    poses = np.empty((len(frames), true_poses.shape[1]))
+    for k, f in enumerate(frames):
+        region = RegionCost(prepared[f].labels, model, camera)
+        edge = EdgeCost(prepared[f].distance, model, camera, edge_gap=config.edge_gap_m)
+        poses[k] = register(region, edge, true_poses[max(f - lag, 0)], config).pose
+    return frames, poses
+
+
+def measure_from_truth(sequence: str, config: TrackerConfig, root: Path, seed: int = 0,
+                       lags: tuple[int, ...] = (1, 3)) -> dict:
+    """Registration error of one benchmark sequence from true start poses (see the module)."""
+    loaded, prepared = _benchmark_sequence(sequence, root, seed)
+    truth_poses, truth_joints = loaded.ground_truth.poses, loaded.ground_truth.joints
+    row = {"sequence": sequence, "frames": len(prepared)}
+    for lag in lags:
+        frames, poses = register_from_truth(prepared, loaded.model, loaded.calibration.camera, truth_poses,
+                                            config, lag)
+        joints = np.array([loaded.model.joint_positions(q) for q in poses])
+        start = truth_joints[np.maximum(frames - lag, 0)]
+        row[f"lag{lag}_start_mpjpe_mm"] = mpjpe(start, truth_joints[frames])
+        row[f"lag{lag}_mpjpe_mm"] = mpjpe(joints, truth_joints[frames])
+        row[f"lag{lag}_failure_rate"] = failure_rate(joints, truth_joints[frames])
+    return row
 
 
 def config_key(config: TrackerConfig) -> str:
@@ -131,6 +197,19 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def table_from_truth(rows: list[dict], lags: tuple[int, ...]) -> str:
+    """Markdown table of :func:`measure_from_truth` results, with the medians."""
+    cols = [c for lag in lags for c in (f"lag{lag}_start_mpjpe_mm", f"lag{lag}_mpjpe_mm", f"lag{lag}_failure_rate")]
+    head = ["sequence"] + [h for lag in lags for h in (f"start {lag} frame(s) back, mm", "registered, mm",
+                                                           f"> {DEFAULT_FAILURE_MM:g} mm")]
+    fmt = lambda c, v: f"{100 * v:.0f} %" if "rate" in c else f"{v:.0f}"
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        lines.append("| " + " | ".join([r["sequence"]] + [fmt(c, r[c]) for c in cols]) + " |")
+    lines.append("| **median** | " + " | ".join(fmt(c, float(np.median([r[c] for r in rows]))) for c in cols) + " |")
+    return "\n".join(lines)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python -m experiments.ambiguity", description=__doc__.split("\n\n")[0])
     p.add_argument("--sequences", default=",".join(SEQUENCE_NAMES),
@@ -139,6 +218,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--config", type=Path, default=None, help="TrackerConfig JSON (default: the tracker's defaults)")
     p.add_argument("--out", type=Path, default=RESULTS_DIR / "ambiguity", help="results folder")
     p.add_argument("--seed", type=int, default=0, help="sequence generator seed")
+    p.add_argument("--from-truth", default=None, metavar="LAGS",
+                   help="comma-separated frame lags, e.g. 1,3: register each frame from the true pose that many "
+                        "frames earlier instead of tracking")
     return p
 
 
@@ -152,19 +234,31 @@ def main(argv=None) -> int:
     config = TrackerConfig.from_json(args.config) if args.config is not None else TrackerConfig()
     if args.evaluations is not None:
         config = TrackerConfig.from_dict({**config.to_dict(), "evaluations": args.evaluations})
+    lags = None
+    if args.from_truth is not None:
+        try:
+            lags = tuple(sorted({int(v) for v in args.from_truth.split(",") if v.strip()}))
+        except ValueError:
+            lags = ()
+        if not lags or min(lags) < 0:
+            print(f"error: --from-truth takes non-negative integer lags such as 1,3, got {args.from_truth!r}",
+                  file=sys.stderr)
+            return 2
     key = config_key(config)
+    suffix = "" if lags is None else "-truth" + "_".join(map(str, lags))
     rows = []
     for name in names:
-        path = args.out / "units" / f"{name}-s{args.seed}-{key}.json"
+        path = args.out / "units" / f"{name}-s{args.seed}-{key}{suffix}.json"
         if path.is_file():
             rows.append(read_json(path)["result"])
             continue
-        print(f"tracking {name} ...", file=sys.stderr, flush=True)
-        row = measure(name, config, args.out, args.seed)
+        print(f"{'tracking' if lags is None else 'registering'} {name} ...", file=sys.stderr, flush=True)
+        row = (measure(name, config, args.out, args.seed) if lags is None
+               else measure_from_truth(name, config, args.out, args.seed, lags))
         write_json(path, {"config": config.to_dict(), "result": row})
         rows.append(row)
     print(f"configuration {key} ({config.evaluations} evaluations per frame)\n")
-    print(table(rows))
+    print(table(rows) if lags is None else table_from_truth(rows, lags))
     return 0
 
 

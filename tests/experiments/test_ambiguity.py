@@ -39,3 +39,66 @@ def test_table_has_a_median_row():
                flip_oracle_failure_rate=0.1)
     text = table([row, {**row, "sequence": "b", "mpjpe_mm": 200.0}])
     assert "| **median** | 150 | 50 % | 2.0 | 50 | 10 % |" in text
+
+
+def _clean_frames(poses, model, camera):
+    """Prepared-frame stand-ins (labels and distance map) rendered from the model itself."""
+    from types import SimpleNamespace
+
+    from scipy import ndimage
+
+    from mocap.render import render
+
+    frames = []
+    for q in poses:
+        r = render(q, model, camera)
+        distance = np.minimum(ndimage.distance_transform_edt(~r.edges), 20.0).astype(np.float32)
+        frames.append(SimpleNamespace(labels=r.labels, distance=distance))
+    return frames
+
+
+def test_register_from_truth_starts_each_frame_from_the_lagged_truth():
+    import pytest
+
+    from experiments.ambiguity import register_from_truth
+    from mocap.body import PARAMETER_INDEX as P, BodyModel, neutral_pose
+    from mocap.render import Camera
+    from mocap.track import TrackerConfig
+
+    model, camera = BodyModel.build(resolution=8), Camera.default()
+    poses = np.tile(neutral_pose(), (5, 1))
+    poses[:, P["r_shoulder_abd"]] += np.radians(np.arange(5) * 6.0)    # the right arm rises 6 degrees a frame
+    frames = _clean_frames(poses, model, camera)
+    config = TrackerConfig(evaluations=200)
+    index, out = register_from_truth(frames, model, camera, poses, config, lag=2, every=2)
+    np.testing.assert_array_equal(index, [0, 2, 4])
+    err = [np.linalg.norm(model.joint_positions(q) - model.joint_positions(poses[f]), axis=1).mean()
+           for q, f in zip(out, index)]
+    start = [np.linalg.norm(model.joint_positions(poses[max(f - 2, 0)]) - model.joint_positions(poses[f]),
+                            axis=1).mean() for f in index]
+    # frame 0 starts on its own truth, where F is 0, and stays there exactly; the others start 12
+    # degrees of arm motion (31 mm of mean joint error) away and end closer, but not exactly there
+    assert err[0] < 1e-9
+    for k in (1, 2):
+        assert 1e-4 < err[k] < start[k] and err[k] < 0.035, (err, start)
+    # frames never see later ones: registering frame 4 alone from frame 2's truth gives the same pose
+    _, alone = register_from_truth(frames[:5], model, camera, poses, config, lag=2, every=4)
+    np.testing.assert_array_equal(alone[1], out[2])
+    for lag, every in ((-1, 1), (0, 0)):
+        with pytest.raises(ValueError, match="lag"):
+            register_from_truth(frames, model, camera, poses, config, lag=lag, every=every)
+
+
+def test_table_from_truth_has_a_median_row():
+    from experiments.ambiguity import table_from_truth
+
+    row = dict(sequence="a", lag1_start_mpjpe_mm=10.0, lag1_mpjpe_mm=20.0, lag1_failure_rate=0.0)
+    text = table_from_truth([row, {**row, "sequence": "b", "lag1_mpjpe_mm": 40.0, "lag1_failure_rate": 0.1}], (1,))
+    assert "| **median** | 10 | 30 | 5 % |" in text
+
+
+def test_from_truth_option_rejects_bad_lags(capsys):
+    from experiments.ambiguity import main
+
+    assert main(["--from-truth", "1,x"]) == 2
+    assert "--from-truth" in capsys.readouterr().err
