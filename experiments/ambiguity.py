@@ -40,7 +40,6 @@ from mocap.body import JOINT_NAMES
 from mocap.io.jsonfile import read_json, write_json
 from mocap.metrics import DEFAULT_FAILURE_MM, failure_rate, mpjpe, reprojection_error
 from mocap.synth import SEQUENCE_NAMES, SEQUENCES
-from mocap.cost import EdgeCost, RegionCost
 from mocap.track import Tracker, TrackerConfig, register, track_prepared
 
 #: Image size of the benchmark (pixels).
@@ -150,14 +149,11 @@ def register_from_truth(prepared, model, camera, true_poses: np.ndarray, config:
     """
     if lag < 0 or every < 1:
         raise ValueError(f"lag must be >= 0 and every >= 1, got {lag} and {every}")
-    if config.mesh_resolution and model.mesh.resolution != config.mesh_resolution:
-        model = model.with_resolution(config.mesh_resolution)
+    tracker = Tracker(model, camera, config, true_poses[0])     # only for its model and costs
     frames = np.arange(0, min(len(prepared), len(true_poses)), every)
     poses = np.empty((len(frames), true_poses.shape[1]))
     for k, f in enumerate(frames):
-        region = RegionCost(prepared[f].labels, model, camera)
-        edge = EdgeCost(prepared[f].distance, model, camera, edge_gap=config.edge_gap_m)
-        poses[k] = register(region, edge, true_poses[max(f - lag, 0)], config).pose
+        poses[k] = register(*tracker.costs(prepared[f]), true_poses[max(f - lag, 0)], config).pose
     return frames, poses
 
 

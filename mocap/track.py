@@ -464,6 +464,11 @@ class Tracker:
         self.history = [check_pose(p) for p in poses[-2:]]
         self.last_good = check_pose(last_good)
 
+    def costs(self, prepared) -> tuple[RegionCost, EdgeCost]:
+        """Region and edge costs of one prepared frame, for this tracker's model, camera and config."""
+        return (RegionCost(prepared.labels, self.model, self.camera),
+                EdgeCost(prepared.distance, self.model, self.camera, edge_gap=self.config.edge_gap_m))
+
     def step(self, frame_index: int, prepared) -> FrameResult:
         """Register the model on one prepared frame (a :class:`mocap.imaging.PreparedFrame`)."""
         cfg = self.config
@@ -477,8 +482,7 @@ class Tracker:
             timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)
             return FrameResult(frame_index, pose, self.model.joint_positions(pose), math.nan, math.nan, math.nan,
                                False, True, "empty frame: pose kept", 0, 0, 0, timings)
-        region_cost = RegionCost(prepared.labels, self.model, self.camera)
-        edge_cost = EdgeCost(prepared.distance, self.model, self.camera, edge_gap=cfg.edge_gap_m)
+        region_cost, edge_cost = self.costs(prepared)
         t1 = time.perf_counter()
         reg = register(region_cost, edge_cost, self.predict(), cfg)
         t2 = time.perf_counter()
