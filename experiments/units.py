@@ -46,7 +46,8 @@ RUN_KINDS = ("run", "timing")
 #: Tracker settings of the paper's method, pinned so that options added beyond the paper (and
 #: their defaults) never leak into the experiments; only fields the tracker has are passed.
 PAPER_TRACKER = MappingProxyType({"prediction": "previous", "adaptive": False, "recovery": False, "blocks": "all",
-                 "arm_search": False, "prior_weight_region": 0.0, "prior_weight_edge": 0.0, "pose_prior_weight": 0.0})
+                 "arm_search": False, "prior_weight_region": 0.0, "prior_weight_edge": 0.0, "pose_prior_weight": 0.0,
+                 "posture_weight_region": 0.0, "posture_weight_edge": 0.0, "hand_reacquisition": False})
 
 
 @dataclass(frozen=True)

@@ -9,6 +9,11 @@ is the paper's (below 200 evaluations all go to the region step, from 200 on 50/
 explicit ``R:E``. A frame whose residual exceeds its threshold (a "peak") is a failure; the
 tracker then retries once from the last good pose with a wider simplex and keeps the better of
 the two results, recording what it did.
+
+Beyond the paper, on by default (``hand_reacquisition``): a skin region of the image that the
+registered model's hands and head leave unexplained is taken for a hand the tracker lost; each
+arm is posed to reach it (inverse kinematics, :mod:`mocap.body.ik`), the frame is registered
+again from the best such candidate, and the result is kept when its F is lower.
 """
 from __future__ import annotations
 
@@ -18,10 +23,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from mocap.body.ik import reach_arm
 from mocap.body.model import BodyModel
 from mocap.body.pose import JOINT_LIMITS, N_PARAMETERS, PARAMETER_INDEX, PARAMETER_NAMES, check_pose, clamp_to_limits
+from mocap.body.skeleton import JOINT_NAMES
 from mocap.config import JsonConfig
 from mocap.cost import EdgeCost, RegionCost
+from mocap.imaging.blobs import label_blobs
+from mocap.labels import class_label
 from mocap.optimize import SimplexResult, initial_simplex, minimize_cost
 from mocap.render.camera import Camera
 
@@ -30,6 +39,11 @@ AUTO_SPLIT_THRESHOLD = 200
 SPLIT_POLICIES = ("auto",)
 EDGE_STARTS = ("region_simplex", "fresh")
 PREDICTIONS = ("previous", "constant_velocity")
+#: Row of each named joint in the joint arrays.
+_JOINT = {name: i for i, name in enumerate(JOINT_NAMES)}
+#: The seven angles of one arm, without the side prefix.
+ARM_PARAMETERS = ("shoulder_flex", "shoulder_abd", "shoulder_rot", "elbow_flex", "forearm_twist", "wrist_flex",
+                  "wrist_dev")
 
 
 @dataclass(frozen=True)
@@ -107,6 +121,18 @@ class TrackerConfig(JsonConfig):
         0 is the paper's method.
     posture_margin_m, posture_sigma_m : float, metres
         Free distance behind the shoulder, and the distance beyond it that costs the weight.
+    hand_reacquisition : bool
+        Beyond the paper: after a frame's registration, look for skin regions of the image
+        that neither of the model's hands (nor its head) is near. For each one, pose either arm
+        to reach it (:func:`mocap.body.ik.reach_arm`, hand on the camera ray through the region
+        at the depths of :data:`REACQUISITION_REACH`), register again from the candidate of
+        lowest F and keep the result when its F is lower. Re-finds an arm that a fast motion left
+        behind, which the local simplex cannot; it runs only on frames with such a region.
+    reacquisition_distance_px : float, pixels
+        A skin region whose centroid is farther than this from both projected hand centres
+        triggers re-acquisition.
+    reacquisition_min_pixels : int, pixels
+        Smaller skin regions are ignored (noise, slivers at boundaries).
     """
 
     evaluations: int = 500
@@ -136,6 +162,9 @@ class TrackerConfig(JsonConfig):
     posture_weight_edge: float = 0.0
     posture_margin_m: float = 0.05
     posture_sigma_m: float = 0.1
+    hand_reacquisition: bool = True
+    reacquisition_distance_px: float = 4.0
+    reacquisition_min_pixels: int = 2
 
     def __post_init__(self) -> None:
         if isinstance(self.evaluations, bool) or not isinstance(self.evaluations, int) or self.evaluations < 0:
@@ -150,12 +179,16 @@ class TrackerConfig(JsonConfig):
             raise ValueError(f"prediction must be one of {PREDICTIONS}, got {self.prediction!r}")
         for name in ("position_step_m", "angle_step_deg", "fresh_step_scale", "recovery_step_scale",
                      "edge_failure_threshold_px", "region_failure_threshold", "prior_sigma_position_m",
-                     "prior_sigma_angle_deg", "pose_prior_sigma_deg", "posture_sigma_m"):
+                     "prior_sigma_angle_deg", "pose_prior_sigma_deg", "posture_sigma_m",
+                     "reacquisition_distance_px"):
             v = getattr(self, name)
             if not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be a finite positive number, got {v!r}")
         if not (isinstance(self.ftol, (int, float)) and math.isfinite(self.ftol) and self.ftol >= 0):
             raise ValueError(f"ftol must be finite and non-negative, got {self.ftol!r}")
+        if (isinstance(self.reacquisition_min_pixels, bool) or not isinstance(self.reacquisition_min_pixels, int)
+                or self.reacquisition_min_pixels < 1):
+            raise ValueError(f"reacquisition_min_pixels must be a positive integer, got {self.reacquisition_min_pixels!r}")
         if not isinstance(self.mesh_resolution, int) or self.mesh_resolution < 0:
             raise ValueError(f"mesh_resolution must be 0 (automatic) or a positive integer, got {self.mesh_resolution!r}")
         for name in ("edge_gap_m", "prior_weight_region", "prior_weight_edge", "pose_prior_weight",
@@ -359,6 +392,93 @@ def _run_step(cost, pose, simplices, budget, config, lower, upper, prior, postur
                       all(r.converged for r in runs), tuple(runs))
 
 
+#: Hand depths tried by hand re-acquisition, as fractions of the arm's reach (shoulder to hand
+#: centre, arm straight): the hand on the camera ray at that distance from the shoulder, nearer
+#: and farther than the shoulder (the two depth branches), plus the point of the ray nearest
+#: the shoulder.
+REACQUISITION_REACH = (0.95, 0.7)
+
+
+def unexplained_hands(labels: np.ndarray, joints: np.ndarray, model: BodyModel, camera: Camera,
+                      config: TrackerConfig) -> np.ndarray:
+    """Centroids of the image's skin regions that the model's hands and head do not account for.
+
+    Parameters
+    ----------
+    labels : ndarray of uint8, shape (H, W)
+        The frame's label image.
+    joints : ndarray, shape (10, 3), metres
+        The registered model's joints (:data:`mocap.body.JOINT_NAMES` order).
+    model : BodyModel
+        Its ``skin`` colour class is the hands' (none: nothing is returned).
+    camera : Camera
+    config : TrackerConfig
+        ``reacquisition_min_pixels`` and ``reacquisition_distance_px``.
+
+    Returns
+    -------
+    ndarray, shape (n, 2), float64, pixels
+        ``(u, v)`` of each skin region, other than the one nearest the projected head centre,
+        whose centroid is farther than ``reacquisition_distance_px`` from both projected hand
+        centres.
+    """
+    if "skin" not in model.class_names:
+        return np.zeros((0, 2))
+    blobs = label_blobs(labels, class_label("skin", model.class_names), min_pixels=config.reacquisition_min_pixels)
+    if len(blobs) == 0:
+        return np.zeros((0, 2))
+    projected = camera.project(joints)
+    head = int(np.argmin(np.linalg.norm(blobs.centroids - projected[_JOINT["head"]], axis=1)))
+    hands = projected[[_JOINT["r_hand"], _JOINT["l_hand"]]]
+    far = np.linalg.norm(blobs.centroids[:, None, :] - hands[None], axis=2).min(axis=1) > config.reacquisition_distance_px
+    far[head] = False
+    return blobs.centroids[far]
+
+
+def reach_proposals(pose: np.ndarray, joints: np.ndarray, targets: np.ndarray, model: BodyModel,
+                    camera: Camera) -> list[np.ndarray]:
+    """Poses with one arm moved so that its hand projects onto each image point.
+
+    For every target pixel and arm, the hand is put on the camera ray through the pixel at the
+    depths of :data:`REACQUISITION_REACH` (both branches where the ray passes within reach) and
+    at the ray's point nearest the shoulder, by :func:`mocap.body.ik.reach_arm`.
+
+    Parameters
+    ----------
+    pose : ndarray, shape (23,)
+        Registered pose (metres, radians); the rest of the body is kept.
+    joints : ndarray, shape (10, 3), metres
+        Its joints.
+    targets : ndarray, shape (n, 2), pixels
+    model : BodyModel
+    camera : Camera
+
+    Returns
+    -------
+    list of ndarray, shape (23,)
+    """
+    out = []
+    k_inv = np.linalg.inv(camera.intrinsics())
+    for uv in targets:
+        ray = k_inv @ np.array([uv[0], uv[1], 1.0])
+        ray /= np.linalg.norm(ray)
+        for side in "rl":
+            shoulder = joints[_JOINT[f"{side}_shoulder"]]
+            straight = pose.copy()
+            straight[[PARAMETER_INDEX[f"{side}_{p}"] for p in ARM_PARAMETERS]] = 0.0
+            straight_joints = model.joint_positions(straight)
+            reach = float(np.linalg.norm(straight_joints[_JOINT[f"{side}_hand"]] - straight_joints[_JOINT[f"{side}_shoulder"]]))
+            nearest = float(shoulder @ ray)
+            miss = float(np.linalg.norm(shoulder - nearest * ray))
+            depths = [nearest]
+            for fraction in REACQUISITION_REACH:
+                if fraction * reach > miss:
+                    half = math.sqrt((fraction * reach) ** 2 - miss ** 2)
+                    depths += [nearest - half, nearest + half]
+            out += [reach_arm(pose, model.skeleton, side, t * ray) for t in depths if t > 0]
+    return out
+
+
 def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: TrackerConfig, *,
              step_scale: float = 1.0, limits: np.ndarray = JOINT_LIMITS, prior_centre=None) -> Registration:
     """Two-step registration of one frame: region step, then edge step.
@@ -411,8 +531,8 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
 class FrameResult:
     """What the tracker did on one frame (one row of ``poses.csv``).
 
-    ``timings_ms`` has ``prepare``, ``region``, ``edge``, ``recovery`` and ``total``
-    (milliseconds; plus the image side's parts ``prepare_*``).
+    ``timings_ms`` has ``prepare``, ``region``, ``edge``, ``recovery`` (failure recovery and
+    hand re-acquisition) and ``total`` (milliseconds; plus the image side's parts ``prepare_*``).
     """
 
     frame: int
@@ -500,6 +620,9 @@ class Tracker:
                 reg, action = retry, "recovery tried: kept its lower F, still failing"
             else:
                 action = "recovery tried: no better, still failing"
+        if cfg.hand_reacquisition and cfg.evaluations > 0:
+            reg, failed, action, used = self._reacquire(prepared, region_cost, edge_cost, reg, failed, action)
+            evaluations += used
         timings["recovery"] = 1e3 * (time.perf_counter() - t2)
         self.history.append(reg.pose)
         if not failed:
@@ -509,6 +632,23 @@ class Tracker:
                            reg.edge_residual, reg.edge_residual_after_region, failed, False, action, evaluations,
                            reg.region.iterations if reg.region else 0, reg.edge.iterations if reg.edge else 0,
                            timings)
+
+    def _reacquire(self, prepared, region_cost, edge_cost, reg: Registration, failed: bool, action: str):
+        """Hand re-acquisition (see :class:`TrackerConfig`); returns (reg, failed, action, evaluations)."""
+        joints = self.model.joint_positions(reg.pose)
+        targets = unexplained_hands(prepared.labels, joints, self.model, self.camera, self.config)
+        if len(targets) == 0:
+            return reg, failed, action, 0
+        proposals = reach_proposals(reg.pose, joints, targets, self.model, self.camera)
+        if not proposals:
+            return reg, failed, action, 0
+        values = [region_cost.evaluate_unchecked(q) for q in proposals]
+        retry = register(region_cost, edge_cost, proposals[int(np.argmin(values))], self.config)
+        used = len(proposals) + retry.evaluations
+        if retry.region_residual >= reg.region_residual:
+            return reg, failed, action, used
+        note = "hand re-acquired"
+        return retry, self._failed(retry), note if action == "none" else f"{action}; {note}", used
 
     def _failed(self, reg: Registration) -> bool:
         cfg = self.config

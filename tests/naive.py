@@ -44,6 +44,28 @@ def naive_segment_transforms(pose, offsets):
 # --- optimiser ---
 
 
+def naive_reach_arm(pose, model, side, target, regularization, scale=0.01):
+    """Arm inverse kinematics by scipy's bounded least squares on the same objective as
+    :func:`mocap.body.ik.reach_arm`: hand miss / ``scale`` and the pull to the start angles."""
+    from scipy.optimize import least_squares
+
+    from mocap.body import JOINT_LIMITS, JOINT_NAMES
+
+    idx = np.array([P[f"{side}_{n}"] for n in ("shoulder_flex", "shoulder_abd", "shoulder_rot", "elbow_flex")])
+    lo, hi = JOINT_LIMITS[idx, 0], JOINT_LIMITS[idx, 1]
+    start = np.clip(np.asarray(pose, float)[idx], lo, hi)
+    hand = JOINT_NAMES.index(f"{side}_hand")
+
+    def residual(a):
+        q = np.array(pose, float)
+        q[idx] = a
+        return np.r_[(model.joint_positions(q)[hand] - target) / scale, np.sqrt(regularization) * (a - start)]
+
+    out = np.array(pose, float)
+    out[idx] = least_squares(residual, np.clip(start, lo + 1e-9, hi - 1e-9), bounds=(lo, hi)).x
+    return out
+
+
 def naive_nelder_mead(f, simplex, lower, upper, budget, ftol, coef=(1.0, 2.0, 0.5, 0.5)):
     """Textbook bounded Nelder-Mead, written plainly: returns the list of evaluated points.
 

@@ -39,7 +39,8 @@ def test_track_cli_end_to_end(sequence, tmp_path, capsys):
     assert set(run["metrics"]) == {"mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg", "reprojection_px", "failure_rate", "fps"}
     assert run["metrics"]["mpjpe_mm"] == pytest.approx(mpjpe(table.joints, truth.joints))
     assert run["settings"]["tracker"]["evaluations"] == 300
-    assert np.all(table.extra["evaluations"] > 0) and np.all(table.extra["evaluations"] <= 2 * 300)  # + recovery
+    # the budget, plus recovery (a second budget) and hand re-acquisition (candidates and a third)
+    assert np.all(table.extra["evaluations"] > 0) and np.all(table.extra["evaluations"] <= 3 * 300 + 50)
     # the BVH parses, has the skeleton, and gives the same poses back
     bvh = read_bvh(out / "poses.bvh")
     assert bvh.n_frames == N_FRAMES

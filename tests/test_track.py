@@ -144,3 +144,49 @@ def test_tracker_rebuilds_the_mesh_at_the_configured_resolution():
     assert coarse.model.mesh.resolution == 6
     assert coarse.model.mesh.n_triangles == BodyModel.build(resolution=6).mesh.n_triangles
     assert coarse.model.dims == model.dims
+
+
+def lost_arm_frame():
+    """A clean frame of the right arm raised sideways, and a start with that arm hanging."""
+    from mocap.imaging import PreparedFrame
+    truth = neutral_pose()
+    truth[P["r_shoulder_abd"]] = np.radians(100.0)
+    truth[P["r_elbow_flex"]] = np.radians(40.0)
+    truth[P["l_shoulder_flex"]] = np.radians(30.0)
+    lost = truth.copy()
+    for name in ("r_shoulder_abd", "r_elbow_flex"):
+        lost[P[name]] = 0.0
+    r = render(truth, MODEL, CAMERA)
+    distance = np.minimum(ndimage.distance_transform_edt(~r.edges), 20.0).astype(np.float32)
+    frame = PreparedFrame(r.labels, r.labels != 0, r.edges, distance, False, {})
+    return truth, lost, frame
+
+
+def test_unexplained_hands_finds_the_hand_the_model_misses():
+    from mocap.body import JOINT_NAMES
+    from mocap.track import reach_proposals, unexplained_hands
+    truth, lost, frame = lost_arm_frame()
+    config = TrackerConfig()
+    assert len(unexplained_hands(frame.labels, MODEL.joint_positions(truth), MODEL, CAMERA, config)) == 0
+    targets = unexplained_hands(frame.labels, MODEL.joint_positions(lost), MODEL, CAMERA, config)
+    true_hand = CAMERA.project(MODEL.joint_positions(truth)[JOINT_NAMES.index("r_hand")])
+    assert targets.shape == (1, 2)
+    assert np.linalg.norm(targets[0] - true_hand) < 1.5          # pixels: the hand region's centroid
+    proposals = reach_proposals(lost, MODEL.joint_positions(lost), targets, MODEL, CAMERA)
+    hands = np.array([CAMERA.project(MODEL.joint_positions(q)[JOINT_NAMES.index("r_hand")]) for q in proposals])
+    assert np.min(np.linalg.norm(hands - targets[0], axis=1)) < 0.5
+    far = TrackerConfig(reacquisition_distance_px=1000.0)
+    assert len(unexplained_hands(frame.labels, MODEL.joint_positions(lost), MODEL, CAMERA, far)) == 0
+
+
+def test_hand_reacquisition_refinds_a_lost_arm():
+    from mocap.track import Tracker
+    truth, lost, frame = lost_arm_frame()
+    errors = {}
+    for on in (False, True):
+        tracker = Tracker(MODEL, CAMERA, TrackerConfig(hand_reacquisition=on), lost)
+        result = tracker.step(0, frame)
+        errors[on] = joint_error(result.pose, truth)
+        assert ("hand re-acquired" in result.recovery) == on
+        np.testing.assert_array_equal(tracker.history[-1], result.pose)
+    assert errors[False] > 0.1 and errors[True] < SINGLE_FRAME_BOUND_M

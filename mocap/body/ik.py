@@ -1,0 +1,165 @@
+"""Inverse kinematics of one arm: the arm angles that put the hand at a 3D point.
+
+Stateless, like :mod:`mocap.body.kinematics`: the pose and the model data go in, a new pose
+comes out. The tracker's hand re-acquisition (:mod:`mocap.track`) uses it to turn a hand seen
+in the image (a point on a camera ray, at a chosen depth) into a candidate pose.
+
+The solver is a bounded Levenberg–Marquardt on the four angles that place the hand (shoulder
+flexion, abduction, rotation and elbow flexion; the forearm twist and the wrist stay as they
+are), with a weak pull towards the starting angles that picks, among the many arm postures
+reaching the point, one close to where the arm was.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from mocap._numba import jit
+from mocap.body.kinematics import Skeleton, _apply_transforms, _segment_transforms, joint_positions
+from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX, check_pose
+from mocap.body.skeleton import JOINT_NAMES
+
+#: Arm angles the solver moves, in the order of its internal vector.
+REACH_PARAMETERS: tuple[str, ...] = ("shoulder_flex", "shoulder_abd", "shoulder_rot", "elbow_flex")
+#: Residual scale of the hand position (metres): a 1 cm miss weighs as much as ``1 / sqrt(weight)``
+#: radians of change.
+REACH_SCALE_M = 0.01
+#: Default weight of the pull towards the starting angles (per radian squared, in units of
+#: ``REACH_SCALE_M`` squared).
+REACH_REGULARIZATION = 0.0025
+#: Levenberg–Marquardt iterations (each evaluates the arm five times).
+REACH_ITERATIONS = 30
+#: A hand this close to its target (metres) is taken as reached (no second start).
+REACH_TOLERANCE_M = 0.01
+#: Further starting postures of the reaching angles (shoulder flexion, abduction, rotation,
+#: elbow flexion; degrees), tried in turn while the hand misses by more than
+#: :data:`REACH_TOLERANCE_M`: the bounded solver can stall against a limit (a straight elbow
+#: above all) from the current arm.
+REACH_STARTS_DEG = ((45.0, 45.0, 0.0, 90.0), (120.0, 30.0, 0.0, 30.0), (0.0, 90.0, 45.0, 60.0),
+                    (60.0, 0.0, -45.0, 120.0))
+
+
+@jit
+def _hand_point(pose, offsets, hand_segment, hand_local, transforms, point):
+    _segment_transforms(pose, offsets, transforms)
+    _apply_transforms(transforms, hand_segment, hand_local, point)
+
+
+@jit
+def _reach(pose, offsets, hand_segment, hand_local, active, lower, upper, target, scale, regularization,
+           iterations):
+    """Bounded Levenberg–Marquardt; returns the new pose (a copy of ``pose``)."""
+    n = active.shape[0]
+    q = pose.copy()
+    start = np.empty(n)
+    for i in range(n):
+        start[i] = q[active[i]]
+    transforms = np.empty((offsets.shape[0], 3, 4))
+    point = np.empty((1, 3))
+    m = 3 + n
+    residual = np.empty(m)
+    jac = np.empty((m, n))
+    trial_res = np.empty(m)
+    sqrt_reg = np.sqrt(regularization)
+
+    def fill(qv, out):
+        _hand_point(qv, offsets, hand_segment, hand_local, transforms, point)
+        for r in range(3):
+            out[r] = (point[0, r] - target[r]) / scale
+        for i in range(n):
+            out[3 + i] = sqrt_reg * (qv[active[i]] - start[i])
+
+    fill(q, residual)
+    cost = np.sum(residual ** 2)
+    lam = 1e-2
+    h = 1e-6
+    for _ in range(iterations):
+        for i in range(n):
+            k = active[i]
+            saved = q[k]
+            q[k] = saved + h
+            fill(q, trial_res)
+            for r in range(m):
+                jac[r, i] = (trial_res[r] - residual[r]) / h
+            q[k] = saved
+        jtj = jac.T @ jac
+        g = jac.T @ residual
+        improved = False
+        for _try in range(8):
+            a = jtj.copy()
+            for i in range(n):
+                a[i, i] += lam * (1.0 + jtj[i, i])
+            step = np.linalg.solve(a, -g)
+            trial = q.copy()
+            for i in range(n):
+                k = active[i]
+                trial[k] = min(max(q[k] + step[i], lower[i]), upper[i])
+            fill(trial, trial_res)
+            trial_cost = np.sum(trial_res ** 2)
+            if trial_cost < cost:
+                q = trial
+                residual[:] = trial_res
+                cost = trial_cost
+                lam = max(lam * 0.3, 1e-7)
+                improved = True
+                break
+            lam *= 10.0
+        if not improved:
+            break
+    return q
+
+
+def reach_arm(pose, skeleton: Skeleton, side: str, target, *, regularization: float = REACH_REGULARIZATION,
+              iterations: int = REACH_ITERATIONS, limits: np.ndarray = JOINT_LIMITS) -> np.ndarray:
+    """Pose with one arm moved so that its hand centre is as close as it gets to ``target``.
+
+    Parameters
+    ----------
+    pose : array_like, shape (23,)
+        Starting pose (metres, radians); everything but the four reaching angles of ``side``
+        is kept.
+    skeleton : Skeleton
+        The actor's kinematic constants (``model.skeleton``).
+    side : {"r", "l"}
+        The actor's right or left arm.
+    target : array_like, shape (3,), metres
+        Camera coordinates of the point for the hand centre (the ``*_hand`` joint).
+    regularization : float
+        Weight of the pull towards the starting angles (see :data:`REACH_REGULARIZATION`);
+        0 leaves the choice among reaching postures to the solver's path.
+    iterations : int
+        Levenberg–Marquardt iterations at most.
+    limits : ndarray, shape (23, 2)
+        Joint limits (radians); the result stays within them.
+
+    Returns
+    -------
+    ndarray, shape (23,), float64
+        When the point is out of reach, the arm points at it as far as the limits allow.
+    """
+    if side not in ("r", "l"):
+        raise ValueError(f"side must be 'r' or 'l', got {side!r}")
+    q = check_pose(pose)
+    t = np.asarray(target, dtype=np.float64)
+    if t.shape != (3,) or not np.all(np.isfinite(t)):
+        raise ValueError(f"target must be 3 finite coordinates in metres, got {target!r}")
+    if regularization < 0 or not np.isfinite(regularization):
+        raise ValueError(f"regularization must be finite and non-negative, got {regularization!r}")
+    active = np.array([PARAMETER_INDEX[f"{side}_{p}"] for p in REACH_PARAMETERS], dtype=np.int64)
+    lower, upper = limits[active, 0].astype(np.float64), limits[active, 1].astype(np.float64)
+    hand = JOINT_NAMES.index(f"{side}_hand")
+    segment, local = skeleton.joint_segment[hand:hand + 1], skeleton.joint_local[hand:hand + 1]
+    best, best_miss = None, np.inf
+    for start in (q[active], *np.radians(REACH_STARTS_DEG)):
+        s = q.copy()
+        s[active] = np.clip(start, lower, upper)
+        out = _reach(s, skeleton.offsets, segment, local, active, lower, upper, t, REACH_SCALE_M,
+                     float(regularization), int(iterations))
+        miss = float(np.linalg.norm(joint_positions(out, skeleton)[hand] - t))
+        if miss < best_miss:
+            best, best_miss = out, miss
+        if best_miss <= REACH_TOLERANCE_M:
+            break
+    return best
+
+
+__all__ = ["REACH_PARAMETERS", "reach_arm"]
