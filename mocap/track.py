@@ -163,7 +163,7 @@ class TrackerConfig(JsonConfig):
     posture_margin_m: float = 0.05
     posture_sigma_m: float = 0.1
     hand_reacquisition: bool = True
-    reacquisition_distance_px: float = 4.0
+    reacquisition_distance_px: float = 6.0
     reacquisition_min_pixels: int = 2
 
     def __post_init__(self) -> None:
