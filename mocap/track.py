@@ -41,9 +41,6 @@ EDGE_STARTS = ("region_simplex", "fresh")
 PREDICTIONS = ("previous", "constant_velocity")
 #: Row of each named joint in the joint arrays.
 _JOINT = {name: i for i, name in enumerate(JOINT_NAMES)}
-#: The seven angles of one arm, without the side prefix.
-ARM_PARAMETERS = ("shoulder_flex", "shoulder_abd", "shoulder_rot", "elbow_flex", "forearm_twist", "wrist_flex",
-                  "wrist_dev")
 
 
 @dataclass(frozen=True)
@@ -457,6 +454,13 @@ def reach_proposals(pose: np.ndarray, joints: np.ndarray, targets: np.ndarray, m
     -------
     list of ndarray, shape (23,)
     """
+    reach = {}
+    for side in "rl":                      # shoulder to hand centre with the arm straight
+        straight = pose.copy()
+        straight[[i for i, name in enumerate(PARAMETER_NAMES) if name.startswith(f"{side}_")]] = 0.0
+        straight_joints = model.joint_positions(straight)
+        reach[side] = float(np.linalg.norm(straight_joints[_JOINT[f"{side}_hand"]]
+                                           - straight_joints[_JOINT[f"{side}_shoulder"]]))
     out = []
     k_inv = np.linalg.inv(camera.intrinsics())
     for uv in targets:
@@ -464,16 +468,12 @@ def reach_proposals(pose: np.ndarray, joints: np.ndarray, targets: np.ndarray, m
         ray /= np.linalg.norm(ray)
         for side in "rl":
             shoulder = joints[_JOINT[f"{side}_shoulder"]]
-            straight = pose.copy()
-            straight[[PARAMETER_INDEX[f"{side}_{p}"] for p in ARM_PARAMETERS]] = 0.0
-            straight_joints = model.joint_positions(straight)
-            reach = float(np.linalg.norm(straight_joints[_JOINT[f"{side}_hand"]] - straight_joints[_JOINT[f"{side}_shoulder"]]))
             nearest = float(shoulder @ ray)
             miss = float(np.linalg.norm(shoulder - nearest * ray))
             depths = [nearest]
             for fraction in REACQUISITION_REACH:
-                if fraction * reach > miss:
-                    half = math.sqrt((fraction * reach) ** 2 - miss ** 2)
+                if fraction * reach[side] > miss:
+                    half = math.sqrt((fraction * reach[side]) ** 2 - miss ** 2)
                     depths += [nearest - half, nearest + half]
             out += [reach_arm(pose, model.skeleton, side, t * ray) for t in depths if t > 0]
     return out
