@@ -26,7 +26,6 @@ import platform
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from types import MappingProxyType
 
 import numpy as np
 
@@ -43,11 +42,6 @@ FRAME_ARRAYS: tuple[str, ...] = (
     "mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg", "reprojection_px")
 EDGE_STARTS = ("region_simplex", "fresh")
 RUN_KINDS = ("run", "timing")
-#: Tracker settings of the paper's method, pinned so that options added beyond the paper (and
-#: their defaults) never leak into the experiments; only fields the tracker has are passed.
-PAPER_TRACKER = MappingProxyType({"prediction": "previous", "adaptive": False, "recovery": False, "blocks": "all",
-                 "arm_search": False, "prior_weight_region": 0.0, "prior_weight_edge": 0.0, "pose_prior_weight": 0.0,
-                 "posture_weight_region": 0.0, "posture_weight_edge": 0.0, "hand_reacquisition": False})
 
 
 @dataclass(frozen=True)
@@ -139,17 +133,14 @@ class RunSpec:
         return Path(root) / UNITS_DIR / self.data.key / f"{self.key}.npz"
 
     def tracker_config(self):
-        """The :class:`mocap.track.TrackerConfig` of this run: the paper's method (:data:`PAPER_TRACKER`,
-        no recovery: the paper had none) with this unit's budgets, edge start and ``ftol``."""
-        import dataclasses
-
-        from mocap.track import TrackerConfig
+        """The :class:`mocap.track.TrackerConfig` of this run: the paper's method
+        (:data:`mocap.track.PAPER_METHOD`, no recovery: the paper had none) with this unit's
+        budgets, edge start and ``ftol``."""
+        from mocap.track import PAPER_METHOD, TrackerConfig
 
         total = self.region + self.edge
         split = f"{self.region}:{self.edge}" if total else "1:0"
-        known = {f.name for f in dataclasses.fields(TrackerConfig)}
-        paper = {k: v for k, v in PAPER_TRACKER.items() if k in known}
-        return TrackerConfig.from_dict({**paper, "evaluations": total, "split": split, "edge_start": self.edge_start,
+        return TrackerConfig.from_dict({**PAPER_METHOD, "evaluations": total, "split": split, "edge_start": self.edge_start,
                                         "ftol": self.ftol})
 
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import numpy as np
 
@@ -265,6 +266,14 @@ PARAMETER_BLOCKS: dict[str, tuple[tuple[str, ...], ...]] = {
         tuple(n for n in PARAMETER_NAMES if n.startswith("l_")),
     ),
 }
+
+
+#: TrackerConfig options of the paper's method: every option beyond the paper switched off
+#: (``TrackerConfig(**PAPER_METHOD)``), so that their defaults never leak into a reproduction.
+PAPER_METHOD = MappingProxyType({
+    "prediction": "previous", "adaptive": False, "recovery": False, "blocks": "all", "arm_search": False,
+    "prior_weight_region": 0.0, "prior_weight_edge": 0.0, "pose_prior_weight": 0.0,
+    "posture_weight_region": 0.0, "posture_weight_edge": 0.0, "hand_reacquisition": False})
 
 
 @dataclass(frozen=True)
