@@ -36,9 +36,28 @@ def test_oracle_undoes_a_mirrored_forearm_and_keeps_a_correct_arm():
 
 def test_table_has_a_median_row():
     row = dict(sequence="a", mpjpe_mm=100.0, failure_rate=0.5, reprojection_px=2.0, flip_oracle_mpjpe_mm=50.0,
-               flip_oracle_failure_rate=0.1)
-    text = table([row, {**row, "sequence": "b", "mpjpe_mm": 200.0}])
-    assert "| **median** | 150 | 50 % | 2.0 | 50 | 10 % |" in text
+               flip_oracle_failure_rate=0.1, cost_equivalent_failure_rate=0.2, cost_equivalent_both_rate=0.1)
+    text = table([row, {**row, "sequence": "b", "mpjpe_mm": 200.0, "cost_equivalent_both_rate": 0.0}])
+    assert "| **median** | 150 | 50 % | 2.0 | 50 | 10 % | 20 % | 5 % |" in text
+
+
+def test_cost_equivalent_rates_count_failing_frames_the_costs_prefer():
+    import pytest
+
+    from experiments.ambiguity import cost_equivalent_rates
+
+    error = np.array([150.0, 150.0, 150.0, 50.0, 150.0, 100.0])
+    truth = np.array([[0.10, 1.0]] * 6)
+    tracked = np.array([[0.10, 1.0],       # fails, ties the truth on both costs: counts twice
+                        [0.09, 1.5],       # fails, lower F but higher edge distance: F only
+                        [0.20, 0.5],       # fails, higher F: neither
+                        [0.05, 0.5],       # better by both costs but within 100 mm: not a failure
+                        [np.nan, np.nan],  # empty frame: never equivalent
+                        [0.05, 0.5]])      # exactly 100 mm is not a failure
+    assert cost_equivalent_rates(error, tracked, truth) == (2 / 6, 1 / 6)
+    assert cost_equivalent_rates(error, tracked, truth, threshold_mm=40.0) == (4 / 6, 3 / 6)
+    with pytest.raises(ValueError, match="frames"):
+        cost_equivalent_rates(error, tracked[:5], truth[:5])
 
 
 def _clean_frames(poses, model, camera):
