@@ -121,3 +121,26 @@ def test_from_truth_option_rejects_bad_lags(capsys):
 
     assert main(["--from-truth", "1,x"]) == 2
     assert "--from-truth" in capsys.readouterr().err
+
+
+def test_lower_region_cost_keeps_the_better_track_frame_by_frame():
+    from types import SimpleNamespace
+
+    import pytest
+
+    from experiments.ambiguity import lower_region_cost
+
+    track = lambda name, values: [SimpleNamespace(name=name, region_residual=v) for v in values]
+    forward = track("f", [0.1, 0.3, 0.2, np.nan, 0.4])
+    backward = track("b", [0.2, 0.1, 0.2, 0.5, np.nan])
+    # lower F wins; a tie keeps forward; a number beats NaN (an empty frame) on either side
+    assert [r.name for r in lower_region_cost(forward, backward)] == ["f", "b", "f", "b", "f"]
+    with pytest.raises(ValueError, match="same frames"):
+        lower_region_cost(forward, backward[:4])
+
+
+def test_two_way_option_cannot_go_with_from_truth(capsys):
+    from experiments.ambiguity import main
+
+    assert main(["--two-way", "--from-truth", "1"]) == 2
+    assert "--two-way" in capsys.readouterr().err
