@@ -175,7 +175,7 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     try:
         for index, frame in enumerate(iter_frames(source, start, total), start=start):
             prepared = prepare_frame(frame, bg_image, colour_model, imaging)
-            result = tracker.step(index, prepared)
+            result, = tracker.push(index, prepared)
             _frame_row(result).append_to(journal)
             _write_state(state_path, index, tracker)
             results_ms.append(result.timings_ms["total"])

@@ -596,6 +596,33 @@ class Tracker:
         self.history = [check_pose(p) for p in poses[-2:]]
         self.last_good = check_pose(last_good)
 
+    # -- streaming interface: what the video pipeline and resumable runs use ------------------
+    def push(self, frame_index: int, prepared) -> list[FrameResult]:
+        """Take one prepared frame; return the frames whose pose is now final (oldest first).
+
+        A tracker that decodes with a lag returns nothing for the first frames and then one
+        frame per call; :meth:`finish` returns the rest. Every frame pushed comes out exactly
+        once, in order.
+        """
+        return [self.step(frame_index, prepared)]
+
+    def finish(self) -> list[FrameResult]:
+        """Frames still held back at the end of the video (oldest first)."""
+        return []
+
+    def state(self) -> dict[str, np.ndarray]:
+        """Everything the next :meth:`push` depends on, as named arrays (exact, for resuming).
+
+        Restoring it with :meth:`restore` on a tracker built with the same model, camera and
+        config makes the following pushes give bit-identical results.
+        """
+        return {"history": np.array(self.history[-2:]), "last_good": np.array(self.last_good)}
+
+    def restore(self, state: dict[str, np.ndarray]) -> None:
+        """Continue from a :meth:`state` (see there)."""
+        self.history = [check_pose(p) for p in np.asarray(state["history"])]
+        self.last_good = check_pose(state["last_good"])
+
     def costs(self, prepared) -> tuple[RegionCost, EdgeCost]:
         """Region and edge costs of one prepared frame, for this tracker's model, camera and config."""
         return (RegionCost(prepared.labels, self.model, self.camera),
@@ -694,5 +721,7 @@ def track_prepared(prepared_frames, tracker: Tracker, *, first_index: int = 0, p
     """
     from tqdm import tqdm
 
-    return [tracker.step(first_index + i, p)
-            for i, p in enumerate(tqdm(prepared_frames, desc=description, unit="frame", disable=not progress))]
+    out: list[FrameResult] = []
+    for i, p in enumerate(tqdm(prepared_frames, desc=description, unit="frame", disable=not progress)):
+        out += tracker.push(first_index + i, p)
+    return out + tracker.finish()
