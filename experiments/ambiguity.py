@@ -44,6 +44,7 @@ import argparse
 import hashlib
 import json
 import sys
+import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -53,7 +54,7 @@ from experiments import RESULTS_DIR
 from experiments.units import DataSpec, load_prepared, load_sequence, prepare_data
 from mocap.body import JOINT_NAMES
 from mocap.io.jsonfile import read_json, write_json
-from mocap.metrics import DEFAULT_FAILURE_MM, failure_rate, mpjpe, reprojection_error
+from mocap.metrics import DEFAULT_FAILURE_MM, failure_rate, mpjpe, pa_mpjpe, reprojection_error, root_relative_mpjpe
 from mocap.synth import SEQUENCE_NAMES, SEQUENCES
 from mocap.track import Tracker, TrackerConfig, register, track_prepared
 
@@ -178,7 +179,9 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     loaded, prepared = _benchmark_sequence(sequence, root, seed)
     camera = loaded.calibration.camera
     tracker = Tracker(loaded.model, camera, config, loaded.calibration.initial_pose)
+    started = time.perf_counter()
     results = track_prepared(prepared, tracker)
+    seconds = time.perf_counter() - started
     if two_way:
         backward = track_prepared(prepared[::-1], Tracker(loaded.model, camera, config, results[-1].pose))
         n = len(prepared)
@@ -193,6 +196,10 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
                                                         truth_costs)
     return {"sequence": sequence, "frames": len(joints),
             "mpjpe_mm": mpjpe(joints, truth), "failure_rate": failure_rate(joints, truth),
+            "root_relative_mpjpe_mm": root_relative_mpjpe(joints, truth), "pa_mpjpe_mm": pa_mpjpe(joints, truth),
+            "frame_mpjpe_mm": mpjpe(joints, truth, per_frame=True).tolist(),
+            "tracking_ms_per_frame": 1e3 * seconds / len(joints),
+            "prepare_ms_per_frame": float(np.mean([r.timings_ms.get("prepare", 0.0) for r in results])),
             "reprojection_px": reprojection_error(joints, truth, camera),
             "flip_oracle_mpjpe_mm": mpjpe(oracle, truth), "flip_oracle_failure_rate": failure_rate(oracle, truth),
             "flip_oracle_reprojection_px": reprojection_error(oracle, truth, camera),

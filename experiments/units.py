@@ -134,14 +134,13 @@ class RunSpec:
 
     def tracker_config(self):
         """The :class:`mocap.track.TrackerConfig` of this run: the paper's method
-        (:data:`mocap.track.PAPER_METHOD`, no recovery: the paper had none) with this unit's
-        budgets, edge start and ``ftol``."""
-        from mocap.track import PAPER_METHOD, TrackerConfig
+        (:meth:`mocap.track.TrackerConfig.paper`: one hypothesis, no recovery, the paper had
+        none) with this unit's budgets, edge start and ``ftol``."""
+        from mocap.track import TrackerConfig
 
         total = self.region + self.edge
         split = f"{self.region}:{self.edge}" if total else "1:0"
-        return TrackerConfig.from_dict({**PAPER_METHOD, "evaluations": total, "split": split, "edge_start": self.edge_start,
-                                        "ftol": self.ftol})
+        return TrackerConfig.paper(evaluations=total, split=split, edge_start=self.edge_start, ftol=self.ftol)
 
 
 # ----------------------------------------------------------------------------- data units

@@ -10,6 +10,9 @@ degrees, pixels.
 function               definition
 =====================  ===================================================================
 :func:`mpjpe`          mean over frames and joints of the 3D joint distance, mm
+:func:`root_relative_mpjpe`  the same with both skeletons moved to put their necks at the
+                       origin (the usual protocol for monocular methods, which cannot
+                       see absolute depth well), mm
 :func:`pa_mpjpe`       the same after aligning each predicted frame to the true one by the
                        best similarity transform (rotation, translation, uniform scale)
 :func:`joint_angle_error`  mean absolute difference of the 20 joint angles, degrees,
@@ -27,16 +30,19 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from mocap.body.pose import ANGLE_NAMES, N_PARAMETERS, PARAMETER_INDEX
+from mocap.body.skeleton import JOINT_NAMES
 from mocap.render.camera import Camera
 
-__all__ = ["DEFAULT_FAILURE_MM", "SUMMARY_KEYS", "failure_rate", "joint_angle_error", "mpjpe",
-           "pa_mpjpe", "reprojection_error", "summary"]
+__all__ = ["DEFAULT_FAILURE_MM", "ROOT_JOINT", "SUMMARY_KEYS", "failure_rate", "joint_angle_error", "mpjpe",
+           "pa_mpjpe", "reprojection_error", "root_relative_mpjpe", "summary"]
 
 #: Frames whose MPJPE exceeds this many millimetres count as failures (DESIGN.md section 5).
 DEFAULT_FAILURE_MM: float = 100.0
 #: Keys of :func:`summary`, in order (the ``metrics`` object of ``run.json`` without ``fps``).
-SUMMARY_KEYS: tuple[str, ...] = ("mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg", "reprojection_px",
+SUMMARY_KEYS: tuple[str, ...] = ("mpjpe_mm", "root_relative_mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg", "reprojection_px",
                                  "failure_rate")
+#: Joint that root-relative errors are taken about (its row in the joint arrays).
+ROOT_JOINT: str = "neck"
 _ANGLE_COLUMNS = np.array([PARAMETER_INDEX[name] for name in ANGLE_NAMES])
 _ANGLE_COLUMNS.setflags(write=False)
 
@@ -81,6 +87,29 @@ def mpjpe(pred, true, *, per_frame: bool = False):
     p, t = _joint_pair(pred, true)
     err = np.linalg.norm(p - t, axis=2).mean(axis=1) * 1000.0
     return err if per_frame else float(err.mean())
+
+
+def root_relative_mpjpe(pred, true, *, per_frame: bool = False):
+    """Mean per-joint position error with both skeletons translated to put :data:`ROOT_JOINT` at 0.
+
+    Parameters
+    ----------
+    pred, true : array_like, shape (N, J, 3), metres
+        Joints in :data:`~mocap.body.skeleton.JOINT_NAMES` order (the root joint's row is
+        looked up there).
+    per_frame : bool
+        Return the error of each frame instead of the mean.
+
+    Returns
+    -------
+    float or ndarray of shape (N,), millimetres
+        The root joint itself contributes 0 to the mean over the J joints.
+    """
+    p, t = _joint_pair(pred, true)
+    if p.shape[1] != len(JOINT_NAMES):
+        raise ValueError(f"root-relative errors need the {len(JOINT_NAMES)} named joints, got {p.shape[1]}")
+    r = JOINT_NAMES.index(ROOT_JOINT)
+    return mpjpe(p - p[:, r:r + 1], t - t[:, r:r + 1], per_frame=per_frame)
 
 
 def _procrustes_align(p: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -247,7 +276,7 @@ def summary(pred_poses, true_poses, pred_joints, true_joints, camera: Camera, *,
     Returns
     -------
     dict
-        Exactly the keys of :data:`SUMMARY_KEYS`: ``mpjpe_mm``, ``pa_mpjpe_mm``,
+        Exactly the keys of :data:`SUMMARY_KEYS`: ``mpjpe_mm``, ``root_relative_mpjpe_mm``, ``pa_mpjpe_mm``,
         ``angle_error_deg``, ``reprojection_px``, ``failure_rate`` (plain floats).
 
     Raises
@@ -261,6 +290,7 @@ def summary(pred_poses, true_poses, pred_joints, true_joints, camera: Camera, *,
         raise ValueError(f"poses cover {n_pose} frames but joints cover {n_joint}")
     return {
         "mpjpe_mm": mpjpe(pred_joints, true_joints),
+        "root_relative_mpjpe_mm": root_relative_mpjpe(pred_joints, true_joints),
         "pa_mpjpe_mm": pa_mpjpe(pred_joints, true_joints),
         "angle_error_deg": joint_angle_error(pred_poses, true_poses),
         "reprojection_px": reprojection_error(pred_joints, true_joints, camera),

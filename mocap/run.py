@@ -28,7 +28,8 @@ from mocap.io.video import count_frames, iter_frames, read_image
 from mocap.track import FrameResult, Tracker, TrackerConfig
 
 #: Per-frame columns of ``poses.csv`` after the pose and joint columns.
-EXTRA_COLUMNS = ("region_residual", "edge_residual", "edge_residual_after_region", "failed", "empty", "evaluations", "region_iterations",
+EXTRA_COLUMNS = ("region_residual", "edge_residual", "edge_residual_after_region", "failed", "empty", "hypothesis",
+                 "score", "evaluations", "region_iterations",
                  "edge_iterations", "ms_prepare", "ms_region", "ms_edge", "ms_recovery", "ms_total")
 COLOUR_SOURCES = ("calibration", "face")
 
@@ -50,6 +51,7 @@ def _frame_row(r: FrameResult) -> PoseTable:
     extra = {"region_residual": [r.region_residual], "edge_residual": [r.edge_residual],
              "edge_residual_after_region": [r.edge_residual_after_region],
              "failed": np.array([int(r.failed)]), "empty": np.array([int(r.empty)]),
+             "hypothesis": np.array([r.hypothesis]), "score": [r.score],
              "evaluations": np.array([r.evaluations]), "region_iterations": np.array([r.region_iterations]),
              "edge_iterations": np.array([r.edge_iterations]), "ms_prepare": [t.get("prepare", 0.0)],
              "ms_region": [t.get("region", 0.0)], "ms_edge": [t.get("edge", 0.0)],
@@ -165,23 +167,26 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     state_path = out_dir / STATE_FILE
     start = 0
     if done is not None and len(done):
-        start = int(done.frames[-1]) + 1
-        tracker.resume_from(*_read_state(state_path, start, done))
+        tracker, start = _resume(tracker, state_path, done, model, camera, config)
     else:
         write_text_atomic(run_json, json.dumps({"status": "running", "settings": settings}, indent=2))
     started = time.perf_counter()
     results_ms: list[float] = []
+    rows = 0 if done is None else len(done)
     bar = tqdm(total=total, initial=start, desc="tracking", unit="frame", disable=not progress)
     try:
         for index, frame in enumerate(iter_frames(source, start, total), start=start):
             prepared = prepare_frame(frame, bg_image, colour_model, imaging)
-            result, = tracker.push(index, prepared)
-            _frame_row(result).append_to(journal)
-            _write_state(state_path, index, tracker)
-            results_ms.append(result.timings_ms["total"])
+            for result in tracker.push(index, prepared):
+                _frame_row(result).append_to(journal)
+                rows += 1
+                results_ms.append(result.timings_ms["total"])
+                bar.set_postfix(fps=f"{1e3 / np.mean(results_ms[-25:]):.0f}", F=f"{result.region_residual:.2f}",
+                                D=f"{result.edge_residual:.1f}")
+            _write_state(state_path, index + 1, rows, tracker)
             bar.update(1)
-            bar.set_postfix(fps=f"{1e3 / np.mean(results_ms[-25:]):.0f}", F=f"{result.region_residual:.2f}",
-                            D=f"{result.edge_residual:.1f}")
+        for result in tracker.finish():                 # the frames the decoder still held back
+            _frame_row(result).append_to(journal)
     finally:
         bar.close()
     table = PoseTable.read(journal)
@@ -194,24 +199,30 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
 STATE_FILE = ".tracker_state.npz"
 
 
-def _write_state(path: Path, frame: int, tracker: Tracker) -> None:
+def _write_state(path: Path, next_frame: int, rows: int, tracker: Tracker) -> None:
+    """The tracker's exact state after pushing frames ``0 .. next_frame - 1``, with ``rows``
+    rows of the journal decided by then."""
     import io
 
     from mocap.io.atomic import write_bytes_atomic
     buf = io.BytesIO()
-    np.savez(buf, frame=frame, history=np.array(tracker.history[-2:]), last_good=tracker.last_good)
+    np.savez(buf, next_frame=next_frame, rows=rows, **tracker.state())
     write_bytes_atomic(path, buf.getvalue())
 
 
-def _read_state(path: Path, next_frame: int, done: PoseTable) -> tuple[np.ndarray, np.ndarray]:
-    """History and last good pose to resume with: the exact state file when it matches the
-    journal, else the journal's (degree-rounded) poses."""
+def _resume(tracker: Tracker, path: Path, done: PoseTable, model, camera,
+            config: TrackerConfig) -> tuple[Tracker, int]:
+    """The tracker of a resumed run and the next frame to push.
+
+    The exact state file is used when it belongs to the journal's rows (bit-identical resume);
+    otherwise tracking restarts after the journal's last row from its (degree-rounded) pose.
+    """
     if path.exists():
         with np.load(path) as state:
-            if int(state["frame"]) == next_frame - 1:
-                return state["history"], state["last_good"]
-    good = done.poses[done.extra["failed"] == 0]
-    return done.poses, (good[-1] if len(good) else done.poses[0])
+            if int(state["rows"]) == len(done):
+                tracker.restore({k: state[k] for k in state.files if k not in ("next_frame", "rows")})
+                return tracker, int(state["next_frame"])
+    return Tracker(model, camera, config, done.poses[-1]), int(done.frames[-1]) + 1
 
 
 def _previous_run(journal: Path, run_json: Path, settings: dict, overwrite: bool) -> PoseTable | None:

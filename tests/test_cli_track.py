@@ -36,7 +36,7 @@ def test_track_cli_end_to_end(sequence, tmp_path, capsys):
     assert len(table) == N_FRAMES and list(table.frames) == list(range(N_FRAMES))
     assert mpjpe(table.joints, truth.joints) < SEQUENCE_MPJPE_BOUND_MM
     run = json.loads((out / "run.json").read_text())
-    assert set(run["metrics"]) == {"mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg", "reprojection_px", "failure_rate", "fps"}
+    assert set(run["metrics"]) == {"mpjpe_mm", "root_relative_mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg", "reprojection_px", "failure_rate", "fps"}
     assert run["metrics"]["mpjpe_mm"] == pytest.approx(mpjpe(table.joints, truth.joints))
     assert run["settings"]["tracker"]["evaluations"] == 300
     # the budget, plus recovery (a second budget) and hand re-acquisition (candidates and a third)

@@ -6,8 +6,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from mocap.body.pose import PARAMETER_INDEX, neutral_pose
+from mocap.body.skeleton import JOINT_NAMES
 from mocap.metrics import (SUMMARY_KEYS, failure_rate, joint_angle_error, mpjpe, pa_mpjpe,
-                           reprojection_error, summary)
+                           reprojection_error, root_relative_mpjpe, summary)
 from mocap.render.camera import Camera
 
 
@@ -92,14 +93,30 @@ def test_failure_rate_counts_frames_strictly_above_threshold():
     assert failure_rate(pred, true, threshold_mm=200.0) == 0.0
 
 
+def test_root_relative_error_removes_the_neck_offset_only():
+    n = len(JOINT_NAMES)
+    true = np.zeros((2, n, 3)) + [0.0, 0.0, 2.0]
+    pred = true + [0.0, 0.0, 0.25]                 # the whole body 25 cm too far: root-relative 0
+    assert mpjpe(pred, true) == pytest.approx(250.0)
+    assert root_relative_mpjpe(pred, true) == pytest.approx(0.0)
+    pred[1, JOINT_NAMES.index("r_hand")] += [0.03, 0.04, 0.0]   # one hand 5 cm off in frame 1
+    assert root_relative_mpjpe(pred, true, per_frame=True) == pytest.approx([0.0, 50.0 / n])
+    moved_neck = true.copy()
+    moved_neck[:, JOINT_NAMES.index("neck")] += [0.0, 0.01, 0.0]  # the neck 1 cm off: every other joint
+    assert root_relative_mpjpe(moved_neck, true) == pytest.approx(10.0 * (n - 1) / n)
+    with pytest.raises(ValueError, match="named joints"):
+        root_relative_mpjpe(np.zeros((1, 3, 3)), np.zeros((1, 3, 3)))
+
+
 def test_summary_has_exactly_the_run_json_keys():
-    pred, true = _frames_with_errors([10.0, 20.0])
+    pred, true = _frames_with_errors([10.0, 20.0], n_joints=len(JOINT_NAMES))
     poses = np.tile(neutral_pose(), (2, 1))
     out = summary(poses, poses, pred, true, Camera.default())
-    assert tuple(out) == SUMMARY_KEYS == ("mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg", "reprojection_px",
-                                          "failure_rate")
+    assert tuple(out) == SUMMARY_KEYS == ("mpjpe_mm", "root_relative_mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg",
+                                          "reprojection_px", "failure_rate")
     assert all(type(v) is float for v in out.values())
     assert out["mpjpe_mm"] == pytest.approx(15.0)
+    assert out["root_relative_mpjpe_mm"] == pytest.approx(0.0, abs=1e-9)   # a rigid shift
     assert out["angle_error_deg"] == 0.0 and out["failure_rate"] == 0.0
 
 

@@ -6,7 +6,7 @@ from scipy import ndimage
 
 from mocap.body import PARAMETER_INDEX as P, BodyModel, clamp_to_limits, neutral_pose
 from mocap.cost import EdgeCost, RegionCost
-from mocap.track import AUTO_SPLIT_THRESHOLD, PAPER_METHOD, TrackerConfig, register, split_budget
+from mocap.track import AUTO_SPLIT_THRESHOLD, TrackerConfig, register, split_budget
 from mocap.render import Camera, render
 
 MODEL = BodyModel.build(resolution=8)
@@ -16,7 +16,7 @@ SINGLE_FRAME_BOUND_M = 0.035
 
 
 #: The paper's two-step registration (every option beyond the paper off).
-PAPER_REGISTRATION = TrackerConfig(**{**PAPER_METHOD, "evaluations": 600})
+PAPER_REGISTRATION = TrackerConfig.paper(evaluations=600)
 
 
 def joint_error(a, b):
@@ -39,15 +39,15 @@ def test_bad_split_rejected(bad):
 
 
 def test_config_json_round_trip_and_misspelt_keys(tmp_path):
-    cfg = TrackerConfig(evaluations=300, split="2:1", prediction="constant_velocity")
+    cfg = TrackerConfig(evaluations=300, split="2:1", beam=2, lag=3)
     cfg.to_json(tmp_path / "c.json")
     assert TrackerConfig.from_json(tmp_path / "c.json") == cfg
     data = json.loads((tmp_path / "c.json").read_text())
     data["evaluatons"] = 3
     with pytest.raises(ValueError, match="unknown TrackerConfig option"):
         TrackerConfig.from_dict(data)
-    for bad in ({"evaluations": -1}, {"edge_start": "big"}, {"prediction": "psychic"}, {"angle_step_deg": 0},
-                {"ftol": float("nan")}):
+    for bad in ({"evaluations": -1}, {"edge_start": "big"}, {"beam": 0}, {"angle_step_deg": 0},
+                {"ftol": float("nan")}, {"jumps": "no"}, {"lag": 1.5}, {"prior_weight": -1.0}):
         with pytest.raises(ValueError):
             TrackerConfig(**bad)
 
@@ -75,10 +75,6 @@ def test_registration_recovers_a_perturbed_pose(seed):
     assert reg.region_residual < region(start)
     assert reg.region.evaluations == 300                 # auto split: 50/50 from 200 on
     assert reg.edge.evaluations == 300 or reg.edge.converged
-    # the default adds the posture prior, which is 0 at these poses but bends the simplex's path:
-    # over 20 such poses it lands 2.5 mm further on average (33.9 against 31.4 mm)
-    default = register(region, edge, start, TrackerConfig(evaluations=600))
-    assert joint_error(default.pose, truth) < min(SINGLE_FRAME_BOUND_M, joint_error(start, truth))
 
 
 def test_edge_step_lowers_the_edge_residual_it_starts_from():
@@ -106,41 +102,13 @@ def test_fresh_edge_simplex_option_starts_elsewhere():
     assert not np.array_equal(handed.pose, fresh.pose)
 
 
-def test_block_strategy_and_arm_search_respect_the_budget():
-    truth = neutral_pose()
-    truth[P["l_shoulder_abd"]] = 1.4                   # arm raised far from where tracking starts
-    region, edge = clean_frame(truth)
-    start = neutral_pose()
-    cfg = TrackerConfig(evaluations=400, blocks="torso-arms", arm_search=True)
-    reg = register(region, edge, start, cfg)
-    assert reg.region.evaluations <= 200 and reg.edge.evaluations <= 200
-    assert len(reg.region.blocks) == 3
-    # the arm search re-finds the raised arm that a local search from the start cannot reach
-    plain = register(region, edge, start, TrackerConfig(evaluations=400))
-    assert joint_error(reg.pose, truth) < 0.5 * joint_error(plain.pose, truth)
-    with pytest.raises(ValueError, match="torso-arms"):
-        TrackerConfig(arm_search=True)
-    with pytest.raises(ValueError, match="blocks"):
-        TrackerConfig(blocks="legs")
-
-
-def test_priors_combine_into_one_quadratic():
-    cfg = TrackerConfig(pose_prior_weight=0.1, prior_weight_region=0.2)
-    centre = neutral_pose() + 0.3
-    mixed, weights = cfg.prior(centre, cfg.prior_weight_region)
-    x = neutral_pose() + 0.1
-    sigma_t = np.r_[np.full(3, cfg.prior_sigma_position_m), np.full(20, np.radians(cfg.prior_sigma_angle_deg))]
-    sigma_p = np.radians(cfg.pose_prior_sigma_deg)
-    direct = (0.2 * np.mean(((x - centre) / sigma_t) ** 2)
-              + 0.1 * np.mean(((x - neutral_pose())[3:] / sigma_p) ** 2))
-    ref = np.sum(weights * (mixed - centre) ** 2) * 0 + np.sum(weights * (x - mixed) ** 2)
-    # the two forms differ by a constant: compare differences between two points
-    y = neutral_pose() - 0.05
-    direct_y = (0.2 * np.mean(((y - centre) / sigma_t) ** 2)
-                + 0.1 * np.mean(((y - neutral_pose())[3:] / sigma_p) ** 2))
-    ref_y = np.sum(weights * (y - mixed) ** 2)
-    assert ref - ref_y == pytest.approx(direct - direct_y)
-    assert TrackerConfig().prior(centre, 0.0) is None      # the paper's method: no prior at all
+def test_paper_configuration_switches_every_addition_off():
+    paper = TrackerConfig.paper(evaluations=100)
+    assert (paper.beam, paper.lag, paper.jumps, paper.recovery, paper.hand_reacquisition, paper.prior_weight) \
+        == (1, 0, False, False, False, 0.0)
+    assert paper.evaluations == 100 and paper.split == "auto"
+    with pytest.raises(TypeError):
+        TrackerConfig.paper(evaluatons=100)
 
 
 def test_tracker_rebuilds_the_mesh_at_the_configured_resolution():
@@ -193,9 +161,10 @@ def test_hand_reacquisition_refinds_a_lost_arm():
     truth, lost, frame = lost_arm_frame()
     errors = {}
     for on in (False, True):
-        tracker = Tracker(MODEL, CAMERA, TrackerConfig(hand_reacquisition=on), lost)
-        result = tracker.step(0, frame)
+        config = TrackerConfig(hand_reacquisition=on, beam=1, jumps=False, lag=0, prior_weight=0.0)
+        tracker = Tracker(MODEL, CAMERA, config, lost)
+        result, = tracker.push(0, frame)
         errors[on] = joint_error(result.pose, truth)
         assert ("hand re-acquired" in result.recovery) == on
-        np.testing.assert_array_equal(tracker.history[-1], result.pose)
+        np.testing.assert_array_equal(tracker.hypotheses[0], result.pose)
     assert errors[False] > 0.1 and errors[True] < SINGLE_FRAME_BOUND_M

@@ -1,0 +1,135 @@
+"""``python -m experiments.tracking``: the tracker's ablation over the six benchmark sequences.
+
+Every named configuration of :data:`CONFIGS` (the default tracker; the paper's method; the
+beam width K, the decoding lag L, the pose prior, the kinematic jumps, online against offline
+decoding) tracks each synthetic sequence (full length, 160x120, true calibration) for each
+generator seed, through :func:`experiments.ambiguity.measure`: MPJPE, root-relative MPJPE
+(about the neck), PA-MPJPE, frames over 100 mm, the flip-oracle and cost-equivalence shares,
+and the tracking time per frame on one core.
+
+One JSON file per (configuration, sequence, seed) under ``--out`` (written atomically: an
+interrupted run resumes where it stopped). Prints the Markdown table (medians over sequences,
+failure shares over all frames pooled) that ``experiments/REPORT.md`` carries, and with
+``--figure`` writes the ablation figure.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from types import MappingProxyType
+
+import numpy as np
+
+from experiments import RESULTS_DIR
+from mocap.io.jsonfile import read_json, write_json
+from mocap.metrics import DEFAULT_FAILURE_MM
+from mocap.synth import SEQUENCE_NAMES
+from mocap.track import TrackerConfig
+
+#: Named tracker configurations: changes from the defaults (``"paper"`` is the paper's method;
+#: ``"single"`` one hypothesis with recovery and hand re-acquisition, no jumps, no lag).
+CONFIGS = MappingProxyType({
+    "default": {},
+    "paper": None,
+    "single": {"beam": 1, "jumps": False, "lag": 0},
+    "K1": {"beam": 1},
+    "K5": {"beam": 5},
+    "L0": {"lag": 0},
+    "L16": {"lag": 16},
+    "offline": {"offline": True},
+    "no-prior": {"prior_weight": 0.0},
+    "no-jumps": {"jumps": False},
+})
+
+
+def config_of(name: str) -> TrackerConfig:
+    """The :class:`TrackerConfig` of a :data:`CONFIGS` name."""
+    changes = CONFIGS[name]
+    return TrackerConfig.paper() if changes is None else TrackerConfig.from_dict(changes)
+
+
+def unit_path(out: Path, name: str, sequence: str, seed: int) -> Path:
+    from experiments.ambiguity import config_key
+    return out / "units" / f"{sequence}-s{seed}-{config_key(config_of(name))}.json"
+
+
+def run_unit(out: Path, name: str, sequence: str, seed: int) -> dict:
+    """Measure one (configuration, sequence, seed), reusing its file when present."""
+    from experiments.ambiguity import measure
+
+    path = unit_path(out, name, sequence, seed)
+    if path.is_file():
+        return read_json(path)["result"]
+    config = config_of(name)
+    row = measure(sequence, config, out, seed)
+    write_json(path, {"config": config.to_dict(), "name": name, "seed": seed, "result": row})
+    return row
+
+
+def summarise(rows: list[dict]) -> dict:
+    """Medians over sequences, failure share over all frames pooled, worst sequence, time."""
+    errors = np.concatenate([r["frame_mpjpe_mm"] for r in rows])
+    return {"median_mpjpe_mm": float(np.median([r["mpjpe_mm"] for r in rows])),
+            "median_root_relative_mm": float(np.median([r["root_relative_mpjpe_mm"] for r in rows])),
+            "median_pa_mpjpe_mm": float(np.median([r["pa_mpjpe_mm"] for r in rows])),
+            "failure_rate": float(np.mean(errors > DEFAULT_FAILURE_MM)),
+            "worst_mpjpe_mm": float(max(r["mpjpe_mm"] for r in rows)),
+            "cost_equivalent_both_rate": float(np.average([r["cost_equivalent_both_rate"] for r in rows],
+                                                          weights=[r["frames"] for r in rows])),
+            "ms_per_frame": float(np.average([r["tracking_ms_per_frame"] + r["prepare_ms_per_frame"] for r in rows],
+                                             weights=[r["frames"] for r in rows]))}
+
+
+def table(summaries: dict[str, dict]) -> str:
+    """Markdown table of :func:`summarise` results by configuration name."""
+    head = ("configuration", "median MPJPE mm", "median root-rel. mm", "median PA-MPJPE mm",
+            f"frames > {DEFAULT_FAILURE_MM:g} mm", "worst sequence mm", "failing, costs <= truth's",
+            "ms / frame (fps)")
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name, s in summaries.items():
+        lines.append(f"| {name} | {s['median_mpjpe_mm']:.0f} | {s['median_root_relative_mm']:.0f} | "
+                     f"{s['median_pa_mpjpe_mm']:.0f} | {100 * s['failure_rate']:.1f} % | {s['worst_mpjpe_mm']:.0f} | "
+                     f"{100 * s['cost_equivalent_both_rate']:.1f} % | {s['ms_per_frame']:.1f} "
+                     f"({1e3 / s['ms_per_frame']:.0f}) |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m experiments.tracking", description=__doc__.split("\n\n")[0])
+    p.add_argument("--configs", default="default,paper", help=f"comma-separated names of: {'; '.join(CONFIGS)}")
+    p.add_argument("--seeds", default="0,1,2,3,4", help="comma-separated generator seeds")
+    p.add_argument("--sequences", default=",".join(SEQUENCE_NAMES))
+    p.add_argument("--out", type=Path, default=RESULTS_DIR / "tracking")
+    args = p.parse_args(argv)
+    names = [n.strip() for n in args.configs.split(",") if n.strip()]
+    unknown = [n for n in names if n not in CONFIGS]
+    sequences = [s for s in args.sequences.split(",") if s]
+    bad_sequences = [s for s in sequences if s not in SEQUENCE_NAMES]
+    try:
+        seeds = [int(s) for s in args.seeds.split(",") if s.strip()]
+    except ValueError:
+        seeds = []
+    if unknown or bad_sequences or not names or not seeds or not sequences:
+        print(f"error: unknown configuration(s) {unknown} or sequence(s) {bad_sequences}, or no seeds; "
+              f"configurations: {'; '.join(CONFIGS)}", file=sys.stderr)
+        return 2
+    from tqdm import tqdm
+
+    units = [(n, s, q) for n in names for s in seeds for q in sequences]
+    rows: dict[str, list[dict]] = {n: [] for n in names}
+    for name, seed, sequence in tqdm(units, desc="ablation", unit="sequence"):
+        rows[name].append(run_unit(args.out, name, sequence, seed))
+    summaries = {n: summarise(r) for n, r in rows.items()}
+    write_json(args.out / "summary.json", {"seeds": seeds, "sequences": sequences, "summaries": summaries,
+                                           "per_sequence": {n: {f"{r['sequence']}-s{s}": r["mpjpe_mm"]
+                                                                for r, (s, _) in zip(rows[n], [(s, q) for s in seeds
+                                                                                               for q in sequences])}
+                                                            for n in names}})
+    print(f"seeds {', '.join(map(str, seeds))}; {len(sequences)} sequences\n")
+    print(table(summaries))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

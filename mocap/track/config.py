@@ -1,0 +1,206 @@
+"""Settings of the tracker: one typed, JSON-backed configuration and the paper's method.
+
+:class:`TrackerConfig` holds every option of the registration (the paper's two-step downhill
+simplex, sections 3.2-3.3 and 5) and of what this toolkit adds beyond it: failure recovery,
+hand re-acquisition, a beam of hypotheses with kinematic jumps, a learned pose prior in their
+score, and temporal decoding. :meth:`TrackerConfig.paper` is the paper's method with every
+addition off, as the experiments reproduce it.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from mocap.body.pose import N_PARAMETERS
+from mocap.config import JsonConfig
+
+#: Total budget below which the ``auto`` policy gives every evaluation to the region step.
+AUTO_SPLIT_THRESHOLD = 200
+#: Where the edge step's simplex starts: the region step's final simplex (paper) or a fresh one.
+EDGE_STARTS = ("region_simplex", "fresh")
+
+
+@dataclass(frozen=True)
+class TrackerConfig(JsonConfig):
+    """Settings of the tracker (saved in ``run.json``; JSON with unknown keys rejected).
+
+    Attributes
+    ----------
+    evaluations : int
+        Cost evaluations per frame of the leading hypothesis's two-step registration, both
+        steps together (the paper's "iterations"); at least 1.
+    split : str
+        ``"auto"`` (paper's policy) or ``"R:E"``, e.g. ``"250:250"`` (scaled to ``evaluations``).
+    edge_start : str
+        ``"region_simplex"`` (paper) or ``"fresh"`` (a new simplex of ``fresh_step_scale``
+        times the initial steps around the region step's best pose; the paper's Fig. 8).
+    position_step_m : float, metres
+        Initial simplex step of the three root coordinates.
+    angle_step_deg : float, degrees
+        Initial simplex step of the 20 angles (20 degrees and 5 cm were chosen on the six
+        synthetic sequences with three seeds; see docs/research-log.md).
+    fresh_step_scale : float
+        Size of the fresh edge-step simplex relative to the initial steps.
+    ftol : float
+        Convergence: relative spread of the simplex values (the paper's test).
+    region_failure_threshold : float
+        A frame with F above this is a region failure (F is in [0, 1]).
+    edge_failure_threshold_px : float, pixels
+        A frame with mean edge distance above this is an edge failure.
+    recovery : bool
+        Beyond the paper: retry a failed frame from the last good pose with a wider simplex.
+    recovery_step_scale : float
+        Size of the recovery simplex relative to the initial steps.
+    mesh_resolution : int
+        Mesh level of detail; 0 chooses it from the image size.
+    edge_gap_m : float, metres
+        Depth step that makes an occluding contour between parts.
+    hand_reacquisition : bool
+        Beyond the paper: skin regions of the image that the model's hands and head leave
+        unexplained are taken for a lost hand; either arm is posed to reach each (inverse
+        kinematics) and the best such pose is registered as a further hypothesis.
+    reacquisition_distance_px : float, pixels
+        A skin region whose centroid is farther than this from both projected hands triggers it.
+    reacquisition_min_pixels : int, pixels
+        Smaller skin regions are ignored.
+    beam : int
+        Hypotheses kept per frame (1: a single-hypothesis tracker, as the paper's).
+    hypothesis_evaluations : int
+        Evaluations of the two-step registration of every hypothesis but the leading one.
+    jumps : bool
+        Propose the kinematic jumps of the leading hypothesis (each arm's depth branches and the
+        torso's front/back mirror, :mod:`mocap.body.jumps`), each refined by a short
+        registration of ``jump_evaluations``.
+    jump_evaluations : int
+        Evaluations of each jump's refinement.
+    jumps_refined : int
+        Jumps refined per frame: the lowest-F ones.
+    lag : int, frames
+        Online decoding: a frame's pose is decided ``lag`` frames later, by the best path
+        (Viterbi) through the hypotheses of the frames since. 0 takes the best hypothesis of
+        each frame at once.
+    offline : bool
+        Decode the whole sequence at its end instead (the best path through every frame).
+    region_weight, edge_weight : float
+        Score of a hypothesis per unit of F and per pixel of mean edge distance.
+    prior_weight : float
+        Score per nat of the pose prior's negative log-density (:mod:`mocap.body.prior`); 0: off.
+    motion_sigma_m : float, metres
+        Motion term between hypotheses of consecutive frames: half the mean squared joint
+        displacement over ``motion_sigma_m**2``...
+    motion_cap : float
+        ...at most this much (a truncated quadratic): a jump between branches or to a
+        re-acquired arm costs a fixed price that a clearly better fit pays.
+    merge_distance_m : float, metres
+        Hypotheses whose joints are on average closer than this are merged (the better kept).
+    """
+
+    evaluations: int = 500
+    split: str = "auto"
+    edge_start: str = "region_simplex"
+    position_step_m: float = 0.05
+    angle_step_deg: float = 20.0
+    fresh_step_scale: float = 3.0
+    ftol: float = 1e-3
+    region_failure_threshold: float = 0.45
+    edge_failure_threshold_px: float = 4.0
+    recovery: bool = True
+    recovery_step_scale: float = 2.5
+    mesh_resolution: int = 0
+    edge_gap_m: float = 0.03
+    hand_reacquisition: bool = True
+    reacquisition_distance_px: float = 6.0
+    reacquisition_min_pixels: int = 2
+    beam: int = 3
+    hypothesis_evaluations: int = 150
+    jumps: bool = True
+    jump_evaluations: int = 80
+    jumps_refined: int = 2
+    lag: int = 8
+    offline: bool = False
+    region_weight: float = 50.0
+    edge_weight: float = 2.0
+    prior_weight: float = 0.05
+    motion_sigma_m: float = 0.05
+    motion_cap: float = 8.0
+    merge_distance_m: float = 0.02
+
+    def __post_init__(self) -> None:
+        for name in ("beam",):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                raise ValueError(f"{name} must be an integer of at least 1, got {v!r}")
+        for name in ("evaluations", "hypothesis_evaluations", "jump_evaluations", "jumps_refined", "lag", "mesh_resolution"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+                raise ValueError(f"{name} must be a non-negative integer, got {v!r}")
+        if (isinstance(self.reacquisition_min_pixels, bool) or not isinstance(self.reacquisition_min_pixels, int)
+                or self.reacquisition_min_pixels < 1):
+            raise ValueError(f"reacquisition_min_pixels must be a positive integer, got {self.reacquisition_min_pixels!r}")
+        for name in ("recovery", "hand_reacquisition", "jumps", "offline"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
+        split_budget(self.evaluations, self.split)          # validates the split
+        if self.edge_start not in EDGE_STARTS:
+            raise ValueError(f"edge_start must be one of {EDGE_STARTS}, got {self.edge_start!r}")
+        for name in ("position_step_m", "angle_step_deg", "fresh_step_scale", "recovery_step_scale",
+                     "edge_failure_threshold_px", "region_failure_threshold", "reacquisition_distance_px",
+                     "motion_sigma_m", "motion_cap"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+                raise ValueError(f"{name} must be a finite positive number, got {v!r}")
+        for name in ("ftol", "edge_gap_m", "region_weight", "edge_weight", "prior_weight", "merge_distance_m"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+                raise ValueError(f"{name} must be finite and non-negative, got {v!r}")
+
+    @classmethod
+    def paper(cls, **changes) -> "TrackerConfig":
+        """The paper's method: one hypothesis, no recovery, re-acquisition, jumps or prior.
+
+        Parameters
+        ----------
+        **changes
+            Fields to set as well (the budget, split and edge start the experiments sweep);
+            unknown names raise TypeError.
+        """
+        return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
+                           prior_weight=0.0), **changes)
+
+    def steps(self) -> np.ndarray:
+        """Initial simplex steps, shape (23,): metres for the root, radians for the angles."""
+        return np.r_[np.full(3, self.position_step_m), np.full(N_PARAMETERS - 3, math.radians(self.angle_step_deg))]
+
+
+def split_budget(total: int, split: str) -> tuple[int, int]:
+    """Split a per-frame evaluation budget between the region and the edge step.
+
+    Parameters
+    ----------
+    total : int
+        Evaluations per frame.
+    split : str
+        ``"auto"``: all to the region step below :data:`AUTO_SPLIT_THRESHOLD`, else half each
+        (the paper's policy, section 5). ``"R:E"``: in that proportion (``"1:0"`` all region,
+        ``"0:1"`` all edge); ``R + E`` need not equal ``total``.
+
+    Returns
+    -------
+    (int, int)
+        Region and edge evaluations, adding up to ``total``.
+    """
+    if split == "auto":
+        if total < AUTO_SPLIT_THRESHOLD:
+            return total, 0
+        return total - total // 2, total // 2
+    parts = split.split(":") if isinstance(split, str) else []
+    try:
+        r, e = (float(p) for p in parts)
+    except ValueError:
+        raise ValueError(f"split must be 'auto' or 'R:E' with two non-negative numbers, got {split!r}") from None
+    if not (math.isfinite(r) and math.isfinite(e)) or r < 0 or e < 0 or r + e == 0:
+        raise ValueError(f"split must be 'auto' or 'R:E' with two non-negative numbers not both 0, got {split!r}")
+    region = int(round(total * r / (r + e)))
+    return region, total - region

@@ -1,0 +1,100 @@
+"""One frame's two-step registration (paper sections 3.2-3.3).
+
+The **region step** minimises the non-overlapping ratio F(q) (eq. 1) by bounded downhill
+simplex from a start pose; the **edge step** minimises the mean edge distance (eq. 2) starting
+from the region step's final simplex (or, for the paper's Fig. 8, from a fresh large simplex).
+The evaluation budget is split between the two by :func:`~mocap.track.config.split_budget`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mocap.body.pose import JOINT_LIMITS, check_pose, clamp_to_limits
+from mocap.cost import EdgeCost, RegionCost
+from mocap.optimize import SimplexResult, initial_simplex, minimize_cost
+from mocap.track.config import TrackerConfig, split_budget
+
+
+@dataclass(frozen=True)
+class Registration:
+    """Result of registering the model on one prepared frame.
+
+    Attributes
+    ----------
+    pose : ndarray, shape (23,), float64
+        Metres and radians.
+    region_residual : float
+        F(pose), in [0, 1].
+    edge_residual : float, pixels
+        Mean edge distance at ``pose``.
+    edge_residual_after_region : float, pixels
+        Mean edge distance at the region step's result (the paper's Fig. 6 grey line).
+    region, edge : SimplexResult or None
+        The two simplex runs (None when the step had no budget).
+    """
+
+    pose: np.ndarray
+    region_residual: float
+    edge_residual: float
+    edge_residual_after_region: float
+    region: SimplexResult | None
+    edge: SimplexResult | None
+
+    @property
+    def evaluations(self) -> int:
+        return sum(r.evaluations for r in (self.region, self.edge) if r is not None)
+
+    def failed(self, config: TrackerConfig) -> bool:
+        """A residual peak: F above its threshold, or (when the edge step ran) the edge distance."""
+        edge_checked = self.edge is not None and self.edge.evaluations > 0
+        return bool(self.region_residual > config.region_failure_threshold
+                    or (edge_checked and self.edge_residual > config.edge_failure_threshold_px))
+
+
+def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: TrackerConfig, *,
+             evaluations: int | None = None, step_scale: float = 1.0,
+             limits: np.ndarray = JOINT_LIMITS) -> Registration:
+    """Two-step registration of one frame: region step, then edge step.
+
+    Parameters
+    ----------
+    region_cost, edge_cost : RegionCost, EdgeCost
+        Built from the frame's label image and distance map.
+    start_pose : array_like, shape (23,)
+        Where the region step's simplex starts (metres, radians); clamped to ``limits``.
+    config : TrackerConfig
+        Split, simplex steps, edge-step start, convergence test.
+    evaluations : int, optional
+        Budget of both steps together (default ``config.evaluations``).
+    step_scale : float
+        Multiplies the initial simplex steps (wider for recovery).
+    limits : ndarray, shape (23, 2)
+
+    Returns
+    -------
+    Registration
+    """
+    q0 = clamp_to_limits(check_pose(start_pose, name="start pose"), limits)
+    lower, upper = limits[:, 0], limits[:, 1]
+    total = config.evaluations if evaluations is None else int(evaluations)
+    n_region, n_edge = split_budget(total, config.split)
+    steps = config.steps() * step_scale
+    pose = q0
+    region = edge = None
+    if n_region > 0:
+        region = minimize_cost(region_cost, initial_simplex(q0, steps, lower, upper), lower, upper,
+                               budget=n_region, ftol=config.ftol)
+        if region.evaluations > 0:
+            pose = region.x.copy()
+    edge_after_region = edge_cost(pose)
+    if n_edge > 0:
+        if region is not None and config.edge_start == "region_simplex":
+            simplex = region.simplex
+        else:
+            simplex = initial_simplex(pose, steps * config.fresh_step_scale, lower, upper)
+        edge = minimize_cost(edge_cost, simplex, lower, upper, budget=n_edge, ftol=config.ftol)
+        if edge.evaluations > 0:
+            pose = edge.x.copy()
+    return Registration(pose.copy(), region_cost(pose), edge_cost(pose), edge_after_region, region, edge)

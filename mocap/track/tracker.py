@@ -1,0 +1,356 @@
+"""The tracker: a beam of pose hypotheses per frame, decoded over time.
+
+Every frame, each hypothesis kept from the previous frame is extended by the two-step
+registration (:func:`~mocap.track.registration.register`; the leading one with the full
+budget, the others with ``hypothesis_evaluations``). Proposals compete with them: a recovery
+from the last good pose when the leader fails, hand re-acquisition when a skin region is left
+unexplained, and the leader's kinematic jumps (:mod:`mocap.body.jumps`), each refined by a short
+registration. Every candidate gets a **unary score** (``region_weight * F + edge_weight * edge
+distance + prior_weight * pose-prior energy``); between consecutive frames a **motion term**
+(half the mean squared joint displacement over ``motion_sigma_m**2``) links them. The forward
+Viterbi recursion (:func:`~mocap.track.decode.viterbi_step`) gives each candidate the cost of
+the best path to it; near-duplicates are merged and the ``beam`` cheapest survive.
+
+A frame's pose is decided ``lag`` frames later by backtracking the best path from the newest
+frame (online), or at the end of the sequence through all frames (``offline``). With
+``beam=1``, ``lag=0`` and every proposal off this is the paper's single-hypothesis tracker.
+
+The tracker streams: :meth:`Tracker.push` takes a prepared frame and returns the frames whose
+pose is now final, :meth:`Tracker.finish` the rest; :meth:`Tracker.state` and
+:meth:`Tracker.restore` carry its exact state across a resumed run. Online, its memory holds
+``lag + 1`` frames of hypotheses whatever the length of the video.
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mocap.body.model import BodyModel
+from mocap.body.pose import check_pose, clamp_to_limits
+from mocap.body.prior import PosePrior, default_prior
+from mocap.cost import EdgeCost, RegionCost
+from mocap.render.camera import Camera
+from mocap.track.config import TrackerConfig
+from mocap.track.decode import backtrack, viterbi_step
+from mocap.track.proposals import jump_proposals, reach_proposals, unexplained_hands
+from mocap.track.registration import Registration, register
+
+
+@dataclass
+class FrameResult:
+    """What the tracker decided for one frame (one row of ``poses.csv``).
+
+    ``timings_ms`` has ``prepare``, ``region`` and ``edge`` (the leading hypothesis's two
+    steps), ``recovery`` (every other hypothesis and proposal) and ``total`` (milliseconds;
+    plus the image side's parts ``prepare_*``). ``hypothesis`` is the chosen hypothesis's rank
+    in its frame's beam when that frame was tracked (0: it led), ``score`` its unary score and
+    ``recovery`` what produced it.
+    """
+
+    frame: int
+    pose: np.ndarray
+    joints: np.ndarray
+    region_residual: float
+    edge_residual: float
+    edge_residual_after_region: float
+    failed: bool
+    empty: bool
+    recovery: str
+    evaluations: int
+    region_iterations: int
+    edge_iterations: int
+    timings_ms: dict[str, float] = field(default_factory=dict)
+    hypothesis: int = 0
+    score: float = math.nan
+
+
+@dataclass
+class _Hypothesis:
+    pose: np.ndarray
+    joints: np.ndarray
+    region_residual: float
+    edge_residual: float
+    edge_residual_after_region: float
+    failed: bool
+    note: str
+    unary: float
+    region_iterations: int
+    edge_iterations: int
+
+
+@dataclass
+class _Frame:
+    index: int
+    empty: bool
+    hypotheses: list[_Hypothesis]
+    cost: np.ndarray            # best-path cost of each hypothesis (lowest first)
+    back: np.ndarray            # its predecessor among the previous frame's hypotheses
+    evaluations: int
+    timings: dict[str, float]
+
+
+class Tracker:
+    """Tracks one actor frame after frame (see the module).
+
+    Parameters
+    ----------
+    model : BodyModel
+        The calibrated actor. Its mesh is used as is when ``config.mesh_resolution`` is 0, and
+        rebuilt at that level of detail otherwise.
+    camera : Camera
+    config : TrackerConfig
+    initial_pose : array_like, shape (23,)
+        Pose in the first frame (from calibration), metres and radians.
+    prior : PosePrior, optional
+        Pose prior of the score (default: the shipped one, when ``config.prior_weight > 0``).
+    """
+
+    def __init__(self, model: BodyModel, camera: Camera, config: TrackerConfig, initial_pose,
+                 prior: PosePrior | None = None) -> None:
+        if config.mesh_resolution and model.mesh.resolution != config.mesh_resolution:
+            model = model.with_resolution(config.mesh_resolution)
+        self.model, self.camera, self.config = model, camera, config
+        self.prior = prior if prior is not None else (default_prior() if config.prior_weight > 0 else None)
+        q = clamp_to_limits(check_pose(initial_pose, name="initial pose"))
+        start = _Hypothesis(q, model.joint_positions(q), math.nan, math.nan, math.nan, False, "initial pose",
+                            0.0, 0, 0)
+        self._beam: list[_Hypothesis] = [start]
+        self._cost = np.zeros(1)
+        self._window: deque[_Frame] = deque()
+        self.last_good = q
+
+    # -- streaming ---------------------------------------------------------------------------
+    def push(self, frame_index: int, prepared) -> list[FrameResult]:
+        """Take one prepared frame (:class:`mocap.imaging.PreparedFrame`); return the frames
+        whose pose is now final, oldest first.
+
+        Online with ``lag`` L, the first L calls return nothing and each later call one frame;
+        offline, nothing comes out before :meth:`finish`. Every frame pushed comes out once,
+        in order.
+        """
+        frame = self._track(int(frame_index), prepared)
+        self._window.append(frame)
+        self._beam, self._cost = frame.hypotheses, frame.cost
+        leader = frame.hypotheses[0]
+        if not frame.empty and not leader.failed:
+            self.last_good = leader.pose
+        if self.config.offline:
+            return []
+        out = []
+        while len(self._window) > self.config.lag:
+            out.append(self._decide_oldest())
+        return out
+
+    def finish(self) -> list[FrameResult]:
+        """The frames still undecided at the end of the video, decided by the best path."""
+        out = []
+        while self._window:
+            out.append(self._decide_oldest())
+        return out
+
+    def step(self, frame_index: int, prepared) -> FrameResult:
+        """Track one frame and return the best hypothesis of that frame now (no decoding lag).
+
+        For single frames and notebooks; :meth:`push` is the tracker's stream, and the two are
+        not to be mixed on one tracker.
+        """
+        frame = self._track(int(frame_index), prepared)
+        self._beam, self._cost = frame.hypotheses, frame.cost
+        if not frame.empty and not frame.hypotheses[0].failed:
+            self.last_good = frame.hypotheses[0].pose
+        return _result(frame, 0)
+
+    def _decide_oldest(self) -> FrameResult:
+        frames = self._window
+        path = backtrack([f.back for f in list(frames)[1:]], int(np.argmin(frames[-1].cost)))
+        return _result(frames.popleft(), path[0])
+
+    @property
+    def hypotheses(self) -> list[np.ndarray]:
+        """Poses of the current beam, best path cost first (metres, radians)."""
+        return [h.pose.copy() for h in self._beam]
+
+    # -- one frame ---------------------------------------------------------------------------
+    def costs(self, prepared) -> tuple[RegionCost, EdgeCost]:
+        """Region and edge costs of one prepared frame, for this tracker's model, camera and config."""
+        return (RegionCost(prepared.labels, self.model, self.camera),
+                EdgeCost(prepared.distance, self.model, self.camera, edge_gap=self.config.edge_gap_m))
+
+    def _track(self, index: int, prepared) -> _Frame:
+        cfg = self.config
+        t0 = time.perf_counter()
+        timings = {f"prepare_{k}": 1e3 * v for k, v in prepared.timings.items()}
+        timings["prepare"] = sum(timings.values())
+        if prepared.is_empty:
+            kept = [_Hypothesis(h.pose, h.joints, math.nan, math.nan, math.nan, False, "empty frame: pose kept",
+                                0.0, 0, 0) for h in self._beam]
+            timings.update(region=0.0, edge=0.0, recovery=0.0)
+            timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)
+            return _Frame(index, True, kept, self._cost - self._cost.min(), np.arange(len(kept)), 0, timings)
+        region_cost, edge_cost = self.costs(prepared)
+        candidates: list[tuple[Registration, str]] = []
+        evaluations = 0
+        t1 = time.perf_counter()
+        for rank, h in enumerate(self._beam):
+            budget = cfg.evaluations if rank == 0 else cfg.hypothesis_evaluations
+            if budget > 0:
+                reg = register(region_cost, edge_cost, h.pose, cfg, evaluations=budget)
+                evaluations += reg.evaluations
+                candidates.append((reg, "tracked" if rank == 0 else f"hypothesis {rank} tracked"))
+            if rank == 0:
+                t2 = time.perf_counter()
+                lead = candidates[0][0]
+                share = (lead.region.evaluations if lead.region else 0) / max(lead.evaluations, 1)
+                timings["region"] = 1e3 * (t2 - t1) * share
+                timings["edge"] = 1e3 * (t2 - t1) - timings["region"]
+        leader = candidates[0][0]
+        if cfg.recovery and leader.failed(cfg):
+            retry = register(region_cost, edge_cost, self.last_good, cfg, step_scale=cfg.recovery_step_scale)
+            evaluations += retry.evaluations
+            candidates.append((retry, "recovered from last good pose"))
+        if cfg.hand_reacquisition:
+            evaluations += self._reacquire(prepared, region_cost, edge_cost, leader, candidates)
+        if cfg.jumps and cfg.jumps_refined > 0:
+            evaluations += self._jump(region_cost, edge_cost, leader, candidates)
+        hypotheses = [self._hypothesis(reg, note) for reg, note in candidates]
+        transition = self._motion(self._beam, hypotheses)
+        cost, back = viterbi_step(self._cost, transition, np.array([h.unary for h in hypotheses]))
+        keep = self._select(hypotheses, cost)
+        timings["recovery"] = 1e3 * (time.perf_counter() - t2)
+        timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)
+        kept_cost = cost[keep]
+        return _Frame(index, False, [hypotheses[k] for k in keep], kept_cost - kept_cost[0], back[keep], evaluations,
+                      timings)
+
+    def _hypothesis(self, reg: Registration, note: str) -> _Hypothesis:
+        cfg = self.config
+        unary = cfg.region_weight * reg.region_residual + cfg.edge_weight * reg.edge_residual
+        if self.prior is not None and cfg.prior_weight > 0:
+            unary += cfg.prior_weight * self.prior.energy(reg.pose)
+        return _Hypothesis(reg.pose, self.model.joint_positions(reg.pose), reg.region_residual, reg.edge_residual,
+                           reg.edge_residual_after_region, reg.failed(cfg), note, float(unary),
+                           reg.region.iterations if reg.region else 0, reg.edge.iterations if reg.edge else 0)
+
+    def _motion(self, previous: list[_Hypothesis], current: list[_Hypothesis]) -> np.ndarray:
+        """Motion term between every pair (previous, current), shape (len(previous), len(current))."""
+        a = np.array([h.joints for h in previous])
+        b = np.array([h.joints for h in current])
+        squared = ((a[:, None] - b[None]) ** 2).sum(axis=3).mean(axis=2)
+        return np.minimum(0.5 * squared / self.config.motion_sigma_m ** 2, self.config.motion_cap)
+
+    def _select(self, hypotheses: list[_Hypothesis], cost: np.ndarray) -> list[int]:
+        """Indices of the survivors: cheapest path first, near-duplicates merged, at most ``beam``."""
+        keep: list[int] = []
+        for i in np.argsort(cost, kind="stable"):
+            joints = hypotheses[i].joints
+            if any(np.linalg.norm(joints - hypotheses[k].joints, axis=1).mean() < self.config.merge_distance_m
+                   for k in keep):
+                continue
+            keep.append(int(i))
+            if len(keep) == self.config.beam:
+                break
+        return keep
+
+    def _reacquire(self, prepared, region_cost, edge_cost, leader: Registration, candidates: list) -> int:
+        """Hand re-acquisition from the leader (see :class:`TrackerConfig`); returns evaluations used."""
+        joints = self.model.joint_positions(leader.pose)
+        targets = unexplained_hands(prepared.labels, joints, self.model, self.camera, self.config)
+        if len(targets) == 0:
+            return 0
+        proposals = reach_proposals(leader.pose, joints, targets, self.model, self.camera)
+        if not proposals:
+            return 0
+        values = [region_cost.evaluate_unchecked(q) for q in proposals]
+        retry = register(region_cost, edge_cost, proposals[int(np.argmin(values))], self.config)
+        candidates.append((retry, "hand re-acquired"))
+        return len(proposals) + retry.evaluations
+
+    def _jump(self, region_cost, edge_cost, leader: Registration, candidates: list) -> int:
+        """The leader's kinematic jumps, the lowest-F ones refined; returns evaluations used."""
+        jumps = jump_proposals(leader.pose, self.model)
+        values = np.array([region_cost.evaluate_unchecked(q) for _, q in jumps])
+        used = len(jumps)
+        for i in np.argsort(values, kind="stable")[: self.config.jumps_refined]:
+            name, q = jumps[int(i)]
+            reg = register(region_cost, edge_cost, q, self.config, evaluations=self.config.jump_evaluations)
+            used += reg.evaluations
+            candidates.append((reg, f"jump: {name}"))
+        return used
+
+    # -- exact state -------------------------------------------------------------------------
+    def state(self) -> dict[str, np.ndarray]:
+        """Everything the next :meth:`push` and :meth:`finish` depend on, as named arrays.
+
+        Restoring it with :meth:`restore` on a tracker built with the same model, camera and
+        config makes the following calls give bit-identical results (floats are stored exactly).
+        """
+        doc = {"beam": [_hyp_to_dict(h) for h in self._beam], "cost": self._cost.tolist(),
+               "last_good": self.last_good.tolist(),
+               "window": [{"index": f.index, "empty": f.empty, "hypotheses": [_hyp_to_dict(h) for h in f.hypotheses],
+                           "cost": f.cost.tolist(), "back": f.back.tolist(), "evaluations": f.evaluations,
+                           "timings": f.timings} for f in self._window]}
+        return {"tracker_json": np.array(json.dumps(doc))}
+
+    def restore(self, state: dict[str, np.ndarray]) -> None:
+        """Continue from a :meth:`state` (see there)."""
+        try:
+            doc = json.loads(str(np.asarray(state["tracker_json"])))
+            beam = [_hyp_from_dict(h) for h in doc["beam"]]
+            window = deque(_Frame(int(f["index"]), bool(f["empty"]), [_hyp_from_dict(h) for h in f["hypotheses"]],
+                                  np.array(f["cost"], dtype=np.float64), np.array(f["back"], dtype=np.int64),
+                                  int(f["evaluations"]), {k: float(v) for k, v in f["timings"].items()})
+                           for f in doc["window"])
+            cost, last_good = np.array(doc["cost"], dtype=np.float64), check_pose(doc["last_good"])
+        except (KeyError, TypeError, ValueError) as err:
+            raise ValueError(f"not a tracker state of this version: {err}") from None
+        self._beam, self._cost, self._window, self.last_good = beam, cost, window, last_good
+
+
+def _hyp_to_dict(h: _Hypothesis) -> dict:
+    return {"pose": h.pose.tolist(), "joints": h.joints.tolist(), "region": h.region_residual,
+            "edge": h.edge_residual, "edge_after_region": h.edge_residual_after_region, "failed": h.failed,
+            "note": h.note, "unary": h.unary, "region_iterations": h.region_iterations,
+            "edge_iterations": h.edge_iterations}
+
+
+def _hyp_from_dict(d: dict) -> _Hypothesis:
+    return _Hypothesis(np.array(d["pose"], dtype=np.float64), np.array(d["joints"], dtype=np.float64),
+                       float(d["region"]), float(d["edge"]), float(d["edge_after_region"]), bool(d["failed"]),
+                       str(d["note"]), float(d["unary"]), int(d["region_iterations"]), int(d["edge_iterations"]))
+
+
+def _result(frame: _Frame, k: int) -> FrameResult:
+    h = frame.hypotheses[k]
+    return FrameResult(frame.index, h.pose.copy(), h.joints.copy(), h.region_residual, h.edge_residual,
+                       h.edge_residual_after_region, h.failed, frame.empty, h.note, frame.evaluations,
+                       h.region_iterations, h.edge_iterations, dict(frame.timings), k, h.unary)
+
+
+def track_prepared(prepared_frames, tracker: Tracker, *, first_index: int = 0, progress: bool = False,
+                   description: str = "tracking") -> list[FrameResult]:
+    """Track frames already prepared by :func:`mocap.imaging.prepare_frame` (in memory).
+
+    Experiments reuse one image-side pass for many tracker settings this way.
+
+    Parameters
+    ----------
+    prepared_frames : sequence of PreparedFrame
+    tracker : Tracker
+        Fresh, or continuing a stream; :meth:`Tracker.finish` is called at the end.
+
+    Returns
+    -------
+    list of FrameResult
+        One per frame, in order.
+    """
+    from tqdm import tqdm
+
+    out: list[FrameResult] = []
+    for i, p in enumerate(tqdm(prepared_frames, desc=description, unit="frame", disable=not progress)):
+        out += tracker.push(first_index + i, p)
+    return out + tracker.finish()
