@@ -147,7 +147,7 @@ def check_pose(pose, *, name: str = "pose") -> np.ndarray:
     try:
         arr = np.array(pose, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be 23 numbers: {exc}") from None
+        raise ValueError(f"{name} must be {N_PARAMETERS} numbers: {exc}") from None
     if arr.shape != (N_PARAMETERS,):
         raise ValueError(f"{name} must have shape ({N_PARAMETERS},), got {arr.shape}")
     # the sum is NaN or infinite when a value is (a cheap test: 0.4 µs against 1.2; it may also
