@@ -61,7 +61,7 @@ def _store(out, k, r, parent, offset):
 def segment_transforms_into(pose, offsets, out):
     """Fill ``out`` (8, 3, 4) with [R | t] of every segment in camera coordinates.
 
-    The angle layout is DESIGN.md section 2; see :mod:`mocap.body.pose` for the signs.
+    The angle layout is docs/design.md section 2; see :mod:`mocap.body.pose` for the signs.
     """
     r_chest = _mul(_mul(_rot_y(pose[3]), _rot_x(pose[4])), _rot_z(pose[5]))
     _store(out, 0, r_chest, -1, pose[0:3])
@@ -121,7 +121,7 @@ def segment_transforms(pose, skeleton: Skeleton) -> np.ndarray:
     Parameters
     ----------
     pose : array_like, shape (23,)
-        Metres and radians (DESIGN.md section 2).
+        Metres and radians (docs/design.md section 2).
     skeleton : Skeleton
 
     Returns

@@ -1,6 +1,6 @@
 """The 23-parameter pose vector: names, units, neutral pose and biomechanical joint limits.
 
-Layout (DESIGN.md section 2): three root positions in metres (camera coordinates, x right,
+Layout (docs/design.md section 2): three root positions in metres (camera coordinates, x right,
 y down, z forward), then 20 joint angles in radians.
 
 Angle conventions (all rotations right-handed about the parent segment's axes; with every

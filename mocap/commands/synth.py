@@ -1,6 +1,6 @@
 """``python -m mocap synth NAME [--out DIR] [--frames N] [--seed S] [--size WxH] [--motion FILE]``.
 
-Writes a synthetic benchmark sequence with ground truth (DESIGN.md sections 3-4); see
+Writes a synthetic benchmark sequence with ground truth (docs/design.md sections 3-4); see
 :func:`mocap.synth.generate_sequence`.
 """
 from __future__ import annotations

@@ -22,7 +22,7 @@ Writing
 segment of :data:`~mocap.body.skeleton.SEGMENT_NAMES` with offsets from the body dimensions,
 in metres, in a Y-up world that is the camera frame turned upside down (``x`` right, ``y`` up,
 ``z`` towards the viewer: the camera sits at the origin looking along ``-z``, as an OpenGL or
-Blender camera does). Channels per joint, with the sign that maps our angle (DESIGN.md section
+Blender camera does). Channels per joint, with the sign that maps our angle (docs/design.md section
 2; ``m`` is +1 for the right arm and -1 for the left):
 
 ===========  ============================================  =====================================

@@ -1,4 +1,4 @@
-"""Pose tables as CSV: ``ground_truth.csv`` and the tracker's ``poses.csv`` (DESIGN.md section 4).
+"""Pose tables as CSV: ``ground_truth.csv`` and the tracker's ``poses.csv`` (docs/design.md section 4).
 
 Columns: ``frame``, the 23 pose parameters by name (positions in metres, angles in **degrees**,
 since these files are read by people), the joint columns ``<joint>_x, <joint>_y, <joint>_z``

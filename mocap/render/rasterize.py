@@ -177,7 +177,7 @@ def render(pose, model: BodyModel, camera: Camera, *, cull: bool = True,
     Parameters
     ----------
     pose : array_like, shape (23,)
-        Metres and radians (DESIGN.md section 2).
+        Metres and radians (docs/design.md section 2).
     model : BodyModel
     camera : Camera
     cull : bool

@@ -1,4 +1,4 @@
-"""Named benchmark sequences and the writer of a sequence folder (DESIGN.md section 4).
+"""Named benchmark sequences and the writer of a sequence folder (docs/design.md section 4).
 
 A folder holds ``frames/000000.png ...`` (or ``.jpg``), ``background.png`` (the empty scene
 through the same camera, with noise of its own), ``calibration.json`` (the true actor: body
