@@ -19,12 +19,12 @@ from mocap._numba import jit
 from mocap.imaging._validate import check_mask, check_rgb, foreground_bbox
 from mocap.imaging.config import DISTANCE_METHODS, EDGE_METHODS, ImagingConfig
 
-__all__ = ["detect_edges", "distance_map", "deriche_gradient"]
+__all__ = ["SOBEL_GAIN", "detect_edges", "distance_map", "deriche_gradient"]
 
 _DEFAULTS = ImagingConfig()
 #: Sobel's response to a unit slope ([-1, 0, 1] times the [1, 2, 1] smoothing): Deriche
 #: gradients are multiplied by it so both edge methods share the thresholds' units.
-_SOBEL_GAIN = 8.0
+SOBEL_GAIN = 8.0
 
 
 # --------------------------------------------------------------------------- Deriche
@@ -212,7 +212,7 @@ def _magnitude_kernel(gy, gx, gain, out):  # pragma: no cover - compiled
 def _deriche_edges(grey, sigma, low, high):
     gy, gx = deriche_gradient(grey, math.sqrt(math.pi) / sigma)
     magnitude = np.empty_like(gy)
-    _magnitude_kernel(gy, gx, _SOBEL_GAIN, magnitude)
+    _magnitude_kernel(gy, gx, SOBEL_GAIN, magnitude)
     strength = np.empty_like(magnitude)
     _nonmax_kernel(gy, gx, magnitude, low, strength)
     return _hysteresis(strength, high)
