@@ -3,7 +3,6 @@ captured frame, segmented colour classes, edges in the foreground with the dista
 the registered model drawn over the frame. Run ``python docs/overview.py``."""
 from __future__ import annotations
 
-import tempfile
 from pathlib import Path
 
 import matplotlib
@@ -13,13 +12,13 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from mocap.calibrate import Calibration, colour_model_from_pose
-from mocap.commands.demo import DEFAULT_SEQUENCE, bundled_sequence
 from mocap.imaging import prepare_frame
 from mocap.imaging.visual import colour_distance, colour_labels
 from mocap.io.overlay import draw_model
 from mocap.io.sequence import find_sequence
 from mocap.io.video import iter_frames, read_image
 from mocap.render import render
+from mocap.synth.benchmark import default_sequence
 from mocap.track import Tracker, TrackerConfig, track_prepared
 
 #: Frames shown (indices into the default sequence).
@@ -27,10 +26,7 @@ SHOWN = (10, 45)
 
 
 def main(out: Path = Path(__file__).with_name("overview.png")) -> None:
-    root = bundled_sequence()
-    if root is None:
-        from mocap.synth import generate_sequence
-        root = generate_sequence(DEFAULT_SEQUENCE, Path(tempfile.mkdtemp()) / "seq", frames=max(SHOWN) + 1, seed=0)
+    root = default_sequence(frames=max(SHOWN) + 1)
     seq = find_sequence(root)
     cal = Calibration.from_json(seq.calibration)
     model = cal.body_model(8)

@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from mocap.io.atomic import write_bytes_atomic
+from mocap.track import EDGE_STARTS
 
 #: Folder names below the results folder.
 DATA_DIR, UNITS_DIR = "data", "units"
@@ -40,7 +41,6 @@ FRAME_ARRAYS: tuple[str, ...] = (
     "frame", "region_residual", "edge_residual", "edge_residual_after_region", "empty", "evaluations",
     "region_iterations", "edge_iterations", "ms_prepare", "ms_region", "ms_edge", "ms_total", "poses", "joints",
     "mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg", "reprojection_px")
-EDGE_STARTS = ("region_simplex", "fresh")
 RUN_KINDS = ("run", "timing")
 
 

@@ -1,4 +1,4 @@
-"""``python -m mocap bench``: medians of every stage at every resolution (DESIGN.md section 6).
+"""``python -m mocap bench``: medians of every stage at every resolution (docs/design.md section 6).
 
 Stages (JSON ``stage`` names): ``render`` (pose + rasterize the label image, through the public
 ``LabelRenderer`` call), ``cost_region`` (render + non-overlapping ratio), ``cost_edge`` (render +
@@ -256,7 +256,7 @@ GROUPS: tuple[str, ...] = ("render", "imaging", "frame")
 
 def run_benchmark(*, quick: bool = False, with_llvmpipe: bool = True, stages: Sequence[str] = GROUPS,
                   progress: bool = True) -> dict:
-    """Run the benchmark and return the JSON-ready result of DESIGN.md section 6."""
+    """Run the benchmark and return the JSON-ready result of docs/design.md section 6."""
     from tqdm import tqdm
 
     min_runs, min_seconds = (20, 0.02) if quick else (300, 1.0)

@@ -20,34 +20,74 @@ Degenerate cases (documented, finite, never NaN):
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from mocap._numba import jit
-from mocap.body.kinematics import _segment_transforms
 from mocap.body.model import BodyModel
 from mocap.body.pose import check_pose
-from mocap.body.skeleton import SEGMENT_NAMES
 from mocap.labels import MAX_CLASSES, UNKNOWN
-from mocap.render import _raster
 from mocap.render.camera import Camera
-from mocap.render.rasterize import EDGE_DEPTH_GAP_M, _check_gap
+from mocap.render.rasterize import (EDGE_DEPTH_GAP_M, Buffers, Scene, check_edge_gap, occluding_edge_sum_and_clear,
+                                    render_scene_into)
 
 #: F when neither the image nor the model has a pixel of any class.
 EMPTY_REGION_COST = 1.0
 
 
+class RegionKernelArgs(NamedTuple):
+    """Second argument of :func:`region_cost_kernel` (:meth:`RegionCost.kernel_args`).
+
+    Attributes
+    ----------
+    scene : Scene
+    buffers : Buffers
+    target : ndarray, shape (height * width,), uint8
+        Flat label image.
+    target_count : ndarray, shape (m + 1,), int64
+        |A_c| per class c = 1..m (index 0 unused, 0).
+    n_classes : int
+        m.
+    model_count, overlap_count : ndarray, shape (m + 1,), int64
+        Scratch for |B_c| and |A_c ∩ B_c|.
+    ignore_unknown : bool
+    """
+
+    scene: Scene
+    buffers: Buffers
+    target: np.ndarray
+    target_count: np.ndarray
+    n_classes: int
+    model_count: np.ndarray
+    overlap_count: np.ndarray
+    ignore_unknown: bool
+
+
+class EdgeKernelArgs(NamedTuple):
+    """Second argument of :func:`edge_cost_kernel` (:meth:`EdgeCost.kernel_args`).
+
+    Attributes
+    ----------
+    scene : Scene
+    buffers : Buffers
+    distance : ndarray, shape (height * width,), float32, pixels
+        Flat distance-to-edge map.
+    marks : ndarray, shape (height * width,), bool
+        Scratch for the edge pixels found (all False between calls).
+    edge_gap : float, metres
+    no_edge_penalty : float, pixels
+    """
+
+    scene: Scene
+    buffers: Buffers
+    distance: np.ndarray
+    marks: np.ndarray
+    edge_gap: float
+    no_edge_penalty: float
+
+
 # ----------------------------------------------------------------------------- kernels
-@jit
-def _render_pose(pose, scene, buffers):
-    """Pose the mesh and rasterize it into the scratch buffers (culled). Fills buffers' bbox."""
-    offsets, vertices, vertex_segment, triangles, triangle_part, part_label, cam, width, height = scene
-    part_buf, depth_buf, xs, ys, iz, transforms, bbox, no_tri, no_count = buffers
-    _segment_transforms(pose, offsets, transforms)
-    _raster._project_vertices(transforms, vertices, vertex_segment, cam, xs, ys, iz)
-    _raster._rasterize(xs, ys, iz, triangles, triangle_part, width, height, True,
-                       part_buf, depth_buf, no_tri, no_count, bbox)
-
-
 @jit
 def _region_counts_and_clear(part_buf, depth_buf, part_label, width, bbox, target, n_classes,
                              model_count, overlap_count, ignore_unknown):
@@ -120,40 +160,42 @@ def _non_overlapping_ratio(target_count, model_count, overlap_count, n_classes):
 
 
 @jit
-def _region_cost(pose, scene, buffers, target, target_count, n_classes, model_count, overlap_count,
-                 ignore_unknown):
-    _render_pose(pose, scene, buffers)
-    part_buf, depth_buf, bbox = buffers[0], buffers[1], buffers[6]
-    _region_counts_and_clear(part_buf, depth_buf, scene[5], scene[7], bbox, target, n_classes,
-                             model_count, overlap_count, ignore_unknown)
-    return _non_overlapping_ratio(target_count, model_count, overlap_count, n_classes)
+def region_cost_kernel(pose, args):
+    """Compiled F(pose) (eq. 1) for an unchecked float64 (23,) pose and a
+    :class:`RegionKernelArgs`; leaves the buffers cleared."""
+    scene, buffers = args.scene, args.buffers
+    render_scene_into(pose, scene, buffers)
+    _region_counts_and_clear(buffers.part_ids, buffers.inverse_depth, scene.part_label, scene.width, buffers.box,
+                             args.target, args.n_classes, args.model_count, args.overlap_count, args.ignore_unknown)
+    return _non_overlapping_ratio(args.target_count, args.model_count, args.overlap_count, args.n_classes)
 
 
 @jit
-def _edge_cost(pose, scene, buffers, distance, mark_buf, min_gap, no_edge_penalty):
-    _render_pose(pose, scene, buffers)
-    total, n = _raster._edge_scan(buffers[0], buffers[1], scene[7], scene[8], buffers[6], min_gap,
-                                  distance, mark_buf, True)
+def edge_cost_kernel(pose, args):
+    """Compiled D_c(pose) (eq. 2), pixels, for an unchecked float64 (23,) pose and an
+    :class:`EdgeKernelArgs`; leaves the buffers cleared."""
+    render_scene_into(pose, args.scene, args.buffers)
+    total, n = occluding_edge_sum_and_clear(args.scene, args.buffers, args.edge_gap, args.distance, args.marks)
     if n == 0:
-        return no_edge_penalty
+        return args.no_edge_penalty
     return total / n
 
 
 @jit
 def _render_labels(pose, scene, buffers, out_box):
-    """Render class labels straight into the part buffer ``buffers[0]`` (the scene's
+    """Render class labels straight into the part buffer ``buffers.part_ids`` (the scene's
     triangle parts must be each triangle's label - 1) and reset the depth buffer.
 
     The part buffer must be 0 outside the inclusive pixel box ``out_box`` (x0, y0, x1, y1;
     x0 > x1 for none), as this function leaves it: the previous render is cleared from that
     box first, and the box becomes the new render's one.
     """
-    part_buf, depth_buf, bbox = buffers[0], buffers[1], buffers[6]
-    width = scene[7]
+    part_buf, depth_buf, bbox = buffers.part_ids, buffers.inverse_depth, buffers.box
+    width = scene.width
     for py in range(out_box[1], out_box[3] + 1):
         row = py * width
         part_buf[row + out_box[0]: row + out_box[2] + 1] = 0
-    _render_pose(pose, scene, buffers)
+    render_scene_into(pose, scene, buffers)
     for py in range(bbox[1], bbox[3] + 1):
         row = py * width
         depth_buf[row + bbox[0]: row + bbox[2] + 1] = 0.0
@@ -178,32 +220,17 @@ class LabelRenderer:
 
     def __init__(self, model: BodyModel, camera: Camera) -> None:
         self.model, self.camera = model, camera
-        scene = _scene(model, camera)
         # rasterize labels, not parts: triangle "part" = label - 1, which the rasterizer draws as label
         triangle_label = model.part_label[model.mesh.triangle_part].astype(np.int64) - 1
-        self._scene = scene[:4] + (triangle_label,) + scene[5:]
-        self._buffers = _buffers(model, camera)
+        self._scene = Scene.of(model, camera)._replace(triangle_part=triangle_label)
+        self._buffers = Buffers.of(model, camera)
         self._out_box = np.array([camera.width, camera.height, -1, -1], np.int64)   # nothing drawn
-        self._labels = self._buffers[0].reshape(camera.shape)
+        self._labels = self._buffers.part_ids.reshape(camera.shape)
         self._labels.flags.writeable = False
 
     def __call__(self, pose) -> np.ndarray:
         _render_labels(check_pose(pose), self._scene, self._buffers, self._out_box)
         return self._labels
-
-
-def _scene(model: BodyModel, camera: Camera) -> tuple:
-    m = model.mesh
-    return (model.skeleton.offsets, m.vertices, m.vertex_segment, m.triangles, m.triangle_part,
-            model.part_label, camera.as_array(), np.int64(camera.width), np.int64(camera.height))
-
-
-def _buffers(model: BodyModel, camera: Camera) -> tuple:
-    n_px = camera.width * camera.height
-    n_v = model.mesh.vertices.shape[0]
-    return (np.zeros(n_px, np.uint8), np.zeros(n_px, np.float32), np.empty(n_v, np.int64),
-            np.empty(n_v, np.int64), np.empty(n_v), np.empty((len(SEGMENT_NAMES), 3, 4)),
-            np.empty(4, np.int64), np.empty(0, np.int32), np.empty(0, np.int32))
 
 
 def _check_image(image: np.ndarray, camera: Camera, what: str) -> None:
@@ -249,8 +276,8 @@ class RegionCost:
         counts = np.bincount(self._target, minlength=256).astype(np.int64)
         self.target_count = counts[: m + 1].copy()
         self.target_count[0] = 0
-        self._scene = _scene(model, camera)
-        self._buffers = _buffers(model, camera)
+        self._scene = Scene.of(model, camera)
+        self._buffers = Buffers.of(model, camera)
         self._model_count = np.zeros(m + 1, np.int64)
         self._overlap_count = np.zeros(m + 1, np.int64)
         self.ignore_unknown = bool(ignore_unknown)
@@ -260,12 +287,12 @@ class RegionCost:
 
     def evaluate_unchecked(self, pose: np.ndarray) -> float:
         """As calling, without validating ``pose`` (a float64 (23,) array): for optimiser loops."""
-        return _region_cost(pose, *self.kernel_args())
+        return region_cost_kernel(pose, self.kernel_args())
 
-    def kernel_args(self) -> tuple:
-        """Arguments after ``pose`` of the compiled kernel (for compiled optimiser loops)."""
-        return (self._scene, self._buffers, self._target, self.target_count, self.n_classes,
-                self._model_count, self._overlap_count, self.ignore_unknown)
+    def kernel_args(self) -> RegionKernelArgs:
+        """Second argument of :func:`region_cost_kernel` (for compiled optimiser loops)."""
+        return RegionKernelArgs(self._scene, self._buffers, self._target, self.target_count, self.n_classes,
+                                self._model_count, self._overlap_count, self.ignore_unknown)
 
 
 class EdgeCost:
@@ -295,11 +322,11 @@ class EdgeCost:
         if not np.isfinite(penalty) or penalty < 0:
             raise ValueError(f"no_edge_penalty must be finite and non-negative, got {no_edge_penalty}")
         self.model, self.camera = model, camera
-        self.edge_gap = _check_gap(edge_gap)
+        self.edge_gap = check_edge_gap(edge_gap)
         self.no_edge_penalty = penalty
         self._distance = d.ravel()
-        self._scene = _scene(model, camera)
-        self._buffers = _buffers(model, camera)
+        self._scene = Scene.of(model, camera)
+        self._buffers = Buffers.of(model, camera)
         self._marks = np.zeros(camera.width * camera.height, np.bool_)
 
     def __call__(self, pose) -> float:
@@ -307,12 +334,12 @@ class EdgeCost:
 
     def evaluate_unchecked(self, pose: np.ndarray) -> float:
         """As calling, without validating ``pose`` (a float64 (23,) array): for optimiser loops."""
-        return _edge_cost(pose, self._scene, self._buffers, self._distance, self._marks, self.edge_gap,
-                          self.no_edge_penalty)
+        return edge_cost_kernel(pose, self.kernel_args())
 
-    def kernel_args(self) -> tuple:
-        """Arguments after ``pose`` of the compiled kernel (for compiled optimiser loops)."""
-        return (self._scene, self._buffers, self._distance, self._marks, self.edge_gap, self.no_edge_penalty)
+    def kernel_args(self) -> EdgeKernelArgs:
+        """Second argument of :func:`edge_cost_kernel` (for compiled optimiser loops)."""
+        return EdgeKernelArgs(self._scene, self._buffers, self._distance, self._marks, self.edge_gap,
+                              self.no_edge_penalty)
 
 
 def non_overlapping_ratio(target_labels: np.ndarray, model_labels: np.ndarray, n_classes: int, *,

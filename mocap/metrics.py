@@ -1,4 +1,4 @@
-"""Accuracy against ground truth (DESIGN.md section 5).
+"""Accuracy against ground truth (docs/design.md section 5).
 
 Every function takes whole sequences (frames first) and returns a plain float (or a per-frame
 array when asked). Joints are the upper-body joints of
@@ -36,7 +36,7 @@ from mocap.render.camera import Camera
 __all__ = ["DEFAULT_FAILURE_MM", "ROOT_JOINT", "SUMMARY_KEYS", "failure_rate", "joint_angle_error", "mpjpe",
            "pa_mpjpe", "reprojection_error", "root_relative_mpjpe", "summary"]
 
-#: Frames whose MPJPE exceeds this many millimetres count as failures (DESIGN.md section 5).
+#: Frames whose MPJPE exceeds this many millimetres count as failures (docs/design.md section 5).
 DEFAULT_FAILURE_MM: float = 100.0
 #: Keys of :func:`summary`, in order (the ``metrics`` object of ``run.json`` without ``fps``).
 SUMMARY_KEYS: tuple[str, ...] = ("mpjpe_mm", "root_relative_mpjpe_mm", "pa_mpjpe_mm", "angle_error_deg", "reprojection_px",

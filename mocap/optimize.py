@@ -26,6 +26,7 @@ from typing import Callable
 import numpy as np
 
 from mocap._numba import jit
+from mocap.body.pose import N_PARAMETERS
 
 # phases of the state machine
 _INIT, _REFLECT, _EXPAND, _CONTRACT_OUT, _CONTRACT_IN, _SHRINK, _DONE = 0, 1, 2, 3, 4, 5, 6
@@ -180,22 +181,22 @@ def _nm_run_costs(kind, region_args, edge_args, prior_centre, prior_weight, post
         for i in range(active.shape[0]):
             x[active[i]] = work[_TRIAL, i]
         if kind == 0:
-            f = _region_cost_kernel(x, *region_args)
+            f = region_cost_kernel(x, region_args)
         else:
-            f = _edge_cost_kernel(x, *edge_args)
+            f = edge_cost_kernel(x, edge_args)
         for i in range(x.shape[0]):
             d = x[i] - prior_centre[i]
             f += prior_weight[i] * d * d
         if posture[0] > 0.0:
             # the cost kernel has just posed the segments into its buffers
-            transforms = region_args[1][5] if kind == 0 else edge_args[1][5]
-            f += posture[0] * _arm_behind_penalty(transforms, _ARMS, posture[1], posture[2])
+            transforms = region_args.buffers.transforms if kind == 0 else edge_args.buffers.transforms
+            f += posture[0] * arm_behind_penalty_of_transforms(transforms, ARM_SEGMENTS, posture[1], posture[2])
         _nm_tell(simplex, values, lower, upper, coef, work, ist, fst, f)
 
 
-from mocap.body.posture import _ARMS, _arm_behind_penalty  # noqa: E402
-from mocap.cost import _edge_cost as _edge_cost_kernel  # noqa: E402  (compiled into the loop above)
-from mocap.cost import _region_cost as _region_cost_kernel  # noqa: E402
+from mocap.body.posture import ARM_SEGMENTS, arm_behind_penalty_of_transforms  # noqa: E402
+from mocap.cost import (EdgeKernelArgs, RegionKernelArgs, edge_cost_kernel,  # noqa: E402  (compiled into the loop above)
+                        region_cost_kernel)
 
 
 # ----------------------------------------------------------------------------- public API
@@ -384,19 +385,19 @@ def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-
         raise ValueError(f"minimize_cost takes a RegionCost or EdgeCost, got {type(cost).__name__}; "
                          "use minimize() for other callables")
     k = st.simplex.shape[1]
-    n = 23
+    n = N_PARAMETERS
     if active is None:
         active = np.arange(n)
         base = np.zeros(n)
     else:
         active = np.asarray(active, dtype=np.int64)
         if base is None or np.shape(base) != (n,):
-            raise ValueError("optimising a subset of the parameters needs the full (23,) base pose")
+            raise ValueError(f"optimising a subset of the parameters needs the full ({n},) base pose")
         base = np.ascontiguousarray(base, dtype=np.float64)
         if active.ndim != 1 or len(np.unique(active)) != len(active) or active.min() < 0 or active.max() >= n:
-            raise ValueError("active must list distinct parameter indices in 0..22")
+            raise ValueError(f"active must list distinct parameter indices in 0..{n - 1}")
     if active.shape[0] != k:
-        raise ValueError(f"mocap costs take 23 parameters: the simplex has {k} columns for {active.shape[0]} "
+        raise ValueError(f"mocap costs take {n} parameters: the simplex has {k} columns for {active.shape[0]} "
                          "active parameters")
     if prior is None:
         centre, weight = np.zeros(n), np.zeros(n)
@@ -404,7 +405,7 @@ def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-
         centre, weight = (np.ascontiguousarray(a, dtype=np.float64) for a in prior)
         if centre.shape != (n,) or weight.shape != (n,) or not (np.isfinite(centre).all() and np.isfinite(weight).all()) \
                 or (weight < 0).any():
-            raise ValueError("prior must be (centre, weight): finite (23,) arrays, weights >= 0")
+            raise ValueError(f"prior must be (centre, weight): finite ({n},) arrays, weights >= 0")
     if posture is None:
         posture_args = np.array([0.0, 0.0, 1.0])
     else:
@@ -420,12 +421,12 @@ class _DummyArgs:
     """Type-correct placeholder arguments for the cost kind a compiled run does not use."""
 
     @staticmethod
-    def region(cost) -> tuple:
-        scene, buffers = cost.kernel_args()[:2]
-        return (scene, buffers, np.zeros(0, np.uint8), np.zeros(1, np.int64), 0,
-                np.zeros(1, np.int64), np.zeros(1, np.int64), True)
+    def region(cost) -> RegionKernelArgs:
+        args = cost.kernel_args()
+        return RegionKernelArgs(args.scene, args.buffers, np.zeros(0, np.uint8), np.zeros(1, np.int64), 0,
+                                np.zeros(1, np.int64), np.zeros(1, np.int64), True)
 
     @staticmethod
-    def edge(cost) -> tuple:
-        scene, buffers = cost.kernel_args()[:2]
-        return (scene, buffers, np.zeros(0, np.float32), np.zeros(0, np.bool_), 0.0, 0.0)
+    def edge(cost) -> EdgeKernelArgs:
+        args = cost.kernel_args()
+        return EdgeKernelArgs(args.scene, args.buffers, np.zeros(0, np.float32), np.zeros(0, np.bool_), 0.0, 0.0)

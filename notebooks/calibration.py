@@ -5,6 +5,8 @@
 #     text_representation:
 #       extension: .py
 #       format_name: percent
+#       format_version: '1.3'
+#       jupytext_version: 1.19.6
 #   kernelspec:
 #     display_name: Python 3
 #     language: python
@@ -25,9 +27,6 @@ import os
 OUT = os.environ.get("MOCAP_NOTEBOOK_OUT", "calibration-notebook.json")
 
 # %%
-import tempfile
-from pathlib import Path
-
 import ipywidgets as widgets
 import matplotlib.pyplot as plt
 import numpy as np
@@ -35,16 +34,13 @@ from IPython.display import display
 
 from mocap.body import ANGLE_NAMES, JOINT_LIMITS, PARAMETER_INDEX, PART_NAMES, BodyDimensions
 from mocap.calibrate import Calibration, auto_calibrate
-from mocap.commands.demo import DEFAULT_SEQUENCE, bundled_sequence
 from mocap.io.overlay import draw_model
 from mocap.io.sequence import find_sequence
 from mocap.io.video import iter_frames, read_image
 from mocap.render import render
+from mocap.synth.benchmark import default_sequence
 
-root = bundled_sequence()
-if root is None:
-    from mocap.synth import generate_sequence
-    root = generate_sequence(DEFAULT_SEQUENCE, Path(tempfile.mkdtemp()) / "default", frames=5, seed=0)
+root = default_sequence(frames=5)
 seq = find_sequence(root)
 frame = next(iter_frames(seq.frames, 0, 1))
 background = read_image(seq.background)

@@ -5,6 +5,8 @@
 #     text_representation:
 #       extension: .py
 #       format_name: percent
+#       format_version: '1.3'
+#       jupytext_version: 1.19.6
 #   kernelspec:
 #     display_name: Python 3
 #     language: python
@@ -31,15 +33,11 @@ N_FRAMES = int(os.environ.get("MOCAP_NOTEBOOK_FRAMES", "60"))   # frames tracked
 EVALUATIONS = 500                                               # cost evaluations per frame
 
 # %%
-import tempfile
-from pathlib import Path
-
 import matplotlib.pyplot as plt
 import numpy as np
 
 from mocap.body import PARAMETER_INDEX, clamp_to_limits
 from mocap.calibrate import Calibration, colour_model_from_pose
-from mocap.commands.demo import DEFAULT_SEQUENCE, bundled_sequence
 from mocap.cost import EdgeCost, RegionCost
 from mocap.imaging import prepare_frame
 from mocap.imaging.visual import colour_distance, colour_labels
@@ -49,12 +47,10 @@ from mocap.io.sequence import find_sequence
 from mocap.io.video import iter_frames, read_image
 from mocap.metrics import mpjpe
 from mocap.render import render
+from mocap.synth.benchmark import default_sequence
 from mocap.track import Tracker, TrackerConfig, register, track_prepared
 
-root = bundled_sequence()
-if root is None:
-    from mocap.synth import generate_sequence
-    root = generate_sequence(DEFAULT_SEQUENCE, Path(tempfile.mkdtemp()) / "default", frames=N_FRAMES, seed=0)
+root = default_sequence(frames=N_FRAMES)
 seq = find_sequence(root)
 calibration = Calibration.from_json(seq.calibration)
 camera = calibration.camera

@@ -1,7 +1,30 @@
-"""Slow, obviously-correct pure-NumPy twins of the compiled kernels.
+"""Slow, obviously-correct pure-NumPy twins of the compiled kernels, for the tests.
 
-Every ``@jit`` kernel in :mod:`mocap` is compared against its twin here in the tests.
-Sections: rendering, costs, imaging.
+Every ``@jit`` kernel of :mod:`mocap` is compared against an independent answer; most twins
+are here (sections: body, optimiser, costs, synth, imaging):
+
+=========================================================  ===============================  =====================================
+compiled kernel                                            twin                             test
+=========================================================  ===============================  =====================================
+``body.kinematics`` (segment transforms, points)           :func:`naive_segment_transforms`  ``tests/body/test_kinematics.py``
+``body.ik`` (arm reach, Levenberg–Marquardt)               :func:`naive_reach_arm` (scipy)   ``tests/body/test_ik.py``
+``optimize`` (ask/tell Nelder–Mead, compiled cost loop)    :func:`naive_nelder_mead`         ``tests/test_optimize.py``
+``cost`` (region counts, eq. 1; edge mean, eq. 2)          :func:`naive_non_overlapping_ratio`, ``tests/test_cost.py``
+                                                           :func:`naive_mean_edge_distance`
+``synth.shading`` (surface samples)                        :func:`naive_surface_samples`     ``tests/synth/test_sequence.py``
+``imaging.background`` (change mask)                       :func:`naive_change_mask`         ``tests/imaging/test_background.py``
+``imaging.colour`` (HSV, classification)                   :func:`naive_hsv`,                ``tests/imaging/test_colour.py``
+                                                           :func:`naive_classify`
+``imaging.edges`` (Deriche recursion)                      :func:`naive_deriche_1d`          ``tests/imaging/test_edges.py``
+``imaging.edges`` (magnitude, non-maximum suppression,     :func:`naive_deriche_edges`       ``tests/imaging/test_edges.py``
+hysteresis)
+``imaging.edges`` (chamfer 3-4 and Euclidean distance)     :func:`naive_distance`            ``tests/imaging/test_edges.py``
+=========================================================  ===============================  =====================================
+
+Two are checked elsewhere: the rasterizer and the occluding-edge scan against the NumPy
+reference rasterizer of the library (:mod:`mocap.render.reference`, which the package also
+keeps for reading; ``tests/render/test_rasterize.py``), and the posture penalty
+(``body.posture``) against hand-computed values (``tests/body/test_posture.py``).
 """
 from __future__ import annotations
 
@@ -265,3 +288,55 @@ def naive_deriche_1d(x, a, b):
         y2[i] = a[2] * x1 + a[3] * x2
         y2[i] += (b[0] * y2[i + 1] if i + 1 < n else 0.0) + (b[1] * y2[i + 2] if i + 2 < n else 0.0)
     return (y1 + y2)[pad:pad + len(x)]
+
+
+def naive_nonmax_suppression(gy, gx, magnitude, low):
+    """Canny's non-maximum suppression: a pixel (not on the border) with magnitude >= ``low`` is
+    kept when it is >= the magnitude one step ahead along its gradient and > the one a step behind.
+
+    The step goes to the 3x3 ring (the gradient scaled by 1 / max(|gx|, |gy|)) and is taken
+    towards +column when |gx| >= |gy|, else towards +row; the ring's values come from
+    ``scipy.ndimage.map_coordinates`` (bilinear). Returns the kept magnitudes, 0 elsewhere.
+    """
+    from scipy import ndimage
+
+    h, w = magnitude.shape
+    out = np.zeros_like(magnitude)
+    for r in range(1, h - 1):
+        for c in range(1, w - 1):
+            m, dy, dx = magnitude[r, c], gy[r, c], gx[r, c]
+            if m < low or (dx == 0 and dy == 0):
+                continue
+            if abs(dx) >= abs(dy):
+                step = np.array([dy / dx, 1.0])
+            else:
+                step = np.array([1.0, dx / dy])
+            ahead, behind = ndimage.map_coordinates(magnitude, np.array([[r, c] + step, [r, c] - step]).T, order=1)
+            if m >= ahead and m > behind:
+                out[r, c] = m
+    return out
+
+
+def naive_hysteresis(strength, high):
+    """Pixels with ``strength > 0`` joined (8-neighbour, by flood fill) to one with ``strength >= high``."""
+    h, w = strength.shape
+    keep = np.zeros((h, w), bool)
+    stack = [tuple(p) for p in np.argwhere(strength >= high) if strength[tuple(p)] > 0]
+    while stack:
+        r, c = stack.pop()
+        if keep[r, c]:
+            continue
+        keep[r, c] = True
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                rr, cc = r + dr, c + dc
+                if 0 <= rr < h and 0 <= cc < w and not keep[rr, cc] and strength[rr, cc] > 0:
+                    stack.append((rr, cc))
+    return keep
+
+
+def naive_deriche_edges(gy, gx, gain, low, high):
+    """Deriche edges from the gradient: magnitude ``gain * hypot(gy, gx)``, non-maximum
+    suppression, hysteresis (the steps of :func:`mocap.imaging.detect_edges` after the gradient)."""
+    magnitude = gain * np.hypot(gy, gx)
+    return naive_hysteresis(naive_nonmax_suppression(gy, gx, magnitude, low), high)

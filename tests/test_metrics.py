@@ -1,4 +1,4 @@
-"""Metrics of DESIGN.md section 5 on cases worked out by hand."""
+"""Metrics of docs/design.md section 5 on cases worked out by hand."""
 import math
 
 import numpy as np

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from mocap._numba import jit
-from mocap.body.kinematics import Skeleton, _apply_transforms, _segment_transforms, joint_positions
+from mocap.body.kinematics import Skeleton, apply_transforms_into, segment_transforms_into, joint_positions
 from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX, check_pose
 from mocap.body.skeleton import JOINT_NAMES
 
@@ -40,8 +40,8 @@ REACH_STARTS_DEG = ((45.0, 45.0, 0.0, 90.0), (120.0, 30.0, 0.0, 30.0), (0.0, 90.
 
 @jit
 def _hand_point(pose, offsets, hand_segment, hand_local, transforms, point):
-    _segment_transforms(pose, offsets, transforms)
-    _apply_transforms(transforms, hand_segment, hand_local, point)
+    segment_transforms_into(pose, offsets, transforms)
+    apply_transforms_into(transforms, hand_segment, hand_local, point)
 
 
 @jit

@@ -58,10 +58,10 @@ def _store(out, k, r, parent, offset):
 
 
 @jit
-def _segment_transforms(pose, offsets, out):
+def segment_transforms_into(pose, offsets, out):
     """Fill ``out`` (8, 3, 4) with [R | t] of every segment in camera coordinates.
 
-    The angle layout is DESIGN.md section 2; see :mod:`mocap.body.pose` for the signs.
+    The angle layout is docs/design.md section 2; see :mod:`mocap.body.pose` for the signs.
     """
     r_chest = _mul(_mul(_rot_y(pose[3]), _rot_x(pose[4])), _rot_z(pose[5]))
     _store(out, 0, r_chest, -1, pose[0:3])
@@ -81,7 +81,7 @@ def _segment_transforms(pose, offsets, out):
 
 
 @jit
-def _apply_transforms(transforms, segment, local, out):
+def apply_transforms_into(transforms, segment, local, out):
     """out[i] = R[segment[i]] @ local[i] + t[segment[i]] for every point."""
     for i in range(local.shape[0]):
         s = segment[i]
@@ -121,7 +121,7 @@ def segment_transforms(pose, skeleton: Skeleton) -> np.ndarray:
     Parameters
     ----------
     pose : array_like, shape (23,)
-        Metres and radians (DESIGN.md section 2).
+        Metres and radians (docs/design.md section 2).
     skeleton : Skeleton
 
     Returns
@@ -132,7 +132,7 @@ def segment_transforms(pose, skeleton: Skeleton) -> np.ndarray:
     """
     q = check_pose(pose)
     out = np.empty((len(SEGMENT_NAMES), 3, 4))
-    _segment_transforms(q, skeleton.offsets, out)
+    segment_transforms_into(q, skeleton.offsets, out)
     return out
 
 
@@ -146,5 +146,5 @@ def joint_positions(pose, skeleton: Skeleton) -> np.ndarray:
     """
     transforms = segment_transforms(pose, skeleton)
     out = np.empty((len(JOINT_NAMES), 3))
-    _apply_transforms(transforms, skeleton.joint_segment, skeleton.joint_local, out)
+    apply_transforms_into(transforms, skeleton.joint_segment, skeleton.joint_local, out)
     return out

@@ -94,7 +94,7 @@ class BodyModel:
 
     def posed_vertices(self, pose) -> np.ndarray:
         """Mesh vertices in camera coordinates for ``pose``, shape (V, 3), float64, metres."""
-        from mocap.body.kinematics import _apply_transforms
+        from mocap.body.kinematics import apply_transforms_into
         out = np.empty_like(self.mesh.vertices)
-        _apply_transforms(self.segment_transforms(pose), self.mesh.vertex_segment, self.mesh.vertices, out)
+        apply_transforms_into(self.segment_transforms(pose), self.mesh.vertex_segment, self.mesh.vertices, out)
         return out

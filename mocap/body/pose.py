@@ -1,6 +1,6 @@
 """The 23-parameter pose vector: names, units, neutral pose and biomechanical joint limits.
 
-Layout (DESIGN.md section 2): three root positions in metres (camera coordinates, x right,
+Layout (docs/design.md section 2): three root positions in metres (camera coordinates, x right,
 y down, z forward), then 20 joint angles in radians.
 
 Angle conventions (all rotations right-handed about the parent segment's axes; with every
@@ -147,7 +147,7 @@ def check_pose(pose, *, name: str = "pose") -> np.ndarray:
     try:
         arr = np.array(pose, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be 23 numbers: {exc}") from None
+        raise ValueError(f"{name} must be {N_PARAMETERS} numbers: {exc}") from None
     if arr.shape != (N_PARAMETERS,):
         raise ValueError(f"{name} must have shape ({N_PARAMETERS},), got {arr.shape}")
     # the sum is NaN or infinite when a value is (a cheap test: 0.4 µs against 1.2; it may also

@@ -19,18 +19,18 @@ from __future__ import annotations
 import numpy as np
 
 from mocap._numba import jit
-from mocap.body.kinematics import Skeleton, _segment_transforms
+from mocap.body.kinematics import Skeleton, segment_transforms_into
 from mocap.body.pose import check_pose
 from mocap.body.skeleton import SEGMENT_NAMES
 
 _CHEST = SEGMENT_NAMES.index("chest")
 #: (shoulder segment, elbow segment, wrist segment) per arm: each segment's origin is its joint.
-_ARMS = np.array([[SEGMENT_NAMES.index(f"{side}_upper_arm"), SEGMENT_NAMES.index(f"{side}_forearm"),
+ARM_SEGMENTS = np.array([[SEGMENT_NAMES.index(f"{side}_upper_arm"), SEGMENT_NAMES.index(f"{side}_forearm"),
                    SEGMENT_NAMES.index(f"{side}_hand")] for side in "rl"], dtype=np.int64)
 
 
 @jit
-def _arm_behind_penalty(transforms, arms, margin_m, sigma_m):
+def arm_behind_penalty_of_transforms(transforms, arms, margin_m, sigma_m):
     """Posture penalty of posed segment transforms (``transforms``: (segments, 3, 4), metres)."""
     total = 0.0
     for a in range(arms.shape[0]):
@@ -78,8 +78,8 @@ def arm_behind_penalty(pose, skeleton: Skeleton, *, margin_m: float = 0.05, sigm
     if not (np.isfinite(sigma_m) and sigma_m > 0.0):
         raise ValueError(f"sigma_m must be > 0 metres, got {sigma_m}")
     transforms = np.empty((len(SEGMENT_NAMES), 3, 4))
-    _segment_transforms(q, skeleton.offsets, transforms)
-    return float(_arm_behind_penalty(transforms, _ARMS, float(margin_m), float(sigma_m)))
+    segment_transforms_into(q, skeleton.offsets, transforms)
+    return float(arm_behind_penalty_of_transforms(transforms, ARM_SEGMENTS, float(margin_m), float(sigma_m)))
 
 
 __all__ = ["arm_behind_penalty"]

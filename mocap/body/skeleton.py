@@ -39,7 +39,7 @@ DEFAULT_PART_CLASS = MappingProxyType({
     "l_upper_arm": "clothes", "l_forearm": "clothes", "l_hand": "skin",
 })
 
-#: Named joints (DESIGN.md section 4 column order).
+#: Named joints (docs/design.md section 4 column order).
 JOINT_NAMES: tuple[str, ...] = (
     "head", "neck",
     "r_shoulder", "r_elbow", "r_wrist", "r_hand",

@@ -7,17 +7,6 @@ from pathlib import Path
 
 from mocap.commands._common import add_tracker_options, print_summary, tracker_config
 
-#: Name and length of the sequence regenerated when the bundled one is not installed.
-DEFAULT_SEQUENCE = "gestures-1"
-
-
-def bundled_sequence() -> Path | None:
-    """``data/default`` of the source tree, when the package runs from one (editable install)."""
-    import mocap
-
-    path = Path(mocap.__file__).resolve().parents[1] / "data" / "default"
-    return path if (path / "calibration.json").is_file() else None
-
 
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser("demo", help="track the bundled default sequence and report accuracy and speed",
@@ -34,14 +23,9 @@ def run(args: argparse.Namespace) -> int:
     from mocap.io.sequence import find_sequence
     from mocap.io.video import iter_frames, read_image
     from mocap.run import track_video
+    from mocap.synth.benchmark import default_sequence
 
-    root = bundled_sequence()
-    if root is None:
-        from mocap.synth import generate_sequence
-        root = args.out / "sequence"
-        if not (root / "calibration.json").is_file():
-            print(f"bundled data/default not found: generating {DEFAULT_SEQUENCE} into {root}")
-            generate_sequence(DEFAULT_SEQUENCE, root, frames=100, seed=0)
+    root = default_sequence(args.out / "sequence")
     seq = find_sequence(root)
     calibration = Calibration.from_json(seq.calibration)
     if args.auto_calibrate:

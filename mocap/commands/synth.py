@@ -1,24 +1,15 @@
 """``python -m mocap synth NAME [--out DIR] [--frames N] [--seed S] [--size WxH] [--motion FILE]``.
 
-Writes a synthetic benchmark sequence with ground truth (DESIGN.md sections 3-4); see
+Writes a synthetic benchmark sequence with ground truth (docs/design.md sections 3-4); see
 :func:`mocap.synth.generate_sequence`.
 """
 from __future__ import annotations
 
 import argparse
-import re
 import time
 from pathlib import Path
 
-from mocap.synth.sequence import FRAME_FORMATS, SEQUENCES, SEQUENCE_NAMES, generate_sequence
-
-
-def parse_size(text: str) -> tuple[int, int]:
-    """``"160x120"`` -> ``(160, 120)``; ValueError with the expected form otherwise."""
-    match = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
-    if not match:
-        raise ValueError(f"--size must look like 160x120 (width x height in pixels), got {text!r}")
-    return int(match.group(1)), int(match.group(2))
+from mocap.synth.sequence import FRAME_FORMATS, SEQUENCES, SEQUENCE_NAMES, generate_sequence, parse_size
 
 
 def _names_help() -> str:

@@ -59,7 +59,7 @@ def _change_mask_kernel(frame, frame_scale, background, background_scale, change
             out[y, x] = cr * cr + cg * cg + cb * cb > allowed * allowed
 
 
-def _change_mask(frame, frame_scale, background, background_scale, config):
+def change_mask_unchecked(frame, frame_scale, background, background_scale, config):
     out = np.empty(frame.shape[:2], dtype=np.bool_)
     _change_mask_kernel(frame, frame_scale, background, background_scale,
                         config.change_threshold ** 2, config.shadow_min_brightness,
@@ -87,7 +87,7 @@ def _remove_small_holes(mask: np.ndarray, max_area: int) -> np.ndarray:
     return morphology.remove_small_holes(mask, area_threshold=max_area + 1)
 
 
-def _clean(raw: np.ndarray, config: ImagingConfig) -> np.ndarray:
+def clean_mask_unchecked(raw: np.ndarray, config: ImagingConfig) -> np.ndarray:
     """Morphological clean-up (square structuring elements, scipy rank filters).
 
     Only the erosion of the opening sees the whole frame; the rest works on the bounding box
@@ -137,7 +137,7 @@ def clean_mask(raw: np.ndarray, config: ImagingConfig | None = None) -> np.ndarr
     """
     if not isinstance(raw, np.ndarray) or raw.dtype != np.bool_ or raw.ndim != 2:
         raise ValueError("raw must be a 2-D boolean array")
-    return _clean(raw, config or _DEFAULT_CONFIG)
+    return clean_mask_unchecked(raw, config or _DEFAULT_CONFIG)
 
 
 def subtract_background(frame: np.ndarray, background: np.ndarray,
@@ -177,8 +177,8 @@ def subtract_background(frame: np.ndarray, background: np.ndarray,
     background, background_scale = check_rgb(background, "background")
     check_same_size(frame, background, "background")
     config = config or _DEFAULT_CONFIG
-    raw = _change_mask(frame, frame_scale, background, background_scale, config)
-    return _clean(raw, config) if clean else raw
+    raw = change_mask_unchecked(frame, frame_scale, background, background_scale, config)
+    return clean_mask_unchecked(raw, config) if clean else raw
 
 
 def median_background(frames: Iterable[np.ndarray]) -> np.ndarray:

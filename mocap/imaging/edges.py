@@ -19,12 +19,12 @@ from mocap._numba import jit
 from mocap.imaging._validate import check_mask, check_rgb, foreground_bbox
 from mocap.imaging.config import DISTANCE_METHODS, EDGE_METHODS, ImagingConfig
 
-__all__ = ["detect_edges", "distance_map", "deriche_gradient"]
+__all__ = ["SOBEL_GAIN", "detect_edges", "distance_map", "deriche_gradient"]
 
 _DEFAULTS = ImagingConfig()
 #: Sobel's response to a unit slope ([-1, 0, 1] times the [1, 2, 1] smoothing): Deriche
 #: gradients are multiplied by it so both edge methods share the thresholds' units.
-_SOBEL_GAIN = 8.0
+SOBEL_GAIN = 8.0
 
 
 # --------------------------------------------------------------------------- Deriche
@@ -212,7 +212,7 @@ def _magnitude_kernel(gy, gx, gain, out):  # pragma: no cover - compiled
 def _deriche_edges(grey, sigma, low, high):
     gy, gx = deriche_gradient(grey, math.sqrt(math.pi) / sigma)
     magnitude = np.empty_like(gy)
-    _magnitude_kernel(gy, gx, _SOBEL_GAIN, magnitude)
+    _magnitude_kernel(gy, gx, SOBEL_GAIN, magnitude)
     strength = np.empty_like(magnitude)
     _nonmax_kernel(gy, gx, magnitude, low, strength)
     return _hysteresis(strength, high)
@@ -220,7 +220,7 @@ def _deriche_edges(grey, sigma, low, high):
 
 # --------------------------------------------------------------------------- edges
 
-def _edges(frame, scale, foreground, method, sigma, low, high, dilation, silhouette):
+def detect_edges_unchecked(frame, scale, foreground, method, sigma, low, high, dilation, silhouette):
     h, w = frame.shape[:2]
     if foreground is None:
         region = None
@@ -303,7 +303,7 @@ def detect_edges(frame: np.ndarray, foreground: np.ndarray | None = None, *,
         raise ValueError("thresholds must satisfy 0 <= low_threshold <= high_threshold")
     if isinstance(dilation, bool) or not isinstance(dilation, (int, np.integer)) or dilation < 0:
         raise ValueError(f"dilation must be a non-negative integer, got {dilation!r}")
-    return _edges(frame, scale, foreground, method, float(sigma), float(low_threshold),
+    return detect_edges_unchecked(frame, scale, foreground, method, float(sigma), float(low_threshold),
                   float(high_threshold), int(dilation), bool(silhouette))
 
 
@@ -346,7 +346,7 @@ def _chamfer34_kernel(edges, cap, out):  # pragma: no cover - compiled
             out[r, c] = v
 
 
-def _distance(edges, method, max_distance):
+def distance_map_unchecked(edges, method, max_distance):
     h, w = edges.shape
     out = np.full((h, w), max_distance, dtype=np.float32)
     box = foreground_bbox(edges, int(math.ceil(max_distance)))
@@ -393,4 +393,4 @@ def distance_map(edges: np.ndarray, *, max_distance: float = _DEFAULTS.max_dista
     if not (isinstance(max_distance, (int, float)) and math.isfinite(max_distance)
             and max_distance > 0):
         raise ValueError(f"max_distance must be a positive finite number, got {max_distance!r}")
-    return _distance(edges, method, float(max_distance))
+    return distance_map_unchecked(edges, method, float(max_distance))

@@ -7,10 +7,10 @@ import time
 import numpy as np
 
 from mocap.imaging._validate import check_rgb, check_same_size
-from mocap.imaging.background import _change_mask, _clean
+from mocap.imaging.background import change_mask_unchecked, clean_mask_unchecked
 from mocap.imaging.colour import ColourModel
 from mocap.imaging.config import ImagingConfig
-from mocap.imaging.edges import _distance, _edges
+from mocap.imaging.edges import distance_map_unchecked, detect_edges_unchecked
 from mocap.labels import BACKGROUND, UNKNOWN
 
 __all__ = ["PreparedFrame", "prepare_frame"]
@@ -97,7 +97,7 @@ def prepare_frame(frame: np.ndarray, background: np.ndarray | None, colour_model
     clock = time.perf_counter
     t0 = clock()
     if background is not None:
-        foreground = _clean(_change_mask(frame, scale, background, background_scale, config),
+        foreground = clean_mask_unchecked(change_mask_unchecked(frame, scale, background, background_scale, config),
                             config)
         t1 = clock()
         labels = colour_model._classify(frame, scale, foreground, config.colour_threshold)
@@ -107,16 +107,16 @@ def prepare_frame(frame: np.ndarray, background: np.ndarray | None, colour_model
         everything = np.ones(frame.shape[:2], dtype=np.bool_)
         labels = colour_model._classify(frame, scale, everything, config.colour_threshold)
         t1 = clock()
-        foreground = _clean((labels != UNKNOWN) & (labels != BACKGROUND), config)
+        foreground = clean_mask_unchecked((labels != UNKNOWN) & (labels != BACKGROUND), config)
         labels[~foreground] = BACKGROUND
         t2 = clock()
         colour_time, background_time = t1 - t0, t2 - t1
     is_empty = not foreground.any()
-    edges = _edges(frame, scale, foreground, config.edge_method, config.edge_sigma,
+    edges = detect_edges_unchecked(frame, scale, foreground, config.edge_method, config.edge_sigma,
                    config.edge_low_threshold, config.edge_high_threshold, config.edge_dilation,
                    config.silhouette_edges)
     t3 = clock()
-    distance = _distance(edges, config.distance_method, config.max_distance)
+    distance = distance_map_unchecked(edges, config.distance_method, config.max_distance)
     t4 = clock()
     timings = {"background": background_time, "colour": colour_time, "edges": t3 - t2,
                "distance": t4 - t3}

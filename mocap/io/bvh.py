@@ -22,7 +22,7 @@ Writing
 segment of :data:`~mocap.body.skeleton.SEGMENT_NAMES` with offsets from the body dimensions,
 in metres, in a Y-up world that is the camera frame turned upside down (``x`` right, ``y`` up,
 ``z`` towards the viewer: the camera sits at the origin looking along ``-z``, as an OpenGL or
-Blender camera does). Channels per joint, with the sign that maps our angle (DESIGN.md section
+Blender camera does). Channels per joint, with the sign that maps our angle (docs/design.md section
 2; ``m`` is +1 for the right arm and -1 for the left):
 
 ===========  ============================================  =====================================
@@ -58,21 +58,31 @@ from mocap.body.pose import N_PARAMETERS, PARAMETER_INDEX, check_pose
 from mocap.body.skeleton import SEGMENT_NAMES, SEGMENT_PARENTS, part_spans, segment_offsets
 from mocap.io.atomic import write_text_atomic
 
-__all__ = ["CAMERA_TO_BVH", "CHANNEL_NAMES", "CONVENTIONS", "Bvh", "BvhJoint", "pose_channels",
+__all__ = ["CAMERA_TO_BVH", "CHANNEL_NAMES", "CONVENTIONS", "JOINT_MAPS", "Bvh", "BvhJoint", "pose_channels",
            "read_bvh", "read_pose_bvh", "write_bvh"]
 
 #: Channel names accepted, in their canonical spelling.
 CHANNEL_NAMES: tuple[str, ...] = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
 _CANONICAL = {c.lower(): c for c in CHANNEL_NAMES}
 
-#: Joints that identify each naming convention (all must be present).
-CONVENTIONS = MappingProxyType({
-    "mocap": ("chest", "head", "r_upper_arm", "r_forearm", "r_hand", "l_upper_arm", "l_forearm", "l_hand"),
-    "motionbuilder": ("Hips", "Spine1", "Head", "RightArm", "RightForeArm", "RightHand", "LeftArm",
-                      "LeftForeArm", "LeftHand"),
-    "3dsmax": ("Hips", "Chest2", "Head", "RightShoulder", "RightElbow", "rhand", "LeftShoulder",
-               "LeftElbow", "lhand"),
+#: File joint of each of our segments (and of the root position), per BVH naming convention.
+JOINT_MAPS = MappingProxyType({
+    "mocap": MappingProxyType({
+        "root": "chest", "chest": "chest", "head": "head",
+        "r_upper_arm": "r_upper_arm", "r_forearm": "r_forearm", "r_hand": "r_hand",
+        "l_upper_arm": "l_upper_arm", "l_forearm": "l_forearm", "l_hand": "l_hand"}),
+    "motionbuilder": MappingProxyType({
+        "root": "Hips", "chest": "Spine1", "head": "Head",
+        "r_upper_arm": "RightArm", "r_forearm": "RightForeArm", "r_hand": "RightHand",
+        "l_upper_arm": "LeftArm", "l_forearm": "LeftForeArm", "l_hand": "LeftHand"}),
+    "3dsmax": MappingProxyType({
+        "root": "Hips", "chest": "Chest2", "head": "Head",
+        "r_upper_arm": "RightShoulder", "r_forearm": "RightElbow", "r_hand": "rhand",
+        "l_upper_arm": "LeftShoulder", "l_forearm": "LeftElbow", "l_hand": "lhand"}),
 })
+
+#: Joints that identify each naming convention (all must be present): those of :data:`JOINT_MAPS`.
+CONVENTIONS = MappingProxyType({key: tuple(dict.fromkeys(joints.values())) for key, joints in JOINT_MAPS.items()})
 
 #: Rotation taking camera coordinates (x right, y down, z forward) to the BVH world written
 #: here (x right, y up, z towards the viewer): a half turn about x.

@@ -1,4 +1,4 @@
-"""Pose tables as CSV: ``ground_truth.csv`` and the tracker's ``poses.csv`` (DESIGN.md section 4).
+"""Pose tables as CSV: ``ground_truth.csv`` and the tracker's ``poses.csv`` (docs/design.md section 4).
 
 Columns: ``frame``, the 23 pose parameters by name (positions in metres, angles in **degrees**,
 since these files are read by people), the joint columns ``<joint>_x, <joint>_y, <joint>_z``
@@ -110,7 +110,7 @@ class PoseTable:
             except StopIteration:
                 raise ValueError(f"{path}: empty pose table") from None
             if tuple(header[: len(BASE_COLUMNS)]) != BASE_COLUMNS:
-                raise ValueError(f"{path}: not a pose table (columns must start with frame, the 23 "
+                raise ValueError(f"{path}: not a pose table (columns must start with frame, the {N_PARAMETERS} "
                                  f"parameters and the joint columns)")
             rows = [r for r in reader if r]
         if tolerate_partial and rows:

@@ -1,4 +1,4 @@
-"""Sequence folders (DESIGN.md section 4): frames, background, calibration, ground truth."""
+"""Sequence folders (docs/design.md section 4): frames, background, calibration, ground truth."""
 from __future__ import annotations
 
 import json

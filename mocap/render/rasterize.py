@@ -2,20 +2,129 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
+from mocap._numba import jit
+from mocap.body.kinematics import segment_transforms_into
 from mocap.body.model import BodyModel
 from mocap.body.pose import check_pose
 from mocap.body.skeleton import SEGMENT_NAMES
 from mocap.render import _raster
 from mocap.render.camera import Camera
-from mocap.body.kinematics import _segment_transforms
 
 #: Depth gap (metres) between a pixel and its 4-neighbour of another part above which the
 #: boundary between them is an occluding contour (an arm in front of the chest) rather than a
 #: crease where adjacent parts meet.
 EDGE_DEPTH_GAP_M = 0.03
+
+
+class Scene(NamedTuple):
+    """What a compiled render of the body model reads (a named tuple Numba compiles).
+
+    Attributes
+    ----------
+    offsets : ndarray, shape (segments, 3), float64, metres
+        Skeleton offsets (:attr:`~mocap.body.kinematics.Skeleton.offsets`).
+    vertices : ndarray, shape (V, 3), float64, metres
+        Mesh vertices in their segment's frame.
+    vertex_segment : ndarray, shape (V,), int64
+        Segment of each vertex.
+    triangles : ndarray, shape (T, 3), int64
+        Vertex indices.
+    triangle_part : ndarray, shape (T,), int64
+        Index drawn for each triangle (the part buffer gets it + 1): the body part, or the colour
+        class label - 1 for a label render.
+    part_label : ndarray, shape (P,), uint8
+        Colour class label of each part.
+    camera : ndarray, shape (5,), float64
+        :meth:`~mocap.render.camera.Camera.as_array` (fx, fy, cx, cy in pixels, near plane in metres).
+    width, height : int64
+        Image size in pixels.
+    """
+
+    offsets: np.ndarray
+    vertices: np.ndarray
+    vertex_segment: np.ndarray
+    triangles: np.ndarray
+    triangle_part: np.ndarray
+    part_label: np.ndarray
+    camera: np.ndarray
+    width: np.int64
+    height: np.int64
+
+    @classmethod
+    def of(cls, model: BodyModel, camera: Camera) -> "Scene":
+        """The scene of ``model`` seen by ``camera`` (arrays shared with the model, not copied)."""
+        m = model.mesh
+        return cls(model.skeleton.offsets, m.vertices, m.vertex_segment, m.triangles, m.triangle_part,
+                   model.part_label, camera.as_array(), np.int64(camera.width), np.int64(camera.height))
+
+
+class Buffers(NamedTuple):
+    """Scratch arrays one compiled render writes (a named tuple Numba compiles; one per thread).
+
+    Attributes
+    ----------
+    part_ids : ndarray, shape (height * width,), uint8
+        Flat part buffer: 0 background, else the triangle's part + 1. All 0 between renders.
+    inverse_depth : ndarray, shape (height * width,), float32, 1/metres
+        Flat inverse depth 1/z (0: nothing drawn). All 0 between renders.
+    vertex_x, vertex_y : ndarray, shape (V,), int64
+        Projected vertices in 1/:data:`~mocap.render._raster.SUBPIXEL` pixels.
+    vertex_inverse_depth : ndarray, shape (V,), float64, 1/metres
+        1/z of each vertex (-1 nearer than the near plane).
+    transforms : ndarray, shape (segments, 3, 4), float64
+        Segment-to-camera transforms of the last pose rendered.
+    box : ndarray, shape (4,), int64
+        Inclusive pixel box (x0, y0, x1, y1) of the last render (x0 > x1: nothing drawn).
+    triangle_ids, coverage : ndarray, shape (0,), int32
+        Empty: the costs ask for neither.
+    """
+
+    part_ids: np.ndarray
+    inverse_depth: np.ndarray
+    vertex_x: np.ndarray
+    vertex_y: np.ndarray
+    vertex_inverse_depth: np.ndarray
+    transforms: np.ndarray
+    box: np.ndarray
+    triangle_ids: np.ndarray
+    coverage: np.ndarray
+
+    @classmethod
+    def of(cls, model: BodyModel, camera: Camera) -> "Buffers":
+        """Zeroed buffers for rendering ``model`` with ``camera``."""
+        n_px = camera.width * camera.height
+        n_v = model.mesh.vertices.shape[0]
+        return cls(np.zeros(n_px, np.uint8), np.zeros(n_px, np.float32), np.empty(n_v, np.int64),
+                   np.empty(n_v, np.int64), np.empty(n_v), np.empty((len(SEGMENT_NAMES), 3, 4)),
+                   np.empty(4, np.int64), np.empty(0, np.int32), np.empty(0, np.int32))
+
+
+@jit
+def render_scene_into(pose, scene, buffers):
+    """Compiled: pose the mesh and rasterize it (front faces) into ``buffers``, setting its box.
+
+    ``pose`` is a float64 (23,) array (unchecked); ``scene`` a :class:`Scene`; ``buffers`` a
+    :class:`Buffers` whose part and depth buffers are 0 (the caller clears the box after use).
+    """
+    segment_transforms_into(pose, scene.offsets, buffers.transforms)
+    _raster._project_vertices(buffers.transforms, scene.vertices, scene.vertex_segment, scene.camera,
+                              buffers.vertex_x, buffers.vertex_y, buffers.vertex_inverse_depth)
+    _raster._rasterize(buffers.vertex_x, buffers.vertex_y, buffers.vertex_inverse_depth, scene.triangles,
+                       scene.triangle_part, scene.width, scene.height, True, buffers.part_ids,
+                       buffers.inverse_depth, buffers.triangle_ids, buffers.coverage, buffers.box)
+
+
+@jit
+def occluding_edge_sum_and_clear(scene, buffers, min_gap, distance, marks):
+    """Compiled: (sum of ``distance`` over the occluding-edge pixels of the render in ``buffers``,
+    their count), marking them in the flat bool ``marks``; clears the part, depth and mark
+    buffers behind it. ``min_gap`` in metres (:data:`EDGE_DEPTH_GAP_M`)."""
+    return _raster._edge_scan(buffers.part_ids, buffers.inverse_depth, scene.width, scene.height,
+                              buffers.box, min_gap, distance, marks, True)
 
 
 @dataclass(frozen=True)
@@ -43,7 +152,7 @@ class Rendering:
     triangle_ids: np.ndarray | None = None
 
 
-def _check_gap(edge_gap: float) -> float:
+def check_edge_gap(edge_gap: float) -> float:
     if not np.isfinite(edge_gap) or edge_gap < 0:
         raise ValueError(f"edge depth gap must be a finite non-negative number of metres, got {edge_gap}")
     return float(edge_gap)
@@ -68,7 +177,7 @@ def render(pose, model: BodyModel, camera: Camera, *, cull: bool = True,
     Parameters
     ----------
     pose : array_like, shape (23,)
-        Metres and radians (DESIGN.md section 2).
+        Metres and radians (docs/design.md section 2).
     model : BodyModel
     camera : Camera
     cull : bool
@@ -83,9 +192,9 @@ def render(pose, model: BodyModel, camera: Camera, *, cull: bool = True,
     Rendering
     """
     q = check_pose(pose)
-    edge_gap = _check_gap(edge_gap)
+    edge_gap = check_edge_gap(edge_gap)
     transforms = np.empty((len(SEGMENT_NAMES), 3, 4))
-    _segment_transforms(q, model.skeleton.offsets, transforms)
+    segment_transforms_into(q, model.skeleton.offsets, transforms)
     mesh = model.mesh
     n = mesh.vertices.shape[0]
     xs, ys, iz = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
@@ -163,7 +272,7 @@ def rasterize_mesh(vertices, triangles, camera: Camera, *, triangle_part=None, p
     xs, ys, iz = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
     _raster._project_points(v, camera.as_array(), xs, ys, iz)
     count = np.zeros(camera.width * camera.height, np.int32) if return_coverage else None
-    out = _draw(xs, ys, iz, t, tp, pl, camera, cull, _check_gap(edge_gap), triangle_ids, count)
+    out = _draw(xs, ys, iz, t, tp, pl, camera, cull, check_edge_gap(edge_gap), triangle_ids, count)
     if return_coverage:
         return out, count.reshape(camera.height, camera.width)
     return out

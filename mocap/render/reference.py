@@ -9,9 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from mocap.render._raster import SUBPIXEL
 from mocap.render.camera import Camera, NEAR_PLANE_M
-
-SUBPIXEL = 16
 
 
 def reference_rasterize(vertices: np.ndarray, triangles: np.ndarray, triangle_part: np.ndarray,

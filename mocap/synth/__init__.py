@@ -1,4 +1,4 @@
-"""Synthetic benchmark sequences with exact ground truth (DESIGN.md sections 4-5).
+"""Synthetic benchmark sequences with exact ground truth (docs/design.md sections 4-5).
 
 * :func:`generate_sequence` writes one of the six named sequences of the paper's Fig. 5
   (:data:`SEQUENCE_NAMES`) as a sequence folder, with procedural motion or a retargeted

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import tempfile
 import time
 from pathlib import Path
 from types import MappingProxyType
@@ -16,10 +17,10 @@ from types import MappingProxyType
 from tqdm import tqdm
 
 import mocap
-from mocap.synth.sequence import SEQUENCE_NAMES, generate_sequence
+from mocap.synth.sequence import SEQUENCE_NAMES, generate_sequence, parse_size
 
-__all__ = ["DEFAULT_SEQUENCE", "bundled_default_sequence", "data_folder", "main", "make_benchmark",
-           "make_default_sequence"]
+__all__ = ["DEFAULT_SEQUENCE", "bundled_default_sequence", "data_folder", "default_sequence", "main",
+           "make_benchmark", "make_default_sequence"]
 
 #: Settings of the sequence bundled in ``data/default`` (used by ``python -m mocap demo`` and the
 #: tests): 80 frames (3.2 s) of gestures-1 at 160 x 120, the camera's JPEG frames (a PNG copy
@@ -49,11 +50,36 @@ def bundled_default_sequence() -> Path:
     return folder
 
 
-def make_default_sequence(out: str | Path, *, progress: bool = True) -> Path:
-    """Write the default sequence (:data:`DEFAULT_SEQUENCE`) to ``out``."""
+def make_default_sequence(out: str | Path, *, frames: int | None = None, progress: bool = True) -> Path:
+    """Write the default sequence (:data:`DEFAULT_SEQUENCE`; only its first ``frames`` frames
+    when given) to ``out``."""
     s = DEFAULT_SEQUENCE
-    return generate_sequence(s["name"], out, frames=s["frames"], seed=s["seed"], size=s["size"],
-                             frame_format=s["frame_format"], progress=progress)
+    return generate_sequence(s["name"], out, frames=s["frames"] if frames is None else frames, seed=s["seed"],
+                             size=s["size"], frame_format=s["frame_format"], progress=progress)
+
+
+def default_sequence(out: str | Path | None = None, *, frames: int | None = None, progress: bool = True) -> Path:
+    """The bundled default sequence folder; where this installation has none (e.g. a wheel), the
+    same sequence generated into ``out`` (default: a new temporary folder), or found there from an
+    earlier call.
+
+    Parameters
+    ----------
+    out : str or Path, optional
+        Where to generate it when it is not bundled.
+    frames : int, optional
+        Generate only the first ``frames`` frames (the bundled folder has all 80).
+    progress : bool
+        Progress bar while generating.
+    """
+    try:
+        return bundled_default_sequence()
+    except FileNotFoundError:
+        pass
+    out = Path(tempfile.mkdtemp(prefix="mocap-default-")) if out is None else Path(out)
+    if (out / "meta.json").is_file():
+        return out
+    return make_default_sequence(out, frames=frames, progress=progress)
 
 
 def make_benchmark(out: str | Path, *, seed: int = 0, size=(160, 120), frames: int | None = None,
@@ -90,8 +116,6 @@ def make_benchmark(out: str | Path, *, seed: int = 0, size=(160, 120), frames: i
 
 def main(argv: list[str] | None = None, *, default_out: Path | None = None) -> int:
     """Command line; see the module docstring. Returns the exit status."""
-    from mocap.commands.synth import parse_size
-
     parser = argparse.ArgumentParser(prog="python -m mocap.synth.benchmark",
                                      description="Regenerate the synthetic benchmark sequences.")
     parser.add_argument("--out", metavar="DIR", default=None,

@@ -66,7 +66,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
 from mocap.body.pose import DEFAULT_ROOT, JOINT_LIMITS, N_PARAMETERS, PARAMETER_INDEX, POSITION_NAMES
-from mocap.io.bvh import Bvh, read_bvh
+from mocap.io.bvh import CAMERA_TO_BVH, Bvh, read_bvh
+from mocap.io.bvh import JOINT_MAPS as BVH_JOINT_MAPS
 
 __all__ = ["CMU_UNIT_M", "JOINT_MAPS", "MotionClip", "RetargetConfig", "clip_from_asf_amc", "clip_from_bvh",
            "load_clip", "retarget"]
@@ -75,29 +76,13 @@ __all__ = ["CMU_UNIT_M", "JOINT_MAPS", "MotionClip", "RetargetConfig", "clip_fro
 CMU_UNIT_M: float = 0.0254 / 0.45
 
 #: Clip joint of each of our segments (and of the root position), per naming convention.
-JOINT_MAPS = MappingProxyType({
-    "motionbuilder": MappingProxyType({
-        "root": "Hips", "chest": "Spine1", "head": "Head",
-        "r_upper_arm": "RightArm", "r_forearm": "RightForeArm", "r_hand": "RightHand",
-        "l_upper_arm": "LeftArm", "l_forearm": "LeftForeArm", "l_hand": "LeftHand"}),
-    "3dsmax": MappingProxyType({
-        "root": "Hips", "chest": "Chest2", "head": "Head",
-        "r_upper_arm": "RightShoulder", "r_forearm": "RightElbow", "r_hand": "rhand",
-        "l_upper_arm": "LeftShoulder", "l_forearm": "LeftElbow", "l_hand": "lhand"}),
-    "asf": MappingProxyType({
-        "root": "root", "chest": "thorax", "head": "head",
-        "r_upper_arm": "rhumerus", "r_forearm": "rradius", "r_hand": "rhand",
-        "l_upper_arm": "lhumerus", "l_forearm": "lradius", "l_hand": "lhand"}),
-    "mocap": MappingProxyType({
-        "root": "chest", "chest": "chest", "head": "head",
-        "r_upper_arm": "r_upper_arm", "r_forearm": "r_forearm", "r_hand": "r_hand",
-        "l_upper_arm": "l_upper_arm", "l_forearm": "l_forearm", "l_hand": "l_hand"}),
-})
+#: (The BVH conventions are :data:`mocap.io.bvh.JOINT_MAPS`; ``"asf"`` is the CMU ASF/AMC skeleton.)
+JOINT_MAPS = MappingProxyType({**BVH_JOINT_MAPS, "asf": MappingProxyType({
+    "root": "root", "chest": "thorax", "head": "head",
+    "r_upper_arm": "rhumerus", "r_forearm": "rradius", "r_hand": "rhand",
+    "l_upper_arm": "lhumerus", "l_forearm": "lradius", "l_hand": "lhand"})})
 _ARM_CHAIN = ("upper_arm", "forearm", "hand")
-# half turn about x: clip world (y up, facing +z) <-> camera (y down, facing the camera = -z)
-_FLIP = np.diag([1.0, -1.0, -1.0])
 _DOWN = np.array([0.0, -1.0, 0.0])   # our arms' zero-pose direction in clip coordinates
-_FLIP.setflags(write=False)
 _DOWN.setflags(write=False)
 
 
@@ -433,7 +418,7 @@ def retarget(clip: MotionClip, config: RetargetConfig = RetargetConfig()) -> np.
         fwd = q["chest"][0] @ np.array([0.0, 0.0, 1.0])
         heading = Rotation.from_rotvec([0.0, -math.atan2(fwd[0], fwd[2]), 0.0]).as_matrix()
     # camera-coordinate world rotation of every segment
-    r = {s: _FLIP @ heading @ m @ _FLIP for s, m in q.items()}
+    r = {s: CAMERA_TO_BVH @ heading @ m @ CAMERA_TO_BVH for s, m in q.items()}
     pose = np.zeros((n, N_PARAMETERS))
 
     def put(names, values):
@@ -464,7 +449,7 @@ def retarget(clip: MotionClip, config: RetargetConfig = RetargetConfig()) -> np.
         put(names, _choose(_euler_pair(rel, "XYZ"), lambda e, m=m: np.stack([-e[:, 0], m * e[:, 1]], 1), names,
                            dropped=2))
     # root: clip units -> metres, heading removed, camera axes, fitted into the view box
-    root_cam = (root * clip.unit_m) @ (_FLIP @ heading).T
+    root_cam = (root * clip.unit_m) @ (CAMERA_TO_BVH @ heading).T
     centre = np.asarray(config.centre, dtype=np.float64)
     if config.max_offset_m is None:
         placed = root_cam

@@ -1,4 +1,4 @@
-"""Named benchmark sequences and the writer of a sequence folder (DESIGN.md section 4).
+"""Named benchmark sequences and the writer of a sequence folder (docs/design.md section 4).
 
 A folder holds ``frames/000000.png ...`` (or ``.jpg``), ``background.png`` (the empty scene
 through the same camera, with noise of its own), ``calibration.json`` (the true actor: body
@@ -28,10 +28,10 @@ from tqdm import tqdm
 import mocap
 from mocap.body.model import BodyModel
 from mocap.body.pose import JOINT_LIMITS
-from mocap.calibrate import Calibration
 from mocap.io.atomic import write_bytes_atomic, write_text_atomic
 from mocap.io.pose_table import PoseTable
 from mocap.labels import DEFAULT_CLASS_NAMES
+from mocap.render.calibration import Calibration
 from mocap.render.camera import Camera
 from mocap.synth.actor import LOWER_BODY, Actor
 from mocap.synth.motion import MOTIONS, avoid_torso, root_height_for_depth
@@ -40,8 +40,17 @@ from mocap.synth.scene import make_background
 from mocap.synth.sensor import SensorConfig, SensorDrift, apply_sensor
 from mocap.synth.shading import Light, downsample, render_actor
 
-__all__ = ["FPS", "FRAME_FORMATS", "SEQUENCES", "SEQUENCE_NAMES", "SequenceSpec", "SequenceSetup",
+__all__ = ["FPS", "FRAME_FORMATS", "SEQUENCES", "SEQUENCE_NAMES", "SequenceSpec", "SequenceSetup", "parse_size",
            "generate_sequence", "setup_sequence"]
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """``"160x120"`` -> ``(160, 120)`` (width, height in pixels); ValueError with the expected form otherwise."""
+    match = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
+    if not match:
+        raise ValueError(f"--size must look like 160x120 (width x height in pixels), got {text!r}")
+    return int(match.group(1)), int(match.group(2))
+
 
 #: Frame rate of every synthetic sequence, frames per second.
 FPS: float = 25.0

@@ -5,10 +5,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
+from scipy import ndimage as ndi
+from skimage import color
 
 from mocap.imaging import detect_edges, distance_map
-from mocap.imaging.edges import _deriche_coefficients, deriche_gradient
-from tests.naive import naive_deriche_1d, naive_distance
+from mocap.imaging.edges import SOBEL_GAIN, _deriche_coefficients, deriche_gradient
+from tests.naive import naive_deriche_1d, naive_deriche_edges, naive_distance
 
 
 # -- distance map
@@ -145,6 +147,20 @@ def test_deriche_gradient_equals_naive_recursion():
     got_y, got_x = deriche_gradient(image, alpha)
     np.testing.assert_allclose(got_x, gx, atol=1e-10)
     np.testing.assert_allclose(got_y, gy, atol=1e-10)
+
+
+@pytest.mark.parametrize("seed, sigma, low, high", [(0, 1.0, 0.05, 0.15), (1, 1.5, 0.08, 0.20), (2, 2.0, 0.02, 0.3)])
+def test_deriche_edges_equal_naive_suppression_and_hysteresis(seed, sigma, low, high):
+    # the compiled magnitude and non-maximum kernels and the hysteresis against tests/naive.py
+    # (bilinear ring samples by scipy, flood fill), on a noisy image with blobs
+    rng = np.random.default_rng(seed)
+    grey = ndi.gaussian_filter(rng.random((31, 37)), 1.0) + 0.3 * (rng.random((31, 37)) > 0.8)
+    rgb = np.repeat(np.clip(grey / grey.max(), 0, 1)[..., None], 3, axis=2)
+    got = detect_edges(rgb, method="deriche", sigma=sigma, low_threshold=low, high_threshold=high, silhouette=False)
+    gy, gx = deriche_gradient(color.rgb2gray(rgb), np.sqrt(np.pi) / sigma)
+    expect = naive_deriche_edges(gy, gx, SOBEL_GAIN, low, high)
+    assert expect.any() and not expect.all()
+    np.testing.assert_array_equal(got, expect)
 
 
 @pytest.mark.parametrize("alpha", [0.5, 1.0, 2.5])

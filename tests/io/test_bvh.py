@@ -124,6 +124,31 @@ def test_written_file_has_our_hierarchy_and_its_kinematics(tmp_path):
                                    atol=2e-6)
 
 
+@pytest.mark.filterwarnings("ignore:Importing PyGLM:PendingDeprecationWarning")
+def test_poses_bvh_joint_positions_read_by_an_independent_parser(tmp_path):
+    # bvhio (PyPI, not ours: its own parser and hierarchy maths, float32 PyGLM) reads the file the
+    # tracker writes; its world joint positions must be our model's joints in the BVH frame
+    import bvhio
+
+    dims = BodyDimensions().scaled(0.93)
+    poses = _random_poses(12, seed=3)
+    write_bvh(tmp_path / "poses.bvh", poses, dims, 25.0)
+    hierarchy = bvhio.readAsHierarchy(str(tmp_path / "poses.bvh"))
+    joints = {joint.Name: joint for joint, _, _ in hierarchy.layout()}
+    assert sorted(joints) == sorted(("chest", "head", "r_upper_arm", "r_forearm", "r_hand", "l_upper_arm",
+                                     "l_forearm", "l_hand"))
+    model = BodyModel.build(dims)
+    pairs = {"neck": "head", "r_shoulder": "r_upper_arm", "r_elbow": "r_forearm", "r_wrist": "r_hand",
+             "l_shoulder": "l_upper_arm", "l_elbow": "l_forearm", "l_wrist": "l_hand"}
+    for frame, q in enumerate(poses):
+        hierarchy.loadPose(frame)
+        expect = model.joint_positions(q) @ CAMERA_TO_BVH.T
+        for joint, bvh_joint in pairs.items():
+            got = np.array(tuple(joints[bvh_joint].PositionWorld))
+            np.testing.assert_allclose(got, expect[JOINT_NAMES.index(joint)], atol=2e-5,
+                                       err_msg=f"frame {frame}, {joint}")
+
+
 def test_write_read_round_trip(tmp_path):
     poses = _random_poses(30, seed=4)
     write_bvh(tmp_path / "p.bvh", poses, BodyDimensions(), 30.0)

@@ -1,0 +1,76 @@
+"""Automatic first-frame calibration recovers a known actor: dimensions and pose of a frame
+rendered from them (values, not only that it runs)."""
+import numpy as np
+import pytest
+
+from mocap.body import PARAMETER_INDEX, BodyDimensions
+from mocap.body.model import BodyModel
+from mocap.body.pose import neutral_pose
+from mocap.calibrate import AutoCalibrationConfig, Calibration, PROPORTION_FACTORS, auto_calibrate
+from mocap.render import Camera, render
+
+CAMERA = Camera.default(160, 120)
+SKIN_RGB, CLOTHES_RGB = (205, 150, 120), (40, 70, 160)
+
+
+def _scaled(base: BodyDimensions, factors: dict[str, float]) -> BodyDimensions:
+    """Body dimensions with each factor of :data:`PROPORTION_FACTORS` applied by hand."""
+    parts = dict(base.parts)
+    for name, f in factors.items():
+        scaled_parts, sizes = PROPORTION_FACTORS[name]
+        for p in scaled_parts:
+            s = parts[p]
+            parts[p] = type(s)(**{k: getattr(s, k) * (f if k in sizes else 1.0) for k in ("length", "width", "depth")})
+    return BodyDimensions(parts)
+
+
+@pytest.fixture(scope="module")
+def actor():
+    """A frame of a known actor (own proportions, arms raised 35°, elbows bent 20°, 2.2 m away)
+    rendered by our model in flat colours over a noisy background, and the calibration it fits."""
+    dims = _scaled(BodyDimensions(), {"torso_width": 1.1, "torso_length": 0.95, "arm_length": 0.92,
+                                      "arm_width": 1.1, "head_size": 1.05})
+    pose = neutral_pose((0.05, 0.3, 2.2))
+    for side in ("r", "l"):
+        pose[PARAMETER_INDEX[f"{side}_shoulder_abd"]] = np.radians(35.0)
+        pose[PARAMETER_INDEX[f"{side}_elbow_flex"]] = np.radians(20.0)
+    labels = render(pose, BodyModel.build(dims), CAMERA).labels
+    rng = np.random.default_rng(0)
+    background = np.clip(rng.normal(0.35, 0.03, (*CAMERA.shape, 3)) + np.linspace(0, 0.2, CAMERA.width)[None, :, None],
+                         0, 1)
+    background = (background * 255).astype(np.uint8)
+    frame = background.copy()
+    frame[labels == 1] = SKIN_RGB
+    frame[labels == 2] = CLOTHES_RGB
+    frame = np.clip(frame + rng.normal(0, 2, frame.shape), 0, 255).astype(np.uint8)
+    fitted = auto_calibrate(frame, background, CAMERA, config=AutoCalibrationConfig(evaluations=600))
+    return dims, pose, labels, fitted
+
+
+@pytest.mark.slow
+def test_auto_calibrate_recovers_position_depth_and_arm_pose(actor):
+    _, pose, _, fitted = actor
+    assert isinstance(fitted, Calibration) and fitted.camera == CAMERA
+    q = fitted.initial_pose
+    x, y, z = (PARAMETER_INDEX[n] for n in ("root_x", "root_y", "root_z"))
+    # bounds: 8 cm across the image, 15 cm (7 %) in depth, whose scale one view leaves to the proportions
+    assert abs(q[x] - pose[x]) < 0.08 and abs(q[y] - pose[y]) < 0.08
+    assert abs(q[z] - pose[z]) < 0.15
+    for side in ("r", "l"):
+        for joint, bound_deg in (("shoulder_abd", 8.0), ("elbow_flex", 10.0)):
+            i = PARAMETER_INDEX[f"{side}_{joint}"]
+            assert abs(np.degrees(q[i] - pose[i])) < bound_deg, (side, joint, np.degrees(q[i]))
+    assert abs(np.degrees(q[PARAMETER_INDEX["chest_yaw"]])) < 5.0
+
+
+@pytest.mark.slow
+def test_auto_calibrate_recovers_dimensions_and_silhouette(actor):
+    dims, _, labels, fitted = actor
+    for part in ("r_upper_arm", "r_forearm", "l_upper_arm", "l_forearm"):
+        # within 5 % of the true arm lengths (the default adult it starts from is 8 % off; measured: 2 %).
+        # The torso's length is not asserted: from one view it trades with depth (measured: +9 %).
+        assert abs(fitted.dims[part].length / dims[part].length - 1.0) < 0.05, part
+        assert abs(BodyDimensions()[part].length / dims[part].length - 1.0) > 0.05
+    got = render(fitted.initial_pose, fitted.body_model(), CAMERA).labels > 0
+    truth = labels > 0
+    assert np.count_nonzero(got & truth) / np.count_nonzero(got | truth) > 0.85
