@@ -6,7 +6,7 @@ mean edge distance) — the costs as an optimiser calls them (``evaluate_uncheck
 validation, ~1.7 µs),
 ``llvmpipe_render`` (the same mesh through OpenGL on Mesa llvmpipe + read-back, when the
 ``bench`` extra is installed), ``prepare_frame`` and its parts ``prepare_background``,
-``prepare_colour``, ``prepare_edges``, ``prepare_distance``, and ``frame_100`` / ``frame_500``
+``prepare_colour``, ``prepare_edges``, ``prepare_distance``, ``frame_100`` / ``frame_500`` (the paper's method) and ``frame_beam`` (the default tracker)
 (a whole frame of registration, image side included, at that many cost evaluations).
 
 Everything runs on one core (the process is pinned to one CPU where the OS allows, llvmpipe
@@ -163,8 +163,11 @@ def imaging_rows(sizes: Sequence[tuple[int, int]], *, min_runs: int, min_seconds
 
 
 def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, min_runs: int) -> list[BenchRow]:
-    """Rows ``frame_<N>``: one whole frame (image side + two-step registration with N cost
-    evaluations, auto split) on a synthetic sequence, median over its frames."""
+    """Rows of one whole frame (image side + registration) on a synthetic sequence, median over
+    its frames: ``frame_<N>`` the paper's method (one hypothesis, two-step registration with N cost
+    evaluations, auto split; :meth:`~mocap.track.TrackerConfig.paper`) for each N of ``budgets``,
+    and ``frame_beam`` the default tracker (beam, proposals and decoding; its evaluations vary
+    from frame to frame)."""
     import tempfile
 
     from mocap.body.mesh import resolution_for_image
@@ -184,16 +187,17 @@ def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, mi
         images = list(iter_frames(seq.frames))
         background = read_image(seq.background)
         colour = colour_model_from_pose(images[0], background, model, camera, calibration.initial_pose)
-        for budget in budgets:
-            tracker = Tracker(model, camera, TrackerConfig(evaluations=budget), calibration.initial_pose)
+        configs = {f"frame_{b}": TrackerConfig.paper(evaluations=b) for b in budgets}
+        configs["frame_beam"] = TrackerConfig()
+        for name, config in configs.items():
             times = []
             while len(times) < min_runs:
+                tracker = Tracker(model, camera, config, calibration.initial_pose)
                 for i, frame in enumerate(images):
                     t0 = time.perf_counter_ns()
-                    tracker.step(i, prepare_frame(frame, background, colour))
+                    tracker.push(i, prepare_frame(frame, background, colour))
                     times.append((time.perf_counter_ns() - t0) / 1000.0)
-                tracker = Tracker(model, camera, TrackerConfig(evaluations=budget), calibration.initial_pose)
-            rows.append(_row(f"frame_{budget}", size, model.mesh.n_triangles, np.asarray(times[1:])))
+            rows.append(_row(name, size, model.mesh.n_triangles, np.asarray(times[1:])))
     return rows
 
 

@@ -171,6 +171,11 @@ class Tracker:
         return _result(frames.popleft(), path[0])
 
     @property
+    def pending(self) -> int:
+        """Frames pushed but not yet decided (at most ``lag`` online; all of them offline)."""
+        return len(self._window)
+
+    @property
     def hypotheses(self) -> list[np.ndarray]:
         """Poses of the current beam, best path cost first (metres, radians)."""
         return [h.pose.copy() for h in self._beam]

@@ -1,0 +1,109 @@
+"""The beam tracker: streaming decisions, exact state, bounded memory, recovery of a wrong branch."""
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from mocap.body import PARAMETER_INDEX as P, BodyModel, JOINT_NAMES, neutral_pose
+from mocap.body.jumps import arm_jumps
+from mocap.imaging import PreparedFrame
+from mocap.render import Camera, render
+from mocap.track import Tracker, TrackerConfig, track_prepared
+
+MODEL = BodyModel.build(resolution=8)
+CAMERA = Camera.default(160, 120)
+#: A small, fast beam for the stream tests.
+SMALL = TrackerConfig(evaluations=80, hypothesis_evaluations=30, jump_evaluations=20, beam=2, lag=2,
+                      hand_reacquisition=False)
+
+
+def clean_frames(poses):
+    """Noise-free prepared frames of the model in ``poses`` (labels and distance map)."""
+    out = []
+    for q in poses:
+        r = render(q, MODEL, CAMERA)
+        distance = np.minimum(ndimage.distance_transform_edt(~r.edges), 20.0).astype(np.float32)
+        out.append(PreparedFrame(r.labels, r.labels != 0, r.edges, distance, False, {}))
+    return out
+
+
+def waving(n):
+    """The right arm raised in front and swinging, the left arm hanging."""
+    poses = np.tile(neutral_pose(), (n, 1))
+    t = np.arange(n)
+    poses[:, P["r_shoulder_flex"]] = np.radians(50.0 + 4.0 * t)
+    poses[:, P["r_shoulder_abd"]] = np.radians(25.0)
+    poses[:, P["r_elbow_flex"]] = np.radians(70.0 + 3.0 * t)
+    return poses
+
+
+FRAMES = clean_frames(waving(8))
+
+
+def test_push_decides_each_frame_once_after_the_lag():
+    tracker = Tracker(MODEL, CAMERA, SMALL, waving(1)[0])
+    decided = []
+    for i, frame in enumerate(FRAMES):
+        out = tracker.push(i, frame)
+        assert len(out) == (0 if i < SMALL.lag else 1)
+        assert tracker.pending == min(i + 1, SMALL.lag)
+        decided += out
+    decided += tracker.finish()
+    assert [r.frame for r in decided] == list(range(len(FRAMES)))
+    assert tracker.pending == 0
+    assert all(0 <= r.hypothesis < SMALL.beam and np.isfinite(r.score) for r in decided)
+
+
+def test_offline_decides_everything_at_the_end():
+    tracker = Tracker(MODEL, CAMERA, TrackerConfig(**{**SMALL.to_dict(), "offline": True}), waving(1)[0])
+    assert all(tracker.push(i, f) == [] for i, f in enumerate(FRAMES))
+    assert tracker.pending == len(FRAMES)
+    assert [r.frame for r in tracker.finish()] == list(range(len(FRAMES)))
+
+
+def test_state_restores_bit_identically():
+    whole = track_prepared(FRAMES, Tracker(MODEL, CAMERA, SMALL, waving(1)[0]))
+    first = Tracker(MODEL, CAMERA, SMALL, waving(1)[0])
+    part = [r for i in range(3) for r in first.push(i, FRAMES[i])]
+    state = first.state()
+    second = Tracker(MODEL, CAMERA, SMALL, neutral_pose())        # any start: the state replaces it
+    second.restore({k: np.array(v) for k, v in state.items()})
+    part += [r for i in range(3, len(FRAMES)) for r in second.push(i, FRAMES[i])] + second.finish()
+    assert [r.frame for r in part] == [r.frame for r in whole]
+    for a, b in zip(part, whole):
+        np.testing.assert_array_equal(a.pose, b.pose)
+        assert (a.region_residual, a.edge_residual, a.hypothesis, a.score, a.recovery) == \
+               (b.region_residual, b.edge_residual, b.hypothesis, b.score, b.recovery)
+    with pytest.raises(ValueError, match="tracker state"):
+        second.restore({"tracker_json": np.array("{}")})
+
+
+def test_memory_holds_lag_frames_whatever_the_length():
+    config = TrackerConfig(**{**SMALL.to_dict(), "evaluations": 10, "hypothesis_evaluations": 5,
+                              "jump_evaluations": 5})
+    tracker = Tracker(MODEL, CAMERA, config, waving(1)[0])
+    sizes = []
+    for i in range(40):
+        tracker.push(i, FRAMES[i % len(FRAMES)])
+        sizes.append(len(str(tracker.state()["tracker_json"])))
+    assert tracker.pending == config.lag
+    # the state (window and beam) stops growing once the window is full
+    assert max(sizes[10:]) < 1.2 * min(sizes[10:])
+
+
+@pytest.mark.slow
+def test_beam_returns_to_the_true_branch_where_one_hypothesis_stays_lost():
+    """The right forearm starts mirrored in depth (same silhouette); the beam's kinematic jumps and
+    decoder bring it back within a few frames, a single hypothesis follows the wrong branch."""
+    truth = waving(12)
+    frames = clean_frames(truth)
+    arm = [JOINT_NAMES.index(f"r_{j}") for j in ("elbow", "wrist", "hand")]
+    start = arm_jumps(truth[0], MODEL.skeleton, "r")["forearm"]
+    single = TrackerConfig(beam=1, jumps=False, lag=0, hand_reacquisition=False, prior_weight=0.0)
+    errors = {}
+    for name, config in (("single", single), ("beam", TrackerConfig())):
+        results = track_prepared(frames, Tracker(MODEL, CAMERA, config, start))
+        errors[name] = np.array([np.linalg.norm(r.joints[arm] - MODEL.joint_positions(q)[arm], axis=1).mean()
+                                 for r, q in zip(results, truth)])
+    assert errors["single"][0] > 0.25 and errors["beam"][0] > 0.25       # both start 29 cm off
+    assert errors["single"][6:].min() > 0.1                               # still on the wrong branch
+    assert errors["beam"][6:].max() < 0.06                                # back on the truth
