@@ -167,34 +167,16 @@ def _nm_tell(simplex, values, lower, upper, coef, work, ist, fst, f):
 
 
 @jit
-def _nm_run_costs(kind, region_args, edge_args, prior_centre, prior_weight, posture, base, active, simplex, values,
-                  lower, upper, coef, work, ist, fst, budget):
-    """Drive the state machine with a mocap cost: kind 0 region (eq. 1), 1 edge (eq. 2), plus the
-    quadratic prior ``sum(prior_weight * (x - prior_centre)**2)`` (zero weights: the plain cost),
-    plus ``posture[0]`` times the arm posture penalty with margin ``posture[1]`` and sigma
-    ``posture[2]`` (:mod:`mocap.body.posture`; weight 0: none).
-
-    The simplex lives in the subspace of the parameters ``active``; the others keep the values
-    of ``base`` (the full pose vector the cost is evaluated on)."""
-    x = base.copy()
+def _nm_run_costs(kind, region_args, edge_args, simplex, values, lower, upper, coef, work, ist, fst, budget):
+    """Drive the state machine with a mocap cost: kind 0 region (eq. 1), 1 edge (eq. 2)."""
     while ist[_EVALS] < budget and ist[_PHASE] != _DONE:
-        for i in range(active.shape[0]):
-            x[active[i]] = work[_TRIAL, i]
         if kind == 0:
-            f = region_cost_kernel(x, region_args)
+            f = region_cost_kernel(work[_TRIAL], region_args)
         else:
-            f = edge_cost_kernel(x, edge_args)
-        for i in range(x.shape[0]):
-            d = x[i] - prior_centre[i]
-            f += prior_weight[i] * d * d
-        if posture[0] > 0.0:
-            # the cost kernel has just posed the segments into its buffers
-            transforms = region_args.buffers.transforms if kind == 0 else edge_args.buffers.transforms
-            f += posture[0] * arm_behind_penalty_of_transforms(transforms, ARM_SEGMENTS, posture[1], posture[2])
+            f = edge_cost_kernel(work[_TRIAL], edge_args)
         _nm_tell(simplex, values, lower, upper, coef, work, ist, fst, f)
 
 
-from mocap.body.posture import ARM_SEGMENTS, arm_behind_penalty_of_transforms  # noqa: E402
 from mocap.cost import (EdgeKernelArgs, RegionKernelArgs, edge_cost_kernel,  # noqa: E402  (compiled into the loop above)
                         region_cost_kernel)
 
@@ -352,31 +334,26 @@ def minimize(fun: Callable[[np.ndarray], float], simplex, lower, upper, *, budge
     return st.result()
 
 
-def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-3,
-                  adaptive: bool = False, prior: tuple[np.ndarray, np.ndarray] | None = None,
-                  active: np.ndarray | None = None, base: np.ndarray | None = None,
-                  posture: tuple[float, float, float] | None = None) -> SimplexResult:
-    """As :func:`minimize` for a :class:`~mocap.cost.RegionCost` or :class:`~mocap.cost.EdgeCost`,
-    with the whole loop compiled (no Python per evaluation).
+def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-3) -> SimplexResult:
+    """As :func:`minimize` for a :class:`~mocap.cost.RegionCost` or :class:`~mocap.cost.EdgeCost`
+    over the whole pose vector, with the loop compiled (no Python per evaluation).
 
     Parameters
     ----------
-    prior : (centre, weight), each ndarray of shape (23,), optional
-        Minimise ``cost(x) + sum(weight * (x - centre)**2)`` instead of ``cost(x)`` (a
-        temporal prior around the predicted pose; ``fun`` and ``values`` then include it).
-    active : ndarray of int, shape (k,), optional
-        Optimise only these parameters (the simplex, bounds and result are k-dimensional);
-        the others keep their values in ``base``. Default: all 23.
-    base : ndarray, shape (23,), optional
-        Full pose the inactive parameters are taken from (needed with ``active``).
-    posture : (weight, margin_m, sigma_m), optional
-        Add ``weight`` (cost units) times the arm posture penalty
-        (:func:`mocap.body.posture.arm_behind_penalty`, margin and sigma in metres).
+    cost : RegionCost or EdgeCost
+    simplex : ndarray, shape (24, 23)
+        Initial simplex (metres and radians).
+    lower, upper : ndarray, shape (23,)
+        Bounds (the joint limits).
+    budget : int
+        Cost evaluations at most.
+    ftol : float
+        Stop when the relative spread of the simplex values falls below it.
     """
     from mocap.cost import EdgeCost, RegionCost
 
     budget = _check_budget(budget)
-    st = _State(simplex, lower, upper, ftol, adaptive)
+    st = _State(simplex, lower, upper, ftol, False)
     if isinstance(cost, RegionCost):
         kind, region_args, edge_args = 0, cost.kernel_args(), _DummyArgs.edge(cost)
     elif isinstance(cost, EdgeCost):
@@ -384,36 +361,9 @@ def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-
     else:
         raise ValueError(f"minimize_cost takes a RegionCost or EdgeCost, got {type(cost).__name__}; "
                          "use minimize() for other callables")
-    k = st.simplex.shape[1]
-    n = N_PARAMETERS
-    if active is None:
-        active = np.arange(n)
-        base = np.zeros(n)
-    else:
-        active = np.asarray(active, dtype=np.int64)
-        if base is None or np.shape(base) != (n,):
-            raise ValueError(f"optimising a subset of the parameters needs the full ({n},) base pose")
-        base = np.ascontiguousarray(base, dtype=np.float64)
-        if active.ndim != 1 or len(np.unique(active)) != len(active) or active.min() < 0 or active.max() >= n:
-            raise ValueError(f"active must list distinct parameter indices in 0..{n - 1}")
-    if active.shape[0] != k:
-        raise ValueError(f"mocap costs take {n} parameters: the simplex has {k} columns for {active.shape[0]} "
-                         "active parameters")
-    if prior is None:
-        centre, weight = np.zeros(n), np.zeros(n)
-    else:
-        centre, weight = (np.ascontiguousarray(a, dtype=np.float64) for a in prior)
-        if centre.shape != (n,) or weight.shape != (n,) or not (np.isfinite(centre).all() and np.isfinite(weight).all()) \
-                or (weight < 0).any():
-            raise ValueError(f"prior must be (centre, weight): finite ({n},) arrays, weights >= 0")
-    if posture is None:
-        posture_args = np.array([0.0, 0.0, 1.0])
-    else:
-        posture_args = np.asarray(posture, dtype=np.float64)
-        if posture_args.shape != (3,) or not np.isfinite(posture_args).all() or posture_args[0] < 0 \
-                or posture_args[1] < 0 or posture_args[2] <= 0:
-            raise ValueError("posture must be (weight >= 0, margin_m >= 0, sigma_m > 0)")
-    _nm_run_costs(kind, region_args, edge_args, centre, weight, posture_args, base, active, *st.args(), budget)
+    if st.simplex.shape[1] != N_PARAMETERS:
+        raise ValueError(f"mocap costs take {N_PARAMETERS} parameters: the simplex has {st.simplex.shape[1]} columns")
+    _nm_run_costs(kind, region_args, edge_args, *st.args(), budget)
     return st.result()
 
 

@@ -21,10 +21,11 @@ hysteresis)
 ``imaging.edges`` (chamfer 3-4 and Euclidean distance)     :func:`naive_distance`            ``tests/imaging/test_edges.py``
 =========================================================  ===============================  =====================================
 
-Two are checked elsewhere: the rasterizer and the occluding-edge scan against the NumPy
-reference rasterizer of the library (:mod:`mocap.render.reference`, which the package also
-keeps for reading; ``tests/render/test_rasterize.py``), and the posture penalty
-(``body.posture``) against hand-computed values (``tests/body/test_posture.py``).
+Checked elsewhere: the rasterizer and the occluding-edge scan against the NumPy reference
+rasterizer of the library (:mod:`mocap.render.reference`, which the package also keeps for
+reading; ``tests/render/test_rasterize.py``), the pose prior's compiled density against
+scikit-learn's (``tests/body/test_prior.py``) and the decoder against brute force
+(``tests/track/test_decode.py``).
 """
 from __future__ import annotations
 
