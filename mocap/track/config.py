@@ -60,7 +60,8 @@ class TrackerConfig(JsonConfig):
     hand_reacquisition : bool
         Beyond the paper: skin regions of the image that the model's hands and head leave
         unexplained are taken for a lost hand; either arm is posed to reach each (inverse
-        kinematics) and the best such pose is registered as a further hypothesis.
+        kinematics) and the best such pose is registered (``hypothesis_evaluations``) as a
+        further hypothesis.
     reacquisition_distance_px : float, pixels
         A skin region whose centroid is farther than this from both projected hands triggers it.
     reacquisition_min_pixels : int, pixels
@@ -68,7 +69,8 @@ class TrackerConfig(JsonConfig):
     beam : int
         Hypotheses kept per frame (1: a single-hypothesis tracker, as the paper's).
     hypothesis_evaluations : int
-        Evaluations of the two-step registration of every hypothesis but the leading one.
+        Evaluations of the two-step registration of every hypothesis but the leading one (and of
+        a re-acquired hand's).
     jumps : bool
         Propose the kinematic jumps of the leading hypothesis (each arm's depth branches and the
         torso's front/back mirror, :mod:`mocap.body.jumps`), each refined by a short

@@ -271,7 +271,8 @@ class Tracker:
         if not proposals:
             return 0
         values = [region_cost.evaluate_unchecked(q) for q in proposals]
-        retry = register(region_cost, edge_cost, proposals[int(np.argmin(values))], self.config)
+        retry = register(region_cost, edge_cost, proposals[int(np.argmin(values))], self.config,
+                         evaluations=self.config.hypothesis_evaluations)
         candidates.append((retry, "hand re-acquired"))
         return len(proposals) + retry.evaluations
 
