@@ -108,3 +108,22 @@ def test_bad_input_gives_one_line_errors(sequence, tmp_path, capsys):
     fails(["track", str(sequence), "--split", "2:x", "--out", str(tmp_path / "o4")], "split")
     (tmp_path / "bad.json").write_text("{not json")
     fails(["track", str(sequence), "--calibration", str(tmp_path / "bad.json"), "--out", str(tmp_path / "o5")], "JSON")
+
+
+def test_tracker_options_set_the_beam_the_lag_and_the_paper_method(tmp_path):
+    import argparse
+
+    from mocap.commands._common import add_tracker_options, tracker_config
+    from mocap.track import TrackerConfig
+
+    p = argparse.ArgumentParser()
+    add_tracker_options(p)
+    assert tracker_config(p.parse_args([])) == TrackerConfig()
+    assert tracker_config(p.parse_args(["--paper", "--iterations", "200"])) == TrackerConfig.paper(evaluations=200)
+    config = tracker_config(p.parse_args(["--beam", "5", "--lag", "0", "--offline"]))
+    assert (config.beam, config.lag, config.offline) == (5, 0, True)
+    TrackerConfig(beam=2).to_json(tmp_path / "c.json")
+    with pytest.raises(ValueError, match="either --config or --paper"):
+        tracker_config(p.parse_args(["--paper", "--config", str(tmp_path / "c.json")]))
+    with pytest.raises(ValueError, match="beam"):
+        tracker_config(p.parse_args(["--beam", "0"]))

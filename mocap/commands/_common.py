@@ -12,6 +12,15 @@ def add_tracker_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--split", default=None, metavar="auto|R:E",
                    help="budget split between region and edge step: 'auto' (paper: all region below 200, "
                         "else 50/50) or a ratio like 1:1, 3:1, 1:0")
+    p.add_argument("--beam", type=int, default=None, metavar="K",
+                   help="pose hypotheses kept per frame (default 3; 1: a single hypothesis)")
+    p.add_argument("--lag", type=int, default=None, metavar="L",
+                   help="decide each frame's pose L frames later by the best path through the hypotheses "
+                        "(default 8; 0: at once)")
+    p.add_argument("--offline", action="store_true",
+                   help="decide every frame at the end of the video by the best path through all of them")
+    p.add_argument("--paper", action="store_true",
+                   help="the paper's method: one hypothesis, no recovery, re-acquisition, jumps or prior")
     p.add_argument("--config", type=Path, default=None, metavar="JSON",
                    help="TrackerConfig as JSON (options above override it)")
     p.add_argument("--max-frames", type=int, default=None, metavar="N", help="track only the first N frames")
@@ -25,12 +34,16 @@ def tracker_config(args: argparse.Namespace):
 
     from mocap.track import TrackerConfig
 
-    config = TrackerConfig.from_json(args.config) if args.config else TrackerConfig()
+    if args.config and args.paper:
+        raise ValueError("give either --config or --paper, not both")
+    config = (TrackerConfig.from_json(args.config) if args.config
+              else TrackerConfig.paper() if args.paper else TrackerConfig())
     changes = {}
-    if args.iterations is not None:
-        changes["evaluations"] = args.iterations
-    if args.split is not None:
-        changes["split"] = args.split
+    for option, name in (("iterations", "evaluations"), ("split", "split"), ("beam", "beam"), ("lag", "lag")):
+        if getattr(args, option) is not None:
+            changes[name] = getattr(args, option)
+    if args.offline:
+        changes["offline"] = True
     return dataclasses.replace(config, **changes) if changes else config
 
 
@@ -40,6 +53,7 @@ def print_summary(summary) -> None:
           f"(one core, image processing included); outputs in {summary.out_dir}")
     if summary.metrics:
         m = summary.metrics
-        print(f"accuracy vs ground truth: MPJPE {m['mpjpe_mm']:.1f} mm, PA-MPJPE {m['pa_mpjpe_mm']:.1f} mm, "
+        print(f"accuracy vs ground truth: MPJPE {m['mpjpe_mm']:.1f} mm, root-relative "
+              f"{m['root_relative_mpjpe_mm']:.1f} mm, PA-MPJPE {m['pa_mpjpe_mm']:.1f} mm, "
               f"joint angles {m['angle_error_deg']:.1f} deg, reprojection {m['reprojection_px']:.2f} px, "
               f"failure rate {100 * m['failure_rate']:.1f}% (MPJPE > 100 mm)")
