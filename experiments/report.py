@@ -535,13 +535,47 @@ def _clips_text(res: Results) -> str:
     return "\n".join(lines)
 
 
+def _section_markers(name: str) -> tuple[str, str]:
+    return f"<!-- section:{name} (generated) -->", f"<!-- /section:{name} -->"
+
+
+def generated_sections(text: str) -> str:
+    """The marked sections other experiments wrote into a report (see :func:`replace_section`)."""
+    out, start = [], 0
+    while (begin := text.find("<!-- section:", start)) >= 0:
+        name = text[begin + len("<!-- section:"):text.index(" ", begin + len("<!-- section:"))]
+        end = text.find(_section_markers(name)[1], begin)
+        if end < 0:
+            break
+        end += len(_section_markers(name)[1])
+        out.append(text[begin:end])
+        start = end
+    return "\n\n".join(out)
+
+
+def replace_section(path: Path, name: str, body: str) -> Path:
+    """Put ``body`` into the report at ``path`` between the markers of section ``name``
+    (replacing what they held, or appended at the end), atomically."""
+    begin, end = _section_markers(name)
+    text = path.read_text() if path.exists() else ""
+    block = f"{begin}\n{body.rstrip()}\n{end}"
+    if begin in text and end in text:
+        text = text[:text.index(begin)] + block + text[text.index(end) + len(end):]
+    else:
+        text = text.rstrip() + "\n\n" + block + "\n"
+    write_text_atomic(path, text)
+    return path
+
+
 def write_report(results: str | Path, out: str | Path, figures: str | Path) -> Path:
-    """Make every figure into ``figures`` and write the report to ``out``."""
+    """Make every figure into ``figures`` and write the report to ``out``, keeping the sections
+    other experiments generated into it (:func:`replace_section`)."""
     res = Results(results)
     out, figures = Path(out), Path(figures)
     make_all(res, figures, FIGURES)
     rel = os.path.relpath(figures.resolve(), out.resolve().parent)
-    write_text_atomic(out, build_report(res, Path(rel).as_posix()))
+    kept = generated_sections(out.read_text()) if out.exists() else ""
+    write_text_atomic(out, build_report(res, Path(rel).as_posix()).rstrip() + ("\n\n" + kept + "\n" if kept else "\n"))
     return out
 
 

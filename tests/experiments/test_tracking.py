@@ -1,0 +1,45 @@
+"""The tracking ablation's summaries, table, figure and report section, on made-up results."""
+import numpy as np
+import pytest
+
+from experiments.report import generated_sections, replace_section
+from experiments.tracking import CONFIGS, config_of, summarise, table
+from mocap.track import TrackerConfig
+
+
+def row(sequence, errors, eq=0.0):
+    errors = np.asarray(errors, dtype=float)
+    return {"sequence": sequence, "frames": len(errors), "mpjpe_mm": float(errors.mean()),
+            "root_relative_mpjpe_mm": float(errors.mean()) / 2, "pa_mpjpe_mm": float(errors.mean()) / 3,
+            "frame_mpjpe_mm": errors.tolist(), "beam_oracle_failure_rate": 0.0, "cost_equivalent_both_rate": eq,
+            "tracking_ms_per_frame": 20.0, "prepare_ms_per_frame": 5.0}
+
+
+def test_summary_pools_frames_and_takes_medians_over_sequences():
+    rows = [row("a", [10, 20, 30]), row("b", [200, 200, 50, 50, 50]), row("c", [60])]
+    s = summarise(rows)
+    assert s["median_mpjpe_mm"] == pytest.approx(60.0)             # medians of 20, 110, 60
+    assert s["failure_rate"] == pytest.approx(2 / 9)               # two of nine frames over 100 mm
+    assert s["worst_mpjpe_mm"] == pytest.approx(110.0)
+    assert s["ms_per_frame"] == pytest.approx(25.0)
+    text = table({"default": s})
+    assert "| default | 60 | 30 | 20 | 22.2 % | 110 |" in text and "(40)" in text
+
+
+def test_named_configurations():
+    assert config_of("paper") == TrackerConfig.paper()
+    assert config_of("default") == TrackerConfig()
+    assert all(isinstance(config_of(n), TrackerConfig) for n in CONFIGS)
+
+
+def test_report_sections_are_replaced_and_kept(tmp_path):
+    path = tmp_path / "REPORT.md"
+    path.write_text("# Report\n\nbody\n")
+    replace_section(path, "tracking", "## old")
+    replace_section(path, "peers", "## peers")
+    replace_section(path, "tracking", "## new")
+    text = path.read_text()
+    assert text.startswith("# Report\n\nbody\n") and "## old" not in text
+    assert text.index("## new") < text.index("## peers")
+    kept = generated_sections(text)
+    assert "## new" in kept and "## peers" in kept and "body" not in kept
