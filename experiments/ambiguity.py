@@ -146,11 +146,11 @@ def cost_equivalent_rates(error_mm: np.ndarray, tracked: np.ndarray, truth: np.n
     return float((failing & region_le).mean()), float((failing & both_le).mean())
 
 
-def _benchmark_sequence(sequence: str, root: Path, seed: int):
+def _benchmark_sequence(sequence: str, root: Path, seed: int, paper_model: bool = False):
     """The generated, prepared benchmark sequence (loaded sequence, prepared frames)."""
     spec = DataSpec(sequence, None, SEQUENCES[sequence].frames, seed, *SIZE)
-    folder = prepare_data(spec, str(root))
-    return load_sequence(folder), load_prepared(folder)
+    folder = prepare_data(spec, str(root), paper_model)
+    return load_sequence(folder, paper_model=paper_model), load_prepared(folder, paper_model)
 
 
 def lower_region_cost(forward: list, backward: list) -> list:
@@ -173,9 +173,11 @@ def lower_region_cost(forward: list, backward: list) -> list:
             for a, b in zip(forward, backward)]
 
 
-def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two_way: bool = False) -> dict:
-    """Track one benchmark sequence with ``config`` and measure its errors (see the module)."""
-    loaded, prepared = _benchmark_sequence(sequence, root, seed)
+def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two_way: bool = False,
+            paper_model: bool = False) -> dict:
+    """Track one benchmark sequence with ``config`` and measure its errors (see the module);
+    ``paper_model``: with the paper's two-class model (no hair region, no lower body)."""
+    loaded, prepared = _benchmark_sequence(sequence, root, seed, paper_model)
     camera = loaded.calibration.camera
     tracker = Tracker(loaded.model, camera, config, loaded.calibration.initial_pose)
     results = track_prepared(prepared, tracker)
@@ -191,7 +193,7 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
                             zip(map(tracker.costs, prepared), loaded.ground_truth.poses[: len(joints)])])
     equivalent, equivalent_both = cost_equivalent_rates(mpjpe(joints, truth, per_frame=True), tracked_costs,
                                                         truth_costs)
-    return {"sequence": sequence, "frames": len(joints),
+    return {"sequence": sequence, "frames": len(joints), "classes": ",".join(loaded.model.class_names),
             "mpjpe_mm": mpjpe(joints, truth), "failure_rate": failure_rate(joints, truth),
             "reprojection_px": reprojection_error(joints, truth, camera),
             "flip_oracle_mpjpe_mm": mpjpe(oracle, truth), "flip_oracle_failure_rate": failure_rate(oracle, truth),
@@ -234,9 +236,9 @@ def register_from_truth(prepared, model, camera, true_poses: np.ndarray, config:
 
 
 def measure_from_truth(sequence: str, config: TrackerConfig, root: Path, seed: int = 0,
-                       lags: tuple[int, ...] = (1, 3)) -> dict:
+                       lags: tuple[int, ...] = (1, 3), paper_model: bool = False) -> dict:
     """Registration error of one benchmark sequence from true start poses (see the module)."""
-    loaded, prepared = _benchmark_sequence(sequence, root, seed)
+    loaded, prepared = _benchmark_sequence(sequence, root, seed, paper_model)
     truth_poses, truth_joints = loaded.ground_truth.poses, loaded.ground_truth.joints
     row = {"sequence": sequence, "frames": len(prepared)}
     for lag in lags:
@@ -294,6 +296,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--from-truth", default=None, metavar="LAGS",
                    help="comma-separated frame lags, e.g. 1,3: register each frame from the true pose that many "
                         "frames earlier instead of tracking")
+    p.add_argument("--paper-model", action="store_true",
+                   help="the paper's model: skin and clothes only, no hair region, no lower body (default: the "
+                        "calibration's classes, those the first frame supports)")
     p.add_argument("--two-way", action="store_true",
                    help="track forwards and backwards and keep, per frame, the pose of lower F (offline)")
     return p
@@ -324,6 +329,7 @@ def main(argv=None) -> int:
             return 2
     key = config_key(config)
     suffix = ("-two-way" if args.two_way else "") if lags is None else "-truth" + "_".join(map(str, lags))
+    suffix += "-paper" if args.paper_model else ""
     rows = []
     for name in names:
         path = args.out / "units" / f"{name}-s{args.seed}-{key}{suffix}.json"
@@ -333,8 +339,8 @@ def main(argv=None) -> int:
                 rows.append(cached)
                 continue
         print(f"{'tracking' if lags is None else 'registering'} {name} ...", file=sys.stderr, flush=True)
-        row = (measure(name, config, args.out, args.seed, args.two_way) if lags is None
-               else measure_from_truth(name, config, args.out, args.seed, lags))
+        row = (measure(name, config, args.out, args.seed, args.two_way, args.paper_model) if lags is None
+               else measure_from_truth(name, config, args.out, args.seed, lags, args.paper_model))
         write_json(path, {"config": config.to_dict(), "result": row})
         rows.append(row)
     print(f"configuration {key} ({config.evaluations} evaluations per frame"

@@ -33,8 +33,10 @@ from mocap.io.atomic import write_bytes_atomic
 
 #: Folder names below the results folder.
 DATA_DIR, UNITS_DIR = "data", "units"
-#: Name of the prepared-frames file inside a sequence folder.
+#: Name of the prepared-frames file inside a sequence folder (the calibration's colour classes).
 PREPARED_FILE = "prepared.npz"
+#: The same, with the paper's two colour classes (``paper_model``).
+PREPARED_FILE_PAPER = "prepared-paper.npz"
 #: Per-frame arrays of a run unit's result, besides ``meta``.
 FRAME_ARRAYS: tuple[str, ...] = (
     "frame", "region_residual", "edge_residual", "edge_residual_after_region", "empty", "evaluations",
@@ -150,7 +152,7 @@ def data_folder(spec: DataSpec, root: str | Path) -> Path:
     return Path(root) / DATA_DIR / spec.key
 
 
-def prepare_data(spec: DataSpec, root: str) -> str:
+def prepare_data(spec: DataSpec, root: str, paper_model: bool = False) -> str:
     """Generate the sequence of ``spec`` (if not there yet) and its prepared frames.
 
     Parameters
@@ -158,6 +160,9 @@ def prepare_data(spec: DataSpec, root: str) -> str:
     spec : DataSpec
     root : str
         Results folder.
+    paper_model : bool
+        Prepare the label images for the paper's model (see :func:`load_sequence`), in
+        :data:`PREPARED_FILE_PAPER`.
 
     Returns
     -------
@@ -172,8 +177,10 @@ def prepare_data(spec: DataSpec, root: str) -> str:
         generate_sequence(spec.actor, folder, frames=spec.frames if spec.motion is None else None, seed=spec.seed,
                           size=(spec.width, spec.height), motion=spec.motion, progress=False)
         (folder / PREPARED_FILE).unlink(missing_ok=True)
-    if not (folder / PREPARED_FILE).is_file():
-        sequence = load_sequence(folder, spec.frames)
+        (folder / PREPARED_FILE_PAPER).unlink(missing_ok=True)
+    prepared_file = PREPARED_FILE_PAPER if paper_model else PREPARED_FILE
+    if not (folder / prepared_file).is_file():
+        sequence = load_sequence(folder, spec.frames, paper_model=paper_model)
         prepared = [sequence.prepare(f) for f in sequence.frames]
         keys = tuple(prepared[0].timings)
         buf = io.BytesIO()
@@ -182,7 +189,7 @@ def prepare_data(spec: DataSpec, root: str) -> str:
             edges=np.stack([p.edges for p in prepared]), distance=np.stack([p.distance for p in prepared]),
             is_empty=np.array([p.is_empty for p in prepared]), timing_keys=np.array(keys),
             timings=np.array([[p.timings[k] for k in keys] for p in prepared], dtype=np.float64))
-        write_bytes_atomic(folder / PREPARED_FILE, buf.getvalue())
+        write_bytes_atomic(folder / prepared_file, buf.getvalue())
     return str(folder)
 
 
@@ -206,43 +213,52 @@ class LoadedSequence:
         return prepare_frame(frame, self.background, self.colour_model)
 
 
-def load_sequence(folder: str | Path, frames: int | None = None) -> LoadedSequence:
+def load_sequence(folder: str | Path, frames: int | None = None, paper_model: bool = False) -> LoadedSequence:
     """Read a synthetic sequence folder and build its model and colour model.
 
     The colour classes are learnt from the first frame inside the calibrated (true) pose, as
-    ``python -m mocap track`` does by default.
+    ``python -m mocap track`` does by default, and the model keeps the classes the colour model
+    kept (a hair or lower-body class the frame does not support is merged).
 
     Parameters
     ----------
     folder : str or Path
     frames : int, optional
         Read only the first ``frames`` frames (all when None or when the sequence is shorter).
+    paper_model : bool
+        Use the paper's model instead of the calibration's: the same dimensions without the
+        hair region and the lower body, and the colour classes skin and clothes only.
     """
     from mocap.body import resolution_for_image
     from mocap.calibrate import Calibration, colour_model_from_pose
     from mocap.io.pose_table import PoseTable
     from mocap.io.sequence import find_sequence
     from mocap.io.video import iter_frames, read_image
+    from mocap.labels import PAPER_CLASS_NAMES
 
     paths = find_sequence(folder)
     if paths.calibration is None or paths.ground_truth is None:
         raise ValueError(f"{folder} is not a synthetic sequence folder (calibration.json and ground_truth.csv needed)")
     calibration = Calibration.from_json(paths.calibration)
+    if paper_model:
+        calibration = Calibration(calibration.dims.without_extensions(), calibration.initial_pose,
+                                  calibration.camera, PAPER_CLASS_NAMES, calibration.part_class)
     camera = calibration.camera
     model = calibration.body_model(resolution_for_image(camera.width, camera.height))
     frames = list(iter_frames(paths.frames, 0, frames))
     background = read_image(paths.background) if paths.background is not None else None
     colour = colour_model_from_pose(frames[0], background, model, camera, calibration.initial_pose)
+    model = model.with_class_names(colour.names)
     meta = json.loads(paths.meta.read_text()) if paths.meta is not None else {}
     return LoadedSequence(Path(folder), calibration, model, frames, background, colour,
                           PoseTable.read(paths.ground_truth), meta)
 
 
-def load_prepared(folder: str | Path) -> list:
+def load_prepared(folder: str | Path, paper_model: bool = False) -> list:
     """The prepared frames stored by :func:`prepare_data`, as :class:`mocap.imaging.PreparedFrame`."""
     from mocap.imaging import PreparedFrame
 
-    with np.load(Path(folder) / PREPARED_FILE, allow_pickle=False) as z:
+    with np.load(Path(folder) / (PREPARED_FILE_PAPER if paper_model else PREPARED_FILE), allow_pickle=False) as z:
         arrays = {k: z[k] for k in z.files}
     keys = [str(k) for k in arrays["timing_keys"]]
     return [PreparedFrame(labels=np.ascontiguousarray(arrays["labels"][i]),
