@@ -285,6 +285,31 @@ def table_from_truth(rows: list[dict], lags: tuple[int, ...]) -> str:
     return "\n".join(lines)
 
 
+def pooled_table(rows: list[dict]) -> str:
+    """Markdown table of :func:`measure` results over several seeds (rows carry ``seed``): per
+    sequence the median over seeds of the MPJPE and the frame-weighted (pooled) rates, then all
+    sequences pooled."""
+    cols = ("failure_rate", "cost_equivalent_failure_rate", "cost_equivalent_both_rate")
+    head = ("sequence", "seeds", "frames", "MPJPE mm (median over seeds)", f"frames > {DEFAULT_FAILURE_MM:g} mm",
+            "failing, F <= truth's", "failing, F and edge <= truth's")
+    pct = lambda v: f"{100 * v:.1f} %"
+
+    def pooled(group):
+        frames = np.array([r["frames"] for r in group], dtype=np.float64)
+        return [pct(float(np.dot(frames, [r[c] for r in group]) / frames.sum())) for c in cols]
+
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    names = list(dict.fromkeys(r["sequence"] for r in rows))
+    for name in names:
+        group = [r for r in rows if r["sequence"] == name]
+        lines.append("| " + " | ".join([name, ",".join(str(r["seed"]) for r in group), str(sum(r["frames"] for r in group)),
+                                         f"{np.median([r['mpjpe_mm'] for r in group]):.0f}"] + pooled(group)) + " |")
+    lines.append("| **all** | " + " | ".join([",".join(sorted({str(r["seed"]) for r in rows})),
+                                              str(sum(r["frames"] for r in rows)),
+                                              f"{np.median([r['mpjpe_mm'] for r in rows]):.0f}"] + pooled(rows)) + " |")
+    return "\n".join(lines)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python -m experiments.ambiguity", description=__doc__.split("\n\n")[0])
     p.add_argument("--sequences", default=",".join(SEQUENCE_NAMES),
@@ -292,7 +317,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--evaluations", type=int, default=None, help="cost evaluations per frame (default: the config's)")
     p.add_argument("--config", type=Path, default=None, help="TrackerConfig JSON (default: the tracker's defaults)")
     p.add_argument("--out", type=Path, default=RESULTS_DIR / "ambiguity", help="results folder")
-    p.add_argument("--seed", type=int, default=0, help="sequence generator seed")
+    p.add_argument("--seed", default="0",
+                   help="sequence generator seed, or comma-separated seeds (e.g. 0,1,2,3,4: adds a table pooled "
+                        "over the seeds)")
     p.add_argument("--from-truth", default=None, metavar="LAGS",
                    help="comma-separated frame lags, e.g. 1,3: register each frame from the true pose that many "
                         "frames earlier instead of tracking")
@@ -327,25 +354,41 @@ def main(argv=None) -> int:
         if args.two_way:
             print("error: --two-way tracks; it cannot be combined with --from-truth", file=sys.stderr)
             return 2
+    try:
+        seeds = tuple(int(v) for v in args.seed.split(",") if v.strip())
+    except ValueError:
+        seeds = ()
+    if not seeds:
+        print(f"error: --seed takes an integer or comma-separated integers, got {args.seed!r}", file=sys.stderr)
+        return 2
     key = config_key(config)
     suffix = ("-two-way" if args.two_way else "") if lags is None else "-truth" + "_".join(map(str, lags))
     suffix += "-paper" if args.paper_model else ""
-    rows = []
-    for name in names:
-        path = args.out / "units" / f"{name}-s{args.seed}-{key}{suffix}.json"
-        if path.is_file():
-            cached = read_json(path)["result"]
-            if lags is not None or "cost_equivalent_failure_rate" in cached:   # older files lack it
-                rows.append(cached)
-                continue
-        print(f"{'tracking' if lags is None else 'registering'} {name} ...", file=sys.stderr, flush=True)
-        row = (measure(name, config, args.out, args.seed, args.two_way, args.paper_model) if lags is None
-               else measure_from_truth(name, config, args.out, args.seed, lags, args.paper_model))
-        write_json(path, {"config": config.to_dict(), "result": row})
-        rows.append(row)
-    print(f"configuration {key} ({config.evaluations} evaluations per frame"
-          f"{', tracked both ways' if args.two_way else ''})\n")
-    print(table(rows) if lags is None else table_from_truth(rows, lags))
+    every = []
+    for seed in seeds:
+        rows = []
+        for name in names:
+            path = args.out / "units" / f"{name}-s{seed}-{key}{suffix}.json"
+            if path.is_file():
+                cached = read_json(path)["result"]
+                if lags is not None or "cost_equivalent_failure_rate" in cached:   # older files lack it
+                    rows.append(cached)
+                    continue
+            print(f"{'tracking' if lags is None else 'registering'} {name} (seed {seed}) ...", file=sys.stderr,
+                  flush=True)
+            row = (measure(name, config, args.out, seed, args.two_way, args.paper_model) if lags is None
+                   else measure_from_truth(name, config, args.out, seed, lags, args.paper_model))
+            write_json(path, {"config": config.to_dict(), "result": row})
+            rows.append(row)
+        print(f"configuration {key} ({config.evaluations} evaluations per frame"
+              f"{', tracked both ways' if args.two_way else ''}{', paper model' if args.paper_model else ''}), "
+              f"seed {seed}\n")
+        print(table(rows) if lags is None else table_from_truth(rows, lags))
+        print()
+        every += [{**r, "seed": seed} for r in rows]
+    if len(seeds) > 1 and lags is None:
+        print(f"pooled over seeds {', '.join(map(str, seeds))}\n")
+        print(pooled_table(every))
     return 0
 
 
