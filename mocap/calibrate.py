@@ -12,7 +12,7 @@ from typing import Mapping
 
 import numpy as np
 
-from mocap.body.dimensions import DEFAULT_HAIRLINE, PART_NAMES, BodyDimensions
+from mocap.body.dimensions import BodyDimensions
 from mocap.body.model import BodyModel
 from mocap.body.pose import check_pose, neutral_pose, pose_from_dict, pose_to_dict
 from mocap.body.skeleton import DEFAULT_PART_CLASS, MESH_PART_NAMES
@@ -270,7 +270,7 @@ def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *,
     foreground = subtract_background(frame, background, imaging)
     if np.count_nonzero(foreground) < 50:
         raise ValueError("no actor in the first frame (the foreground is empty): cannot calibrate")
-    one_class = {p: "body" for p in PART_NAMES}
+    one_class = {p: "body" for p in MESH_PART_NAMES}
     pose_index = np.array([PARAMETER_INDEX[n] for n in CALIBRATED_POSE_PARAMETERS])
     n_pose, n_fac = len(pose_index), len(PROPORTION_FACTORS)
     lower = np.r_[JOINT_LIMITS[pose_index, 0], np.full(n_fac, PROPORTION_RANGE[0])]

@@ -195,3 +195,41 @@ def test_dimensions_without_extensions_round_trip_as_the_paper_model(tmp_path):
         dims.with_hairline(1.5)
     assert BodyDimensions().scaled(2.0).hairline == BodyDimensions().hairline
     assert BodyDimensions().scaled(2.0)["lower_body"] == PartSize(0.6, 0.64, 0.46)
+
+
+@pytest.mark.slow
+def test_auto_calibration_sets_the_lower_body_and_the_hairline():
+    from mocap.calibrate import auto_calibrate
+    a = actor()
+    pose = actor_pose(0.0)
+    pose[P["root_z"]] = 1.5
+    frame, background = frame_of(a, pose)
+    cal = auto_calibrate(frame, background, CAMERA)
+    base = BodyDimensions()
+    assert "lower_body" in cal.class_names and cal.dims.has("lower_body")
+    # the lower body follows the fitted torso width
+    ratio = lambda d: d["lower_body"].width / d["torso"].width
+    assert ratio(cal.dims) == pytest.approx(ratio(base))
+    assert cal.dims.hairline is not None
+    if "hair" in cal.class_names:                            # fitted only when the frame supports hair
+        assert 0.0 <= cal.dims.hairline <= 0.9
+    else:
+        assert cal.dims.hairline == base.hairline
+    model = cal.body_model(8)
+    assert model.class_names == cal.class_names
+    assert np.linalg.norm(model.joint_positions(cal.initial_pose) - BodyModel.build(a.dims).joint_positions(pose),
+                          axis=1).mean() < 0.08
+
+
+def test_calibration_file_from_before_the_classes_loads_as_the_paper_model():
+    from mocap.body.skeleton import DEFAULT_PART_CLASS
+    old = Calibration(BodyDimensions().without_extensions(), class_names=PAPER_CLASS_NAMES).to_dict()
+    old["part_class"] = {p: DEFAULT_PART_CLASS[p] for p in PART_NAMES}          # the nine parts of old files
+    model = Calibration.from_dict(old).body_model(8)
+    paper = BodyModel.build(BodyDimensions().without_extensions(), resolution=8)
+    assert model.class_names == PAPER_CLASS_NAMES
+    np.testing.assert_array_equal(model.mesh.triangle_part, paper.mesh.triangle_part)
+    np.testing.assert_array_equal(model.part_label[:len(PART_NAMES)], paper.part_label[:len(PART_NAMES)])
+    # the default calibration has every class and round-trips
+    full = Calibration()
+    assert Calibration.from_dict(full.to_dict()).body_model(8).class_names == ("skin", "clothes", "hair", "lower_body")
