@@ -50,7 +50,8 @@ from pathlib import Path
 import numpy as np
 
 from experiments import RESULTS_DIR
-from experiments.units import DataSpec, load_prepared, load_sequence, prepare_data
+from experiments.units import (EXTENSIONS, PREPARED_FILE, PREPARED_FILE_PAPER, DataSpec, load_prepared, load_sequence,
+                               prepare_data, prepared_file)
 from mocap.body import JOINT_NAMES
 from mocap.io.jsonfile import read_json, write_json
 from mocap.metrics import DEFAULT_FAILURE_MM, failure_rate, mpjpe, reprojection_error
@@ -146,11 +147,11 @@ def cost_equivalent_rates(error_mm: np.ndarray, tracked: np.ndarray, truth: np.n
     return float((failing & region_le).mean()), float((failing & both_le).mean())
 
 
-def _benchmark_sequence(sequence: str, root: Path, seed: int, paper_model: bool = False):
+def _benchmark_sequence(sequence: str, root: Path, seed: int, without: tuple[str, ...] = ()):
     """The generated, prepared benchmark sequence (loaded sequence, prepared frames)."""
     spec = DataSpec(sequence, None, SEQUENCES[sequence].frames, seed, *SIZE)
-    folder = prepare_data(spec, str(root), paper_model)
-    return load_sequence(folder, paper_model=paper_model), load_prepared(folder, paper_model)
+    folder = prepare_data(spec, str(root), without)
+    return load_sequence(folder, without=without), load_prepared(folder, without)
 
 
 def lower_region_cost(forward: list, backward: list) -> list:
@@ -174,10 +175,11 @@ def lower_region_cost(forward: list, backward: list) -> list:
 
 
 def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two_way: bool = False,
-            paper_model: bool = False) -> dict:
+            without: tuple[str, ...] = ()) -> dict:
     """Track one benchmark sequence with ``config`` and measure its errors (see the module);
-    ``paper_model``: with the paper's two-class model (no hair region, no lower body)."""
-    loaded, prepared = _benchmark_sequence(sequence, root, seed, paper_model)
+    ``without``: model extensions left out (:func:`experiments.units.load_sequence`; both: the
+    paper's two-class model)."""
+    loaded, prepared = _benchmark_sequence(sequence, root, seed, without)
     camera = loaded.calibration.camera
     tracker = Tracker(loaded.model, camera, config, loaded.calibration.initial_pose)
     results = track_prepared(prepared, tracker)
@@ -236,9 +238,9 @@ def register_from_truth(prepared, model, camera, true_poses: np.ndarray, config:
 
 
 def measure_from_truth(sequence: str, config: TrackerConfig, root: Path, seed: int = 0,
-                       lags: tuple[int, ...] = (1, 3), paper_model: bool = False) -> dict:
+                       lags: tuple[int, ...] = (1, 3), without: tuple[str, ...] = ()) -> dict:
     """Registration error of one benchmark sequence from true start poses (see the module)."""
-    loaded, prepared = _benchmark_sequence(sequence, root, seed, paper_model)
+    loaded, prepared = _benchmark_sequence(sequence, root, seed, without)
     truth_poses, truth_joints = loaded.ground_truth.poses, loaded.ground_truth.joints
     row = {"sequence": sequence, "frames": len(prepared)}
     for lag in lags:
@@ -325,7 +327,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "frames earlier instead of tracking")
     p.add_argument("--paper-model", action="store_true",
                    help="the paper's model: skin and clothes only, no hair region, no lower body (default: the "
-                        "calibration's classes, those the first frame supports)")
+                        "calibration's classes, those the first frame supports); as --without hair,lower_body")
+    p.add_argument("--without", default="", metavar="PARTS",
+                   help=f"comma-separated model extensions to leave out: {', '.join(EXTENSIONS)}")
     p.add_argument("--two-way", action="store_true",
                    help="track forwards and backwards and keep, per frame, the pose of lower F (offline)")
     return p
@@ -354,6 +358,11 @@ def main(argv=None) -> int:
         if args.two_way:
             print("error: --two-way tracks; it cannot be combined with --from-truth", file=sys.stderr)
             return 2
+    without = tuple(v.strip() for v in args.without.split(",") if v.strip())
+    without = EXTENSIONS if args.paper_model else without
+    if set(without) - set(EXTENSIONS):
+        print(f"error: --without takes {', '.join(EXTENSIONS)}, got {args.without!r}", file=sys.stderr)
+        return 2
     try:
         seeds = tuple(int(v) for v in args.seed.split(",") if v.strip())
     except ValueError:
@@ -363,7 +372,8 @@ def main(argv=None) -> int:
         return 2
     key = config_key(config)
     suffix = ("-two-way" if args.two_way else "") if lags is None else "-truth" + "_".join(map(str, lags))
-    suffix += "-paper" if args.paper_model else ""
+    suffix += {PREPARED_FILE_PAPER: "-paper", PREPARED_FILE: ""}.get(
+        prepared_file(without), "-without-" + "-".join(e for e in EXTENSIONS if e in without))
     every = []
     for seed in seeds:
         rows = []
@@ -376,12 +386,12 @@ def main(argv=None) -> int:
                     continue
             print(f"{'tracking' if lags is None else 'registering'} {name} (seed {seed}) ...", file=sys.stderr,
                   flush=True)
-            row = (measure(name, config, args.out, seed, args.two_way, args.paper_model) if lags is None
-                   else measure_from_truth(name, config, args.out, seed, lags, args.paper_model))
+            row = (measure(name, config, args.out, seed, args.two_way, without) if lags is None
+                   else measure_from_truth(name, config, args.out, seed, lags, without))
             write_json(path, {"config": config.to_dict(), "result": row})
             rows.append(row)
         print(f"configuration {key} ({config.evaluations} evaluations per frame"
-              f"{', tracked both ways' if args.two_way else ''}{', paper model' if args.paper_model else ''}), "
+              f"{', tracked both ways' if args.two_way else ''}{', without ' + ', '.join(without) if without else ''}), "
               f"seed {seed}\n")
         print(table(rows) if lags is None else table_from_truth(rows, lags))
         print()

@@ -35,8 +35,18 @@ from mocap.io.atomic import write_bytes_atomic
 DATA_DIR, UNITS_DIR = "data", "units"
 #: Name of the prepared-frames file inside a sequence folder (the calibration's colour classes).
 PREPARED_FILE = "prepared.npz"
-#: The same, with the paper's two colour classes (``paper_model``).
+#: The same, with the paper's two colour classes (``without`` hair and lower body).
 PREPARED_FILE_PAPER = "prepared-paper.npz"
+#: Model extensions an experiment can leave out (:func:`load_sequence`).
+EXTENSIONS: tuple[str, ...] = ("hair", "lower_body")
+
+
+def prepared_file(without: tuple[str, ...] = ()) -> str:
+    """Name of the prepared-frames file for a model without the extensions ``without``."""
+    left_out = [e for e in EXTENSIONS if e in without]
+    if len(left_out) == len(EXTENSIONS):
+        return PREPARED_FILE_PAPER
+    return "prepared-without-" + "-".join(left_out) + ".npz" if left_out else PREPARED_FILE
 #: Per-frame arrays of a run unit's result, besides ``meta``.
 FRAME_ARRAYS: tuple[str, ...] = (
     "frame", "region_residual", "edge_residual", "edge_residual_after_region", "empty", "evaluations",
@@ -152,7 +162,7 @@ def data_folder(spec: DataSpec, root: str | Path) -> Path:
     return Path(root) / DATA_DIR / spec.key
 
 
-def prepare_data(spec: DataSpec, root: str, paper_model: bool = False) -> str:
+def prepare_data(spec: DataSpec, root: str, without: tuple[str, ...] = ()) -> str:
     """Generate the sequence of ``spec`` (if not there yet) and its prepared frames.
 
     Parameters
@@ -160,9 +170,9 @@ def prepare_data(spec: DataSpec, root: str, paper_model: bool = False) -> str:
     spec : DataSpec
     root : str
         Results folder.
-    paper_model : bool
-        Prepare the label images for the paper's model (see :func:`load_sequence`), in
-        :data:`PREPARED_FILE_PAPER`.
+    without : tuple of str
+        Prepare the label images for the model without these extensions (see
+        :func:`load_sequence`), in :func:`prepared_file`.
 
     Returns
     -------
@@ -176,11 +186,11 @@ def prepare_data(spec: DataSpec, root: str, paper_model: bool = False) -> str:
         # a clip is generated whole (its length is only known once retargeted) and used up to spec.frames
         generate_sequence(spec.actor, folder, frames=spec.frames if spec.motion is None else None, seed=spec.seed,
                           size=(spec.width, spec.height), motion=spec.motion, progress=False)
-        (folder / PREPARED_FILE).unlink(missing_ok=True)
-        (folder / PREPARED_FILE_PAPER).unlink(missing_ok=True)
-    prepared_file = PREPARED_FILE_PAPER if paper_model else PREPARED_FILE
-    if not (folder / prepared_file).is_file():
-        sequence = load_sequence(folder, spec.frames, paper_model=paper_model)
+        for old in folder.glob("prepared*.npz"):
+            old.unlink()
+    name = prepared_file(without)
+    if not (folder / name).is_file():
+        sequence = load_sequence(folder, spec.frames, without=without)
         prepared = [sequence.prepare(f) for f in sequence.frames]
         keys = tuple(prepared[0].timings)
         buf = io.BytesIO()
@@ -189,7 +199,7 @@ def prepare_data(spec: DataSpec, root: str, paper_model: bool = False) -> str:
             edges=np.stack([p.edges for p in prepared]), distance=np.stack([p.distance for p in prepared]),
             is_empty=np.array([p.is_empty for p in prepared]), timing_keys=np.array(keys),
             timings=np.array([[p.timings[k] for k in keys] for p in prepared], dtype=np.float64))
-        write_bytes_atomic(folder / prepared_file, buf.getvalue())
+        write_bytes_atomic(folder / name, buf.getvalue())
     return str(folder)
 
 
@@ -213,7 +223,7 @@ class LoadedSequence:
         return prepare_frame(frame, self.background, self.colour_model)
 
 
-def load_sequence(folder: str | Path, frames: int | None = None, paper_model: bool = False) -> LoadedSequence:
+def load_sequence(folder: str | Path, frames: int | None = None, without: tuple[str, ...] = ()) -> LoadedSequence:
     """Read a synthetic sequence folder and build its model and colour model.
 
     The colour classes are learnt from the first frame inside the calibrated (true) pose, as
@@ -225,24 +235,33 @@ def load_sequence(folder: str | Path, frames: int | None = None, paper_model: bo
     folder : str or Path
     frames : int, optional
         Read only the first ``frames`` frames (all when None or when the sequence is shorter).
-    paper_model : bool
-        Use the paper's model instead of the calibration's: the same dimensions without the
-        hair region and the lower body, and the colour classes skin and clothes only.
+    without : tuple of str
+        Leave model extensions (:data:`EXTENSIONS`) out of the calibration: ``"hair"`` (no hair
+        region, no hair class), ``"lower_body"`` (no lower-body part, no such class); both
+        give the paper's model (skin and clothes only).
     """
     from mocap.body import resolution_for_image
     from mocap.calibrate import Calibration, colour_model_from_pose
     from mocap.io.pose_table import PoseTable
     from mocap.io.sequence import find_sequence
     from mocap.io.video import iter_frames, read_image
-    from mocap.labels import PAPER_CLASS_NAMES
+    from mocap.body import BodyDimensions
 
     paths = find_sequence(folder)
     if paths.calibration is None or paths.ground_truth is None:
         raise ValueError(f"{folder} is not a synthetic sequence folder (calibration.json and ground_truth.csv needed)")
     calibration = Calibration.from_json(paths.calibration)
-    if paper_model:
-        calibration = Calibration(calibration.dims.without_extensions(), calibration.initial_pose,
-                                  calibration.camera, PAPER_CLASS_NAMES, calibration.part_class)
+    unknown = set(without) - set(EXTENSIONS)
+    if unknown:
+        raise ValueError(f"unknown model extension(s) {sorted(unknown)}; known: {', '.join(EXTENSIONS)}")
+    if without:
+        dims = calibration.dims
+        if "hair" in without:
+            dims = dims.with_hairline(None)
+        if "lower_body" in without:
+            dims = BodyDimensions({n: v for n, v in dims.parts.items() if n != "lower_body"}, dims.hairline)
+        classes = tuple(c for c in calibration.class_names if c not in without)
+        calibration = Calibration(dims, calibration.initial_pose, calibration.camera, classes, calibration.part_class)
     camera = calibration.camera
     model = calibration.body_model(resolution_for_image(camera.width, camera.height))
     frames = list(iter_frames(paths.frames, 0, frames))
@@ -254,11 +273,11 @@ def load_sequence(folder: str | Path, frames: int | None = None, paper_model: bo
                           PoseTable.read(paths.ground_truth), meta)
 
 
-def load_prepared(folder: str | Path, paper_model: bool = False) -> list:
+def load_prepared(folder: str | Path, without: tuple[str, ...] = ()) -> list:
     """The prepared frames stored by :func:`prepare_data`, as :class:`mocap.imaging.PreparedFrame`."""
     from mocap.imaging import PreparedFrame
 
-    with np.load(Path(folder) / (PREPARED_FILE_PAPER if paper_model else PREPARED_FILE), allow_pickle=False) as z:
+    with np.load(Path(folder) / prepared_file(without), allow_pickle=False) as z:
         arrays = {k: z[k] for k in z.files}
     keys = [str(k) for k in arrays["timing_keys"]]
     return [PreparedFrame(labels=np.ascontiguousarray(arrays["labels"][i]),
