@@ -56,7 +56,8 @@ from pathlib import Path
 import numpy as np
 
 from experiments import RESULTS_DIR
-from experiments.units import DataSpec, load_prepared, load_sequence, prepare_data
+from experiments.units import (EXTENSIONS, PREPARED_FILE, PREPARED_FILE_PAPER, DataSpec, load_prepared, load_sequence,
+                               prepare_data, prepared_file)
 from mocap.body import JOINT_NAMES
 from mocap.io.jsonfile import read_json, write_json
 from mocap.metrics import DEFAULT_FAILURE_MM, failure_rate, mpjpe, pa_mpjpe, reprojection_error, root_relative_mpjpe
@@ -152,11 +153,11 @@ def cost_equivalent_rates(error_mm: np.ndarray, tracked: np.ndarray, truth: np.n
     return float((failing & region_le).mean()), float((failing & both_le).mean())
 
 
-def _benchmark_sequence(sequence: str, root: Path, seed: int):
+def _benchmark_sequence(sequence: str, root: Path, seed: int, without: tuple[str, ...] = ()):
     """The generated, prepared benchmark sequence (loaded sequence, prepared frames)."""
     spec = DataSpec(sequence, None, SEQUENCES[sequence].frames, seed, *SIZE)
-    folder = prepare_data(spec, str(root))
-    return load_sequence(folder), load_prepared(folder)
+    folder = prepare_data(spec, str(root), without)
+    return load_sequence(folder, without=without), load_prepared(folder, without)
 
 
 def lower_region_cost(forward: list, backward: list) -> list:
@@ -179,9 +180,12 @@ def lower_region_cost(forward: list, backward: list) -> list:
             for a, b in zip(forward, backward)]
 
 
-def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two_way: bool = False) -> dict:
-    """Track one benchmark sequence with ``config`` and measure its errors (see the module)."""
-    loaded, prepared = _benchmark_sequence(sequence, root, seed)
+def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two_way: bool = False,
+            without: tuple[str, ...] = ()) -> dict:
+    """Track one benchmark sequence with ``config`` and measure its errors (see the module);
+    ``without``: model extensions left out (:func:`experiments.units.load_sequence`; both: the
+    paper's two-class model)."""
+    loaded, prepared = _benchmark_sequence(sequence, root, seed, without)
     camera = loaded.calibration.camera
     tracker = Tracker(loaded.model, camera, config, loaded.calibration.initial_pose)
     truth_joints = loaded.ground_truth.joints
@@ -207,7 +211,7 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
                             zip(map(tracker.costs, prepared), loaded.ground_truth.poses[: len(joints)])])
     equivalent, equivalent_both = cost_equivalent_rates(mpjpe(joints, truth, per_frame=True), tracked_costs,
                                                         truth_costs)
-    return {"sequence": sequence, "frames": len(joints),
+    return {"sequence": sequence, "frames": len(joints), "classes": ",".join(loaded.model.class_names),
             "mpjpe_mm": mpjpe(joints, truth), "failure_rate": failure_rate(joints, truth),
             "root_relative_mpjpe_mm": root_relative_mpjpe(joints, truth), "pa_mpjpe_mm": pa_mpjpe(joints, truth),
             "frame_mpjpe_mm": mpjpe(joints, truth, per_frame=True).tolist(),
@@ -256,9 +260,9 @@ def register_from_truth(prepared, model, camera, true_poses: np.ndarray, config:
 
 
 def measure_from_truth(sequence: str, config: TrackerConfig, root: Path, seed: int = 0,
-                       lags: tuple[int, ...] = (1, 3)) -> dict:
+                       lags: tuple[int, ...] = (1, 3), without: tuple[str, ...] = ()) -> dict:
     """Registration error of one benchmark sequence from true start poses (see the module)."""
-    loaded, prepared = _benchmark_sequence(sequence, root, seed)
+    loaded, prepared = _benchmark_sequence(sequence, root, seed, without)
     truth_poses, truth_joints = loaded.ground_truth.poses, loaded.ground_truth.joints
     row = {"sequence": sequence, "frames": len(prepared)}
     for lag in lags:
@@ -305,6 +309,31 @@ def table_from_truth(rows: list[dict], lags: tuple[int, ...]) -> str:
     return "\n".join(lines)
 
 
+def pooled_table(rows: list[dict]) -> str:
+    """Markdown table of :func:`measure` results over several seeds (rows carry ``seed``): per
+    sequence the median over seeds of the MPJPE and the frame-weighted (pooled) rates, then all
+    sequences pooled."""
+    cols = ("failure_rate", "cost_equivalent_failure_rate", "cost_equivalent_both_rate")
+    head = ("sequence", "seeds", "frames", "MPJPE mm (median over seeds)", f"frames > {DEFAULT_FAILURE_MM:g} mm",
+            "failing, F <= truth's", "failing, F and edge <= truth's")
+    pct = lambda v: f"{100 * v:.1f} %"
+
+    def pooled(group):
+        frames = np.array([r["frames"] for r in group], dtype=np.float64)
+        return [pct(float(np.dot(frames, [r[c] for r in group]) / frames.sum())) for c in cols]
+
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    names = list(dict.fromkeys(r["sequence"] for r in rows))
+    for name in names:
+        group = [r for r in rows if r["sequence"] == name]
+        lines.append("| " + " | ".join([name, ",".join(str(r["seed"]) for r in group), str(sum(r["frames"] for r in group)),
+                                         f"{np.median([r['mpjpe_mm'] for r in group]):.0f}"] + pooled(group)) + " |")
+    lines.append("| **all** | " + " | ".join([",".join(sorted({str(r["seed"]) for r in rows})),
+                                              str(sum(r["frames"] for r in rows)),
+                                              f"{np.median([r['mpjpe_mm'] for r in rows]):.0f}"] + pooled(rows)) + " |")
+    return "\n".join(lines)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python -m experiments.ambiguity", description=__doc__.split("\n\n")[0])
     p.add_argument("--sequences", default=",".join(SEQUENCE_NAMES),
@@ -312,10 +341,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--evaluations", type=int, default=None, help="cost evaluations per frame (default: the config's)")
     p.add_argument("--config", type=Path, default=None, help="TrackerConfig JSON (default: the tracker's defaults)")
     p.add_argument("--out", type=Path, default=RESULTS_DIR / "ambiguity", help="results folder")
-    p.add_argument("--seed", type=int, default=0, help="sequence generator seed")
+    p.add_argument("--seed", default="0",
+                   help="sequence generator seed, or comma-separated seeds (e.g. 0,1,2,3,4: adds a table pooled "
+                        "over the seeds)")
     p.add_argument("--from-truth", default=None, metavar="LAGS",
                    help="comma-separated frame lags, e.g. 1,3: register each frame from the true pose that many "
                         "frames earlier instead of tracking")
+    p.add_argument("--paper-model", action="store_true",
+                   help="the paper's model: skin and clothes only, no hair region, no lower body (default: the "
+                        "calibration's classes, those the first frame supports); as --without hair,lower_body")
+    p.add_argument("--without", default="", metavar="PARTS",
+                   help=f"comma-separated model extensions to leave out: {', '.join(EXTENSIONS)}")
     p.add_argument("--two-way", action="store_true",
                    help="track forwards and backwards and keep, per frame, the pose of lower F (offline)")
     return p
@@ -344,24 +380,47 @@ def main(argv=None) -> int:
         if args.two_way:
             print("error: --two-way tracks; it cannot be combined with --from-truth", file=sys.stderr)
             return 2
+    without = tuple(v.strip() for v in args.without.split(",") if v.strip())
+    without = EXTENSIONS if args.paper_model else without
+    if set(without) - set(EXTENSIONS):
+        print(f"error: --without takes {', '.join(EXTENSIONS)}, got {args.without!r}", file=sys.stderr)
+        return 2
+    try:
+        seeds = tuple(int(v) for v in args.seed.split(",") if v.strip())
+    except ValueError:
+        seeds = ()
+    if not seeds:
+        print(f"error: --seed takes an integer or comma-separated integers, got {args.seed!r}", file=sys.stderr)
+        return 2
     key = config_key(config)
     suffix = ("-two-way" if args.two_way else "") if lags is None else "-truth" + "_".join(map(str, lags))
-    rows = []
-    for name in names:
-        path = args.out / "units" / f"{name}-s{args.seed}-{key}{suffix}.json"
-        if path.is_file():
-            cached = read_json(path)["result"]
-            if lags is not None or "cost_equivalent_failure_rate" in cached:   # older files lack it
-                rows.append(cached)
-                continue
-        print(f"{'tracking' if lags is None else 'registering'} {name} ...", file=sys.stderr, flush=True)
-        row = (measure(name, config, args.out, args.seed, args.two_way) if lags is None
-               else measure_from_truth(name, config, args.out, args.seed, lags))
-        write_json(path, {"config": config.to_dict(), "result": row})
-        rows.append(row)
-    print(f"configuration {key} ({config.evaluations} evaluations per frame"
-          f"{', tracked both ways' if args.two_way else ''})\n")
-    print(table(rows) if lags is None else table_from_truth(rows, lags))
+    suffix += {PREPARED_FILE_PAPER: "-paper", PREPARED_FILE: ""}.get(
+        prepared_file(without), "-without-" + "-".join(e for e in EXTENSIONS if e in without))
+    every = []
+    for seed in seeds:
+        rows = []
+        for name in names:
+            path = args.out / "units" / f"{name}-s{seed}-{key}{suffix}.json"
+            if path.is_file():
+                cached = read_json(path)["result"]
+                if lags is not None or "cost_equivalent_failure_rate" in cached:   # older files lack it
+                    rows.append(cached)
+                    continue
+            print(f"{'tracking' if lags is None else 'registering'} {name} (seed {seed}) ...", file=sys.stderr,
+                  flush=True)
+            row = (measure(name, config, args.out, seed, args.two_way, without) if lags is None
+                   else measure_from_truth(name, config, args.out, seed, lags, without))
+            write_json(path, {"config": config.to_dict(), "result": row})
+            rows.append(row)
+        print(f"configuration {key} ({config.evaluations} evaluations per frame"
+              f"{', tracked both ways' if args.two_way else ''}{', without ' + ', '.join(without) if without else ''}), "
+              f"seed {seed}\n")
+        print(table(rows) if lags is None else table_from_truth(rows, lags))
+        print()
+        every += [{**r, "seed": seed} for r in rows]
+    if len(seeds) > 1 and lags is None:
+        print(f"pooled over seeds {', '.join(map(str, seeds))}\n")
+        print(pooled_table(every))
     return 0
 
 

@@ -34,8 +34,20 @@ from mocap.track import EDGE_STARTS
 
 #: Folder names below the results folder.
 DATA_DIR, UNITS_DIR = "data", "units"
-#: Name of the prepared-frames file inside a sequence folder.
+#: Name of the prepared-frames file inside a sequence folder (the calibration's colour classes).
 PREPARED_FILE = "prepared.npz"
+#: The same, with the paper's two colour classes (``without`` hair and lower body).
+PREPARED_FILE_PAPER = "prepared-paper.npz"
+#: Model extensions an experiment can leave out (:func:`load_sequence`).
+EXTENSIONS: tuple[str, ...] = ("hair", "lower_body")
+
+
+def prepared_file(without: tuple[str, ...] = ()) -> str:
+    """Name of the prepared-frames file for a model without the extensions ``without``."""
+    left_out = [e for e in EXTENSIONS if e in without]
+    if len(left_out) == len(EXTENSIONS):
+        return PREPARED_FILE_PAPER
+    return "prepared-without-" + "-".join(left_out) + ".npz" if left_out else PREPARED_FILE
 #: Per-frame arrays of a run unit's result, besides ``meta``.
 FRAME_ARRAYS: tuple[str, ...] = (
     "frame", "region_residual", "edge_residual", "edge_residual_after_region", "empty", "evaluations",
@@ -149,7 +161,7 @@ def data_folder(spec: DataSpec, root: str | Path) -> Path:
     return Path(root) / DATA_DIR / spec.key
 
 
-def prepare_data(spec: DataSpec, root: str) -> str:
+def prepare_data(spec: DataSpec, root: str, without: tuple[str, ...] = ()) -> str:
     """Generate the sequence of ``spec`` (if not there yet) and its prepared frames.
 
     Parameters
@@ -157,6 +169,9 @@ def prepare_data(spec: DataSpec, root: str) -> str:
     spec : DataSpec
     root : str
         Results folder.
+    without : tuple of str
+        Prepare the label images for the model without these extensions (see
+        :func:`load_sequence`), in :func:`prepared_file`.
 
     Returns
     -------
@@ -170,9 +185,11 @@ def prepare_data(spec: DataSpec, root: str) -> str:
         # a clip is generated whole (its length is only known once retargeted) and used up to spec.frames
         generate_sequence(spec.actor, folder, frames=spec.frames if spec.motion is None else None, seed=spec.seed,
                           size=(spec.width, spec.height), motion=spec.motion, progress=False)
-        (folder / PREPARED_FILE).unlink(missing_ok=True)
-    if not (folder / PREPARED_FILE).is_file():
-        sequence = load_sequence(folder, spec.frames)
+        for old in folder.glob("prepared*.npz"):
+            old.unlink()
+    name = prepared_file(without)
+    if not (folder / name).is_file():
+        sequence = load_sequence(folder, spec.frames, without=without)
         prepared = [sequence.prepare(f) for f in sequence.frames]
         keys = tuple(prepared[0].timings)
         buf = io.BytesIO()
@@ -181,7 +198,7 @@ def prepare_data(spec: DataSpec, root: str) -> str:
             edges=np.stack([p.edges for p in prepared]), distance=np.stack([p.distance for p in prepared]),
             is_empty=np.array([p.is_empty for p in prepared]), timing_keys=np.array(keys),
             timings=np.array([[p.timings[k] for k in keys] for p in prepared], dtype=np.float64))
-        write_bytes_atomic(folder / PREPARED_FILE, buf.getvalue())
+        write_bytes_atomic(folder / name, buf.getvalue())
     return str(folder)
 
 
@@ -205,43 +222,61 @@ class LoadedSequence:
         return prepare_frame(frame, self.background, self.colour_model)
 
 
-def load_sequence(folder: str | Path, frames: int | None = None) -> LoadedSequence:
+def load_sequence(folder: str | Path, frames: int | None = None, without: tuple[str, ...] = ()) -> LoadedSequence:
     """Read a synthetic sequence folder and build its model and colour model.
 
     The colour classes are learnt from the first frame inside the calibrated (true) pose, as
-    ``python -m mocap track`` does by default.
+    ``python -m mocap track`` does by default, and the model keeps the classes the colour model
+    kept (a hair or lower-body class the frame does not support is merged).
 
     Parameters
     ----------
     folder : str or Path
     frames : int, optional
         Read only the first ``frames`` frames (all when None or when the sequence is shorter).
+    without : tuple of str
+        Leave model extensions (:data:`EXTENSIONS`) out of the calibration: ``"hair"`` (no hair
+        region, no hair class), ``"lower_body"`` (no lower-body part, no such class); both
+        give the paper's model (skin and clothes only).
     """
     from mocap.body import resolution_for_image
     from mocap.calibrate import Calibration, colour_model_from_pose
     from mocap.io.pose_table import PoseTable
     from mocap.io.sequence import find_sequence
     from mocap.io.video import iter_frames, read_image
+    from mocap.body import BodyDimensions
 
     paths = find_sequence(folder)
     if paths.calibration is None or paths.ground_truth is None:
         raise ValueError(f"{folder} is not a synthetic sequence folder (calibration.json and ground_truth.csv needed)")
     calibration = Calibration.from_json(paths.calibration)
+    unknown = set(without) - set(EXTENSIONS)
+    if unknown:
+        raise ValueError(f"unknown model extension(s) {sorted(unknown)}; known: {', '.join(EXTENSIONS)}")
+    if without:
+        dims = calibration.dims
+        if "hair" in without:
+            dims = dims.with_hairline(None)
+        if "lower_body" in without:
+            dims = BodyDimensions({n: v for n, v in dims.parts.items() if n != "lower_body"}, dims.hairline)
+        classes = tuple(c for c in calibration.class_names if c not in without)
+        calibration = Calibration(dims, calibration.initial_pose, calibration.camera, classes, calibration.part_class)
     camera = calibration.camera
     model = calibration.body_model(resolution_for_image(camera.width, camera.height))
     frames = list(iter_frames(paths.frames, 0, frames))
     background = read_image(paths.background) if paths.background is not None else None
     colour = colour_model_from_pose(frames[0], background, model, camera, calibration.initial_pose)
+    model = model.with_class_names(colour.names)
     meta = json.loads(paths.meta.read_text()) if paths.meta is not None else {}
     return LoadedSequence(Path(folder), calibration, model, frames, background, colour,
                           PoseTable.read(paths.ground_truth), meta)
 
 
-def load_prepared(folder: str | Path) -> list:
+def load_prepared(folder: str | Path, without: tuple[str, ...] = ()) -> list:
     """The prepared frames stored by :func:`prepare_data`, as :class:`mocap.imaging.PreparedFrame`."""
     from mocap.imaging import PreparedFrame
 
-    with np.load(Path(folder) / PREPARED_FILE, allow_pickle=False) as z:
+    with np.load(Path(folder) / prepared_file(without), allow_pickle=False) as z:
         arrays = {k: z[k] for k in z.files}
     keys = [str(k) for k in arrays["timing_keys"]]
     return [PreparedFrame(labels=np.ascontiguousarray(arrays["labels"][i]),

@@ -3,7 +3,9 @@
 Stages (JSON ``stage`` names): ``render`` (pose + rasterize the label image, through the public
 ``LabelRenderer`` call), ``cost_region`` (render + non-overlapping ratio), ``cost_edge`` (render +
 mean edge distance) — the costs as an optimiser calls them (``evaluate_unchecked``: no pose
-validation, ~1.7 µs),
+validation, ~1.7 µs) — of the default model (four colour classes: hair region and lower body),
+and the same three of the paper's model (two classes, no hair region, no lower body) as
+``render_paper``, ``cost_region_paper``, ``cost_edge_paper``, measured in the same run,
 ``llvmpipe_render`` (the same mesh through OpenGL on Mesa llvmpipe + read-back, when the
 ``bench`` extra is installed), ``prepare_frame`` and its parts ``prepare_background``,
 ``prepare_colour``, ``prepare_edges``, ``prepare_distance``, ``frame_100`` / ``frame_500`` (the paper's method) and ``frame_beam`` (the default tracker)
@@ -104,19 +106,23 @@ def render_rows(sizes: Sequence[tuple[int, int]], *, min_runs: int, min_seconds:
     pick = lambda i: poses[i % len(poses)]
     for size in sizes:
         camera = Camera.default(*size)
-        model = BodyModel.build(resolution=resolution_for_image(*size))
+        full = BodyModel.build(resolution=resolution_for_image(*size))
+        paper = BodyModel.build(full.dims.without_extensions(), resolution=resolution_for_image(*size))
+        for suffix, model in (("", full), ("_paper", paper)):
+            tri = model.mesh.n_triangles
+            target = render(neutral_pose(), model, camera)
+            distance = ndimage.distance_transform_edt(~target.edges).astype(np.float32)
+            labels = LabelRenderer(model, camera)
+            region = RegionCost(target.labels, model, camera)
+            edge = EdgeCost(distance, model, camera)
+            rows.append(_row("render" + suffix, size, tri, time_calls(lambda i: labels(pick(i)), min_runs=min_runs,
+                                                                       min_seconds=min_seconds)))
+            rows.append(_row("cost_region" + suffix, size, tri, time_calls(lambda i: region.evaluate_unchecked(pick(i)),
+                                                                            min_runs=min_runs, min_seconds=min_seconds)))
+            rows.append(_row("cost_edge" + suffix, size, tri, time_calls(lambda i: edge.evaluate_unchecked(pick(i)),
+                                                                          min_runs=min_runs, min_seconds=min_seconds)))
+        model = full
         tri = model.mesh.n_triangles
-        target = render(neutral_pose(), model, camera)
-        distance = ndimage.distance_transform_edt(~target.edges).astype(np.float32)
-        labels = LabelRenderer(model, camera)
-        region = RegionCost(target.labels, model, camera)
-        edge = EdgeCost(distance, model, camera)
-        rows.append(_row("render", size, tri, time_calls(lambda i: labels(pick(i)), min_runs=min_runs,
-                                                          min_seconds=min_seconds)))
-        rows.append(_row("cost_region", size, tri, time_calls(lambda i: region.evaluate_unchecked(pick(i)), min_runs=min_runs,
-                                                               min_seconds=min_seconds)))
-        rows.append(_row("cost_edge", size, tri, time_calls(lambda i: edge.evaluate_unchecked(pick(i)), min_runs=min_runs,
-                                                             min_seconds=min_seconds)))
         if with_llvmpipe:
             try:
                 from mocap.render.gl_reference import GLRenderer
@@ -187,6 +193,7 @@ def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, mi
         images = list(iter_frames(seq.frames))
         background = read_image(seq.background)
         colour = colour_model_from_pose(images[0], background, model, camera, calibration.initial_pose)
+        model = model.with_class_names(colour.names)
         configs = {f"frame_{b}": TrackerConfig.paper(evaluations=b) for b in budgets}
         configs["frame_beam"] = TrackerConfig()
         for name, config in configs.items():

@@ -11,11 +11,11 @@ from types import MappingProxyType
 
 import numpy as np
 
-from mocap.body.dimensions import PART_NAMES, BodyDimensions
+from mocap.body.dimensions import BodyDimensions
 from mocap.body.model import BodyModel
 from mocap.body.pose import neutral_pose
 from mocap.body.skeleton import DEFAULT_PART_CLASS
-from mocap.labels import DEFAULT_CLASS_NAMES
+from mocap.labels import CLASS_MERGES_INTO, DEFAULT_CLASS_NAMES
 from mocap.render.calibration import FORMAT, Calibration
 from mocap.render.camera import Camera
 
@@ -32,7 +32,10 @@ def colour_model_from_pose(frame: np.ndarray, background: np.ndarray | None, mod
 
     Each class is sampled from the frame's foreground pixels inside the projection of the
     model parts of that class (eroded by one pixel so that boundary pixels, mixed with the
-    background, are left out).
+    background, are left out): hair inside the model's hair region, the lower body inside its
+    lower-body part. Those two are optional: a class the frame does not support (too few
+    pixels, or coloured like skin or clothes) is merged away, and the model should follow
+    with ``model.with_class_names(colour_model.names)``.
 
     Parameters
     ----------
@@ -51,16 +54,18 @@ def colour_model_from_pose(frame: np.ndarray, background: np.ndarray | None, mod
     Returns
     -------
     mocap.imaging.ColourModel
-        Classes ``model.class_names`` in label order.
+        Classes ``model.class_names`` in label order, without the merged ones.
 
     Raises
     ------
     ValueError
-        If the frame and camera sizes differ or a class has too few sample pixels.
+        If the frame and camera sizes differ or a class that cannot be merged has too few
+        sample pixels.
     """
     from scipy import ndimage
 
     from mocap.imaging import ColourModel, subtract_background
+    from mocap.imaging.colour import MIN_SAMPLES
     from mocap.render import render
 
     frame = np.asarray(frame)
@@ -74,13 +79,13 @@ def colour_model_from_pose(frame: np.ndarray, background: np.ndarray | None, mod
     for c, name in enumerate(model.class_names, start=1):
         inside = labels == c
         mask = ndimage.binary_erosion(inside) & foreground
-        if np.count_nonzero(mask) < MIN_COLOUR_SAMPLES:
-            mask = inside & foreground
-        if np.count_nonzero(mask) < MIN_COLOUR_SAMPLES:
+        if np.count_nonzero(mask) < max(MIN_COLOUR_SAMPLES, MIN_SAMPLES):
+            mask = inside & foreground                  # small regions (hair): keep the boundary
+        if np.count_nonzero(mask) < MIN_COLOUR_SAMPLES and name not in CLASS_MERGES_INTO:
             raise ValueError(f"the calibrated model covers only {np.count_nonzero(mask)} foreground pixels of "
                              f"class {name!r} in the first frame; is the initial pose right?")
         samples[name] = frame[mask]
-    return ColourModel.from_samples(samples)
+    return ColourModel.from_samples(samples, CLASS_MERGES_INTO)
 
 
 # ----------------------------------------------------------------------------- automatic calibration
@@ -91,7 +96,7 @@ CALIBRATED_POSE_PARAMETERS: tuple[str, ...] = (
 )
 #: Body proportions fitted by automatic calibration: factor name -> (parts, sizes it scales).
 PROPORTION_FACTORS = MappingProxyType({
-    "torso_width": (("torso",), ("width", "depth")),
+    "torso_width": (("torso", "lower_body"), ("width", "depth")),
     "torso_length": (("torso",), ("length",)),
     "arm_length": (("r_upper_arm", "r_forearm", "l_upper_arm", "l_forearm"), ("length",)),
     "arm_width": (("r_upper_arm", "r_forearm", "l_upper_arm", "l_forearm"), ("width", "depth")),
@@ -99,6 +104,9 @@ PROPORTION_FACTORS = MappingProxyType({
 })
 #: Range of every proportion factor relative to the default adult.
 PROPORTION_RANGE = (0.75, 1.35)
+#: Range of the hairline (fraction of half the head length above its centre) fitted by the
+#: colour stage of automatic calibration.
+HAIRLINE_RANGE = (0.0, 0.9)
 
 
 @dataclass(frozen=True)
@@ -124,9 +132,11 @@ def _apply_factors(base: BodyDimensions, factors: np.ndarray) -> BodyDimensions:
     parts = dict(base.parts)
     for f, (parts_scaled, sizes) in zip(factors, PROPORTION_FACTORS.values()):
         for p in parts_scaled:
+            if p not in parts:
+                continue                                # an optional part the base lacks
             s = parts[p]
             parts[p] = type(s)(**{k: getattr(s, k) * (f if k in sizes else 1.0) for k in ("length", "width", "depth")})
-    return BodyDimensions(parts)
+    return BodyDimensions(parts, base.hairline)
 
 
 def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *, imaging=None,
@@ -137,8 +147,11 @@ def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *,
     Beyond the paper's manual adjustment (its section 3.1): (1) the foreground silhouette
     alone, as one class, fixes position, depth and arm pose over a grid of depths and then by
     downhill simplex over pose and proportions; (2) the colour classes are learnt inside the
-    fitted model's projected parts (:func:`colour_model_from_pose`) and (3) a second simplex
-    refines everything on the two-class label image with the non-overlapping ratio.
+    fitted model's projected parts (:func:`colour_model_from_pose`: hair inside the hair region
+    under ``base_dims``' hairline, lower body inside the lower-body part; either merged away
+    when the frame does not support it) and (3) a second simplex refines everything, and the
+    hairline (within :data:`HAIRLINE_RANGE`) when hair was kept, on the label image with the
+    non-overlapping ratio.
 
     From one view, a larger actor farther away looks the same as a smaller one nearer: the
     overall scale stays that of ``base_dims`` (default adult proportions) and the fit adjusts
@@ -153,11 +166,14 @@ def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *,
         Must match the frame size.
     imaging : ImagingConfig, optional
     base_dims : BodyDimensions, optional
+        Default adult proportions with a lower body and the default hairline; without a
+        hairline (or lower body) there the calibration has no hair region (lower body).
     config : AutoCalibrationConfig, optional
 
     Returns
     -------
     Calibration
+        With the colour classes the frame supports.
 
     Raises
     ------
@@ -178,7 +194,7 @@ def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *,
     foreground = subtract_background(frame, background, imaging)
     if np.count_nonzero(foreground) < 50:
         raise ValueError("no actor in the first frame (the foreground is empty): cannot calibrate")
-    one_class = {p: "body" for p in PART_NAMES}
+    one_class = {p: "body" for p in MESH_PART_NAMES}
     pose_index = np.array([PARAMETER_INDEX[n] for n in CALIBRATED_POSE_PARAMETERS])
     n_pose, n_fac = len(pose_index), len(PROPORTION_FACTORS)
     lower = np.r_[JOINT_LIMITS[pose_index, 0], np.full(n_fac, PROPORTION_RANGE[0])]
@@ -191,7 +207,8 @@ def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *,
     def unpack(x):
         pose = neutral_pose()
         pose[pose_index] = x[:n_pose]
-        return pose, _apply_factors(base, x[n_pose:])
+        dims = _apply_factors(base, x[n_pose:n_pose + n_fac])
+        return pose, (dims.with_hairline(float(x[-1])) if len(x) > n_pose + n_fac else dims)
 
     def objective(target, part_class, class_names):
         def cost(x):
@@ -220,13 +237,18 @@ def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *,
     steps = np.r_[0.03, 0.03, 0.1, 0.1, 0.05, np.full(n_pose - 5, 0.25), np.full(n_fac, 0.08)]
     res = minimize(cost1, initial_simplex(best[1], steps, lower, upper), lower, upper,
                    budget=config.evaluations, ftol=1e-6)
-    # (2) colours from the fitted pose, (3) two-class refinement
+    # (2) colours from the fitted pose, (3) refinement on the label image of those classes
     pose, dims = unpack(res.x)
     model = BodyModel.build(dims, resolution=config.resolution)
     colour = colour_model_from_pose(frame, background, model, camera, pose, imaging)
     labels = prepare_frame(frame, background, colour, imaging).labels
-    cost2 = objective(labels, dict(DEFAULT_PART_CLASS), DEFAULT_CLASS_NAMES)
-    res2 = minimize(cost2, initial_simplex(res.x, 0.5 * steps, lower, upper), lower, upper,
+    cost2 = objective(labels, dict(DEFAULT_PART_CLASS), colour.names)
+    x, step2 = res.x, 0.5 * steps
+    if "hair" in colour.names:
+        x = np.r_[x, dims.hairline]
+        step2 = np.r_[step2, 0.15]
+        lower, upper = np.r_[lower, HAIRLINE_RANGE[0]], np.r_[upper, HAIRLINE_RANGE[1]]
+    res2 = minimize(cost2, initial_simplex(np.clip(x, lower, upper), step2, lower, upper), lower, upper,
                     budget=config.evaluations, ftol=1e-6)
     pose, dims = unpack(res2.x)
-    return Calibration(dims, pose, camera)
+    return Calibration(dims, pose, camera, colour.names)

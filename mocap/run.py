@@ -162,6 +162,7 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     else:
         colour_model = learn_colour_model(first, bg_image, config=imaging)
     colour_model.to_json(out_dir / "colour_model.json")
+    model = model.with_class_names(colour_model.names)        # classes the first frame supports
 
     tracker = Tracker(model, camera, config, calibration.initial_pose)
     state_path = out_dir / STATE_FILE
@@ -314,6 +315,6 @@ def _overlay_video(path: Path, source: Path, table: PoseTable, model, camera, fp
         for index, frame in enumerate(iter_frames(source, 0, int(table.frames.max()) + 1)):
             if index in poses:
                 r = render(poses[index], model, camera)
-                frame = draw_model(frame, r.labels, r.edges, model.n_classes)
+                frame = draw_model(frame, r.labels, r.edges, model.n_classes, class_names=model.class_names)
             video.write(frame)
     os.replace(tmp, path)

@@ -64,13 +64,14 @@ print(f"{root}: {len(frames)} frames of {camera.width}x{camera.height}; mesh of 
 # ## 1. The image side
 # The colour classes are learnt inside the calibrated model's projection on the first frame;
 # `prepare_frame` then subtracts the background, classifies the foreground (skin, clothes,
-# unknown), finds edges in the foreground and the distance of every pixel to the nearest edge.
+# hair, lower body, unknown), finds edges in the foreground and the distance of every pixel to the nearest edge.
 
 # %%
 colour_model = colour_model_from_pose(frames[0], background, model, camera, calibration.initial_pose)
+model = model.with_class_names(colour_model.names)    # hair, lower body: only if the frame supports them
 prepared = prepare_frame(frames[0], background, colour_model)
 fig, axes = plt.subplots(1, 4, figsize=(13, 2.8))
-for ax, image, title in zip(axes, [frames[0], colour_labels(prepared.labels, 2), prepared.edges,
+for ax, image, title in zip(axes, [frames[0], colour_labels(prepared.labels, colour_model.m, colour_model.names), prepared.edges,
                                    colour_distance(prepared.distance, float(prepared.distance.max()))],
                             ["frame", "colour classes", "edges", "distance to edges"]):
     ax.imshow(image, cmap="gray")
@@ -86,11 +87,11 @@ print(colour_model, {k: f"{1e3 * v:.2f} ms" for k, v in prepared.timings.items()
 # %%
 r = render(calibration.initial_pose, model, camera)
 fig, axes = plt.subplots(1, 3, figsize=(10, 2.8))
-axes[0].imshow(colour_labels(r.labels, 2))
+axes[0].imshow(colour_labels(r.labels, model.n_classes, model.class_names))
 axes[0].set_title("model labels")
 axes[1].imshow(r.edges, cmap="gray")
 axes[1].set_title("occluding edges")
-axes[2].imshow(draw_model(frames[0], r.labels, r.edges))
+axes[2].imshow(draw_model(frames[0], r.labels, r.edges, model.n_classes, class_names=model.class_names))
 axes[2].set_title("model over frame")
 for ax in axes:
     ax.axis("off")
@@ -117,7 +118,7 @@ fig, axes = plt.subplots(1, 3, figsize=(10, 2.8))
 for ax, (name, pose) in zip(axes, stages):
     rr = render(pose, model, camera)
     err = 1e3 * np.linalg.norm(model.joint_positions(pose) - truth.joints[k], axis=1).mean()
-    ax.imshow(draw_model(frames[k], rr.labels, rr.edges))
+    ax.imshow(draw_model(frames[k], rr.labels, rr.edges, model.n_classes, class_names=model.class_names))
     ax.set_title(f"{name}\nF={region_cost(pose):.3f}  D={edge_cost(pose):.2f}px  {err:.0f}mm", fontsize=9)
     ax.axis("off")
 print(f"region: {reg.region.evaluations} evaluations, {reg.region.iterations} iterations; "

@@ -96,7 +96,7 @@ def test_region_cost_equals_ratio_of_rendered_labels(seed):
     target = render(q_true, MODEL, CAMERA).labels
     cost = RegionCost(target, MODEL, CAMERA)
     assert cost(q_true) == 0.0
-    expect = naive_non_overlapping_ratio(target, render(q, MODEL, CAMERA).labels, 2)
+    expect = naive_non_overlapping_ratio(target, render(q, MODEL, CAMERA).labels, MODEL.n_classes)
     assert cost(q) == pytest.approx(expect, abs=1e-12)
     assert cost(q) == pytest.approx(expect, abs=1e-12)     # buffers are left clean between calls
 
@@ -221,5 +221,6 @@ def test_region_cost_with_unknown_pixels_matches_the_twin(ignore):
     target[rng.random(target.shape) < 0.2] = 255          # a fifth of the image unexplained
     cost = RegionCost(target, MODEL, CAMERA, ignore_unknown=ignore)
     for pose in (q_true, q):
-        expect = naive_non_overlapping_ratio(target, render(pose, MODEL, CAMERA).labels, 2, ignore_unknown=ignore)
+        expect = naive_non_overlapping_ratio(target, render(pose, MODEL, CAMERA).labels, MODEL.n_classes,
+                                             ignore_unknown=ignore)
         assert cost(pose) == pytest.approx(expect, abs=1e-12)

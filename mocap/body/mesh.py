@@ -6,6 +6,13 @@ occluding contours). ``resolution`` (longitudes per part) is the level of detail
 ``resolution`` longitudes and ``resolution // 2 + 1`` latitude rings, smaller parts a fraction
 (:data:`PART_DETAIL`, at least 4 longitudes); a part with n longitudes and r rings has
 ``2 n r`` triangles.
+
+The head is cut into a face and a hair region: with a hairline in the body dimensions its
+tessellation moves two latitude rings to the forehead hairline and :data:`HAIR_NAPE_DROP`
+lower, and the triangles above the first ring, or behind the head's centre plane (away from
+the face) and above the second, belong to the part ``hair``
+(:data:`~mocap.body.skeleton.MESH_PART_NAMES`); the rest stay ``head`` (the face). The cut
+follows rings, so the split is exact and costs no triangle.
 """
 from __future__ import annotations
 
@@ -14,8 +21,9 @@ from types import MappingProxyType
 
 import numpy as np
 
-from mocap.body.dimensions import PART_NAMES, BodyDimensions
-from mocap.body.skeleton import PART_SEGMENT, SEGMENT_AXIS_SIGN, SEGMENT_NAMES, part_spans
+from mocap.body.dimensions import BodyDimensions
+from mocap.body.skeleton import (MESH_PART_NAMES, PART_SEGMENT, SEGMENT_AXIS_SIGN, SEGMENT_NAMES, lower_body_span,
+                                 part_spans)
 
 #: Shape of each part: (e_long, e_cross, taper). ``e_long`` < 1 flattens the ends (1 is an
 #: ellipsoid), ``e_cross`` < 1 squares the cross-section, ``taper`` is the fraction by which the
@@ -30,6 +38,7 @@ PART_SHAPES = MappingProxyType({
     "l_upper_arm": (0.45, 1.0, 0.2),
     "l_forearm": (0.45, 1.0, 0.25),
     "l_hand": (0.6, 0.6, 0.0),
+    "lower_body": (0.4, 0.6, 0.0),
 })
 #: Level of detail of each part relative to the torso: small parts need fewer triangles to
 #: look the same in the image, and per-triangle work dominates the rasterizer's time.
@@ -37,7 +46,11 @@ PART_DETAIL = MappingProxyType({
     "torso": 1.0, "neck": 0.5, "head": 0.75,
     "r_upper_arm": 0.75, "r_forearm": 0.75, "r_hand": 0.5,
     "l_upper_arm": 0.75, "l_forearm": 0.75, "l_hand": 0.5,
+    "lower_body": 0.5,
 })
+#: How far below the forehead hairline the hair reaches at the back of the head, in half head
+#: lengths (the synthetic actor's hair: 0.45 at the forehead, -0.35 at the back).
+HAIR_NAPE_DROP = 0.8
 #: Smallest and largest accepted resolution (longitudes per part).
 MIN_RESOLUTION = 4
 MAX_RESOLUTION = 128
@@ -48,7 +61,8 @@ def _signed_power(x: np.ndarray, e: float) -> np.ndarray:
 
 
 def part_mesh(length: float, width: float, depth: float, *, e_long: float, e_cross: float,
-              taper: float, resolution: int, start: float = 0.0, axis_sign: int = 1):
+              taper: float, resolution: int, start: float = 0.0, axis_sign: int = 1,
+              cuts: tuple[float, ...] = ()):
     """Closed tapered superellipsoid along the local y axis.
 
     Parameters
@@ -59,6 +73,10 @@ def part_mesh(length: float, width: float, depth: float, *, e_long: float, e_cro
         Distance along the axis where the part begins.
     axis_sign : {1, -1}
         The part extends towards +y (1) or -y (-1).
+    cuts : tuple of float
+        Latitude rings at these fractions of the length (0 start ... 1 end, exclusive), so
+        that a region bounded there is a union of whole triangles: each moves the nearest
+        ring of the regular grid (the triangle count stays ``2 n r``).
 
     Returns
     -------
@@ -67,8 +85,25 @@ def part_mesh(length: float, width: float, depth: float, *, e_long: float, e_cro
         Wound counter-clockwise seen from outside (outward normals by the right-hand rule).
     """
     n_lon = int(resolution)
-    rings = n_lon // 2 + 1
-    eta = np.linspace(-np.pi / 2, np.pi / 2, rings + 2)[1:-1]       # latitudes, poles excluded
+    eta = np.linspace(-np.pi / 2, np.pi / 2, n_lon // 2 + 3)[1:-1]   # latitudes, poles excluded
+    if cuts:
+        cut = np.asarray(cuts, dtype=np.float64)
+        if not ((cut > 0) & (cut < 1)).all():
+            raise ValueError(f"cuts must lie strictly between 0 and 1, got {cuts}")
+        # invert u = (1 + sin(eta)^e_long) / 2 (signed power); each cut moves the nearest ring
+        # not moved yet (same triangle count), or adds one when none is left
+        eta = eta.copy()
+        moved = np.zeros(len(eta), bool)
+        extra = []
+        for e in np.arcsin(_signed_power(2.0 * cut - 1.0, 1.0 / e_long)):
+            free = np.flatnonzero(~moved)
+            if free.size == 0:
+                extra.append(e)
+                continue
+            k = free[np.argmin(np.abs(eta[free] - e))]
+            eta[k], moved[k] = e, True
+        eta = np.unique(np.r_[eta, extra])
+    rings = len(eta)
     omega = np.linspace(-np.pi, np.pi, n_lon, endpoint=False)
     u = 0.5 * (1.0 + _signed_power(np.sin(eta), e_long))             # 0..1 along the axis
     radial = np.abs(np.cos(eta)) ** e_long
@@ -121,7 +156,7 @@ class BodyMesh:
     triangles : ndarray, shape (T, 3), int64
         Vertex indices, outward (counter-clockwise from outside) winding.
     triangle_part : ndarray, shape (T,), int64
-        Part index (:data:`~mocap.body.dimensions.PART_NAMES`) of each triangle.
+        Part index (:data:`~mocap.body.skeleton.MESH_PART_NAMES`) of each triangle.
     resolution : int
         Longitudes per part (level of detail).
     """
@@ -142,14 +177,49 @@ def part_resolution(part: str, resolution: int) -> int:
     return max(MIN_RESOLUTION, int(round(resolution * PART_DETAIL[part])))
 
 
+def hair_cuts(hairline: float) -> tuple[float, ...]:
+    """Fractions of the head's length (0 chin ... 1 crown) of the rings that bound the hair
+    region: the forehead hairline and :data:`HAIR_NAPE_DROP` lower (when above the chin)."""
+    front = 0.5 * (1.0 + hairline)
+    back = 0.5 * (1.0 + hairline - HAIR_NAPE_DROP)
+    return (front, back) if back > 0.0 else (front,)
+
+
+def hair_triangles(vertices: np.ndarray, triangles: np.ndarray, start: float, length: float, depth: float,
+                   hairline: float, axis_sign: int = -1) -> np.ndarray:
+    """Which head triangles are hair: centroid above the hairline, or behind the head's centre
+    plane (z > 0, away from the face) and above the hairline less :data:`HAIR_NAPE_DROP`.
+
+    Parameters
+    ----------
+    vertices : ndarray, shape (V, 3), metres
+        Head vertices in the head segment's frame (the face looks towards -z).
+    triangles : ndarray, shape (T, 3), int
+    start, length, depth : float, metres
+        Where the head starts along its axis, its length and depth.
+    hairline : float
+        Forehead hairline, fraction of half the head length above its centre.
+
+    Returns
+    -------
+    ndarray, shape (T,), bool
+    """
+    centroid = vertices[triangles].mean(axis=1)
+    v = (axis_sign * centroid[:, 1] - (start + 0.5 * length)) / (0.5 * length)    # -1 chin ... +1 crown
+    behind = centroid[:, 2] > 1e-9 * depth
+    return (v >= hairline) | (behind & (v >= hairline - HAIR_NAPE_DROP))
+
+
 def build_mesh(dims: BodyDimensions, resolution: int = 12) -> BodyMesh:
-    """Tessellate every body part.
+    """Tessellate every body part: the sized parts the dimensions have, the head split into
+    face (``head``) and ``hair`` when they have a hairline.
 
     Parameters
     ----------
     dims : BodyDimensions
     resolution : int
-        Torso longitudes, in [MIN_RESOLUTION, MAX_RESOLUTION]; 12 gives 832 triangles.
+        Torso longitudes, in [MIN_RESOLUTION, MAX_RESOLUTION]; 12 gives 832 triangles for the
+        paper's model (no lower body, no hairline).
 
     Returns
     -------
@@ -162,17 +232,28 @@ def build_mesh(dims: BodyDimensions, resolution: int = 12) -> BodyMesh:
     spans = part_spans(dims)
     verts, vseg, tris, tpart = [], [], [], []
     offset = 0
-    for p, name in enumerate(PART_NAMES):
+    hair = MESH_PART_NAMES.index("hair")
+    for p, name in enumerate(MESH_PART_NAMES):
+        if not dims.has(name):
+            continue                                    # hair: part of the head; lower body: optional
         size = dims[name]
         seg = SEGMENT_NAMES.index(PART_SEGMENT[name])
         e_long, e_cross, taper = PART_SHAPES[name]
+        if name == "lower_body":
+            start, sign = lower_body_span(dims)[0], 1    # downwards from the chest base
+        else:
+            start, sign = spans[p, 0], SEGMENT_AXIS_SIGN[seg]
+        cuts = hair_cuts(dims.hairline) if name == "head" and dims.hairline is not None else ()
         v, t = part_mesh(size.length, size.width, size.depth, e_long=e_long, e_cross=e_cross,
-                         taper=taper, resolution=part_resolution(name, resolution), start=spans[p, 0],
-                         axis_sign=SEGMENT_AXIS_SIGN[seg])
+                         taper=taper, resolution=part_resolution(name, resolution), start=start,
+                         axis_sign=sign, cuts=cuts)
+        part = np.full(len(t), p, dtype=np.int64)
+        if cuts:
+            part[hair_triangles(v, t, start, size.length, size.depth, dims.hairline, sign)] = hair
         verts.append(v)
         vseg.append(np.full(len(v), seg, dtype=np.int64))
         tris.append(t + offset)
-        tpart.append(np.full(len(t), p, dtype=np.int64))
+        tpart.append(part)
         offset += len(v)
     arrays = [np.concatenate(verts), np.concatenate(vseg), np.concatenate(tris), np.concatenate(tpart)]
     for a in arrays:

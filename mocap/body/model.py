@@ -6,11 +6,11 @@ from typing import Mapping
 
 import numpy as np
 
-from mocap.body.dimensions import PART_NAMES, BodyDimensions
+from mocap.body.dimensions import BodyDimensions
 from mocap.body.kinematics import Skeleton, joint_positions, segment_transforms
 from mocap.body.mesh import BodyMesh, build_mesh
-from mocap.body.skeleton import DEFAULT_PART_CLASS
-from mocap.labels import DEFAULT_CLASS_NAMES, MAX_CLASSES
+from mocap.body.skeleton import DEFAULT_PART_CLASS, MESH_PART_NAMES
+from mocap.labels import DEFAULT_CLASS_NAMES, MAX_CLASSES, merged_class
 
 
 @dataclass(frozen=True)
@@ -24,8 +24,11 @@ class BodyModel:
     mesh : BodyMesh
     class_names : tuple of str
         Colour classes; label of class ``c`` is ``c + 1``.
-    part_label : ndarray, shape (9,), uint8
-        Label (1..m) of each part in :data:`~mocap.body.dimensions.PART_NAMES` order.
+    part_label : ndarray, shape (11,), uint8
+        Label (1..m) of each part in :data:`~mocap.body.skeleton.MESH_PART_NAMES` order (also
+        of parts the mesh lacks: the label of the class they would merge into).
+    part_class : tuple of str
+        Colour class of each part, same order (as given, before merging).
     """
 
     dims: BodyDimensions
@@ -33,42 +36,70 @@ class BodyModel:
     mesh: BodyMesh
     class_names: tuple[str, ...]
     part_label: np.ndarray
+    part_class: tuple[str, ...] = tuple(DEFAULT_PART_CLASS[p] for p in MESH_PART_NAMES)
 
     @classmethod
     def build(cls, dims: BodyDimensions | None = None, *, resolution: int = 12,
               part_class: Mapping[str, str] = DEFAULT_PART_CLASS,
-              class_names: tuple[str, ...] = DEFAULT_CLASS_NAMES) -> "BodyModel":
+              class_names: tuple[str, ...] | None = None) -> "BodyModel":
         """Build the model.
 
         Parameters
         ----------
         dims : BodyDimensions, optional
-            Default adult proportions when omitted.
+            Default adult proportions (with the lower body and the hair region) when omitted.
         resolution : int
             Mesh level of detail (see :func:`~mocap.body.mesh.build_mesh`).
         part_class : mapping of part name to class name
-            Colour class of every part (e.g. forearms as skin for bare arms).
-        class_names : tuple of str
-            The m colour classes, 1 <= m <= 254.
+            Colour class of the parts (:data:`~mocap.body.skeleton.MESH_PART_NAMES`, e.g.
+            forearms as skin for bare arms); a part left out keeps its default class
+            (:data:`~mocap.body.skeleton.DEFAULT_PART_CLASS`).
+        class_names : tuple of str, optional
+            The m colour classes, 1 <= m <= 254. A part whose class is not among them takes
+            the class it merges into (:data:`mocap.labels.CLASS_MERGES_INTO`: no hair class,
+            the hair region is skin; no lower-body class, the lower body is clothes). Default:
+            the classes of :data:`~mocap.labels.DEFAULT_CLASS_NAMES` that the mesh's parts use
+            (other classes must be listed).
         """
         dims = BodyDimensions() if dims is None else dims
-        class_names = tuple(class_names)
-        if not 1 <= len(class_names) <= MAX_CLASSES or len(set(class_names)) != len(class_names):
-            raise ValueError(f"need 1 to {MAX_CLASSES} distinct colour class names, got {class_names}")
-        unknown = set(part_class) - set(PART_NAMES)
+        unknown = set(part_class) - set(MESH_PART_NAMES)
         if unknown:
             raise ValueError(f"unknown body part(s) in part_class: {', '.join(sorted(unknown))}")
-        missing = [p for p in PART_NAMES if p not in part_class]
-        if missing:
-            raise ValueError(f"part_class lacks part(s): {', '.join(missing)}")
+        classes = tuple({**DEFAULT_PART_CLASS, **part_class}[p] for p in MESH_PART_NAMES)
+        mesh = build_mesh(dims, resolution)
+        if class_names is None:
+            used = {classes[p] for p in np.unique(mesh.triangle_part)}
+            class_names = tuple(c for c in DEFAULT_CLASS_NAMES if c in used) or DEFAULT_CLASS_NAMES[:1]
+        return cls._with_classes(dims, Skeleton.from_dimensions(dims), mesh, tuple(class_names), classes)
+
+    @classmethod
+    def _with_classes(cls, dims, skeleton, mesh, class_names: tuple[str, ...],
+                      part_class: tuple[str, ...]) -> "BodyModel":
+        if not 1 <= len(class_names) <= MAX_CLASSES or len(set(class_names)) != len(class_names):
+            raise ValueError(f"need 1 to {MAX_CLASSES} distinct colour class names, got {class_names}")
+        present = set(np.unique(mesh.triangle_part).tolist())
         labels = []
-        for part in PART_NAMES:
-            if part_class[part] not in class_names:
-                raise ValueError(f"part {part!r} has class {part_class[part]!r}, not one of {class_names}")
-            labels.append(class_names.index(part_class[part]) + 1)
+        for p, (part, name) in enumerate(zip(MESH_PART_NAMES, part_class)):
+            try:
+                labels.append(class_names.index(merged_class(name, class_names)) + 1)
+            except ValueError:
+                if p in present:
+                    raise ValueError(f"part {part!r} has class {name!r}, not one of {class_names}") from None
+                labels.append(1)                        # no triangles: never drawn
         part_label = np.array(labels, dtype=np.uint8)
         part_label.setflags(write=False)
-        return cls(dims, Skeleton.from_dimensions(dims), build_mesh(dims, resolution), class_names, part_label)
+        return cls(dims, skeleton, mesh, class_names, part_label, part_class)
+
+    def with_class_names(self, class_names: tuple[str, ...]) -> "BodyModel":
+        """The same model with other colour classes (e.g. those a colour model kept): parts of a
+        class that is gone take the class it merges into (:data:`mocap.labels.CLASS_MERGES_INTO`).
+
+        Raises
+        ------
+        ValueError
+            If a part's class is gone and merges into none of ``class_names``.
+        """
+        return self._with_classes(self.dims, self.skeleton, self.mesh, tuple(class_names), self.part_class)
 
     @property
     def n_classes(self) -> int:
@@ -77,12 +108,12 @@ class BodyModel:
     def with_resolution(self, resolution: int) -> "BodyModel":
         """The same model with another mesh level of detail."""
         return BodyModel(self.dims, self.skeleton, build_mesh(self.dims, resolution),
-                         self.class_names, self.part_label)
+                         self.class_names, self.part_label, self.part_class)
 
     def with_dimensions(self, dims: BodyDimensions) -> "BodyModel":
         """The same model (resolution, classes) with other body dimensions."""
-        return BodyModel(dims, Skeleton.from_dimensions(dims), build_mesh(dims, self.mesh.resolution),
-                         self.class_names, self.part_label)
+        return self._with_classes(dims, Skeleton.from_dimensions(dims), build_mesh(dims, self.mesh.resolution),
+                                  self.class_names, self.part_class)
 
     def joint_positions(self, pose) -> np.ndarray:
         """Joint positions (10, 3), metres; see :func:`~mocap.body.kinematics.joint_positions`."""

@@ -13,7 +13,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from mocap.body.dimensions import PART_NAMES, BodyDimensions
+from mocap.body.dimensions import PART_NAMES, SIZED_PART_NAMES, BodyDimensions
 
 #: Rigid segments (one transform each), in an order where parents come first.
 SEGMENT_NAMES: tuple[str, ...] = (
@@ -26,17 +26,25 @@ SEGMENT_PARENTS: tuple[int, ...] = (-1, 0, 0, 2, 3, 0, 5, 6)
 #: Direction of each segment's long axis in its local frame: -1 up (-y), +1 down (+y).
 SEGMENT_AXIS_SIGN: tuple[int, ...] = (-1, -1, 1, 1, 1, 1, 1, 1)
 
+#: Parts of the mesh (the index of :attr:`~mocap.body.mesh.BodyMesh.triangle_part` and, plus
+#: one, of a rendering's part image): the sized parts, then ``hair``, the region of the head
+#: above and behind the hairline (no size of its own). A model whose dimensions lack the
+#: optional lower body or the hairline has no triangles of that part.
+MESH_PART_NAMES: tuple[str, ...] = SIZED_PART_NAMES + ("hair",)
 #: Segment that carries each part.
 PART_SEGMENT = MappingProxyType({
     "torso": "chest", "neck": "head", "head": "head",
     "r_upper_arm": "r_upper_arm", "r_forearm": "r_forearm", "r_hand": "r_hand",
     "l_upper_arm": "l_upper_arm", "l_forearm": "l_forearm", "l_hand": "l_hand",
+    "lower_body": "chest", "hair": "head",
 })
-#: Default colour class of each part (paper: skin for head and hands, clothes for the rest).
+#: Default colour class of each part (paper: skin for head and hands, clothes for the rest;
+#: here also hair for the hair region and lower_body for the part under the torso).
 DEFAULT_PART_CLASS = MappingProxyType({
     "torso": "clothes", "neck": "skin", "head": "skin",
     "r_upper_arm": "clothes", "r_forearm": "clothes", "r_hand": "skin",
     "l_upper_arm": "clothes", "l_forearm": "clothes", "l_hand": "skin",
+    "lower_body": "lower_body", "hair": "hair",
 })
 
 #: Named joints (docs/design.md section 4 column order).
@@ -54,6 +62,9 @@ SHOULDER_OUT_ARM = 0.1
 SHOULDER_DROP_ARM = 0.55
 #: Fraction of the neck length by which the head overlaps the neck.
 HEAD_NECK_OVERLAP = 0.3
+#: Fraction of the lower body's length by which it reaches up into the torso from the chest
+#: base (the chest segment's origin), so that no gap opens between them.
+LOWER_BODY_OVERLAP = 0.25
 
 
 def segment_offsets(dims: BodyDimensions) -> np.ndarray:
@@ -76,7 +87,8 @@ def segment_offsets(dims: BodyDimensions) -> np.ndarray:
 
 
 def part_spans(dims: BodyDimensions) -> np.ndarray:
-    """Where each part lies along its segment's long axis: (start, end) distances, metres.
+    """Where each part of :data:`~mocap.body.dimensions.PART_NAMES` lies along its segment's
+    long axis: (start, end) distances, metres (the optional lower body: :func:`lower_body_span`).
 
     Returns
     -------
@@ -90,6 +102,20 @@ def part_spans(dims: BodyDimensions) -> np.ndarray:
             start = (1.0 - HEAD_NECK_OVERLAP) * dims["neck"].length
         spans[i] = start, start + length
     return spans
+
+
+def lower_body_span(dims: BodyDimensions) -> tuple[float, float]:
+    """(start, end) of the lower body along the chest axis, metres, measured downwards from the
+    chest base (start < 0: it begins inside the torso, :data:`LOWER_BODY_OVERLAP`).
+
+    Raises
+    ------
+    ValueError
+        If ``dims`` has no lower body.
+    """
+    length = dims["lower_body"].length
+    start = -LOWER_BODY_OVERLAP * length
+    return start, start + length
 
 
 def joint_points(dims: BodyDimensions) -> tuple[np.ndarray, np.ndarray]:

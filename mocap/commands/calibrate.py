@@ -36,5 +36,7 @@ def run(args: argparse.Namespace) -> int:
     calibration.to_json(args.out)
     q = calibration.initial_pose
     print(f"calibration written to {args.out}: actor at {q[2]:.2f} m, torso "
-          f"{calibration.dims['torso'].length:.2f} x {calibration.dims['torso'].width:.2f} m")
+          f"{calibration.dims['torso'].length:.2f} x {calibration.dims['torso'].width:.2f} m, colour classes "
+          f"{', '.join(calibration.class_names)}, hairline "
+          + ("none" if calibration.dims.hairline is None else f"{calibration.dims.hairline:+.2f} (half head lengths)"))
     return 0

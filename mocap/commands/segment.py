@@ -1,7 +1,8 @@
 """``python -m mocap segment VIDEO --background IMG [--out DIR]``: what the image side sees.
 
 Writes, per frame, the label image (coloured: black background, skin tone = skin, blue =
-clothes, grey = unknown foreground), the edge mask (white on black) and the truncated
+clothes, brown = hair, green = lower body, grey = unknown foreground; hair and lower body only
+when the first frame supports them), the edge mask (white on black) and the truncated
 distance map (viridis: dark on edges), as PNG in ``labels/``, ``edges/`` and ``distance/``,
 plus ``segment.mp4`` (frame | labels / edges | distance), the colour model
 (``colour_model.json``) and the parameters (``imaging.json``) it used.
@@ -18,7 +19,7 @@ from tqdm import tqdm
 
 from mocap.imaging import ColourModel, ImagingConfig, learn_colour_model, median_background, \
     prepare_frame
-from mocap.imaging.visual import colour_distance, colour_labels, overlay_edges, tile
+from mocap.imaging.visual import colour_distance, colour_labels, label_palette, overlay_edges, tile
 from mocap.io.video import VideoWriter, count_frames, frame_rate, iter_frames, read_image
 
 
@@ -61,6 +62,10 @@ def add_parser(subparsers) -> None:
                    help="skin sample box (row, col, height, width in pixels) instead of the face")
     p.add_argument("--clothes-box", type=_box, metavar="R,C,H,W",
                    help="clothes sample box instead of the box under the face")
+    p.add_argument("--hair-box", type=_box, metavar="R,C,H,W",
+                   help="hair sample box instead of the box above the face (with a background)")
+    p.add_argument("--lower-body-box", type=_box, metavar="R,C,H,W",
+                   help="lower-body (trousers, skirt) sample box; without it there is no lower-body class")
     p.add_argument("--config", type=Path, metavar="JSON", help="imaging parameters (ImagingConfig)")
     p.add_argument("--start", type=int, default=0, metavar="N", help="first frame (default 0)")
     p.add_argument("--max-frames", type=int, metavar="N", help="process at most N frames")
@@ -101,6 +106,7 @@ def run(args: argparse.Namespace) -> int:
         model = ColourModel.from_json(args.colour_model)
     else:
         model = learn_colour_model(first, background, args.skin_box, args.clothes_box,
+                                   hair_box=args.hair_box, lower_body_box=args.lower_body_box,
                                    config=config)
 
     out = args.out if args.out is not None else Path(f"{args.video.stem}_segment")
@@ -125,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
             for key, value in prepared.timings.items():
                 timings.setdefault(key, []).append(value)
             empty_frames += prepared.is_empty
-            labels_rgb = colour_labels(prepared.labels, model.m)
+            labels_rgb = colour_labels(prepared.labels, model.m, model.names)
             distance_rgb = colour_distance(prepared.distance, config.max_distance)
             name = f"{index:06d}.png"
             iio.imwrite(out / "labels" / name, labels_rgb)
@@ -139,8 +145,9 @@ def run(args: argparse.Namespace) -> int:
     print(f"segmented {n} frames ({empty_frames} with nobody in them) in {elapsed:.1f} s; "
           f"median ms per frame: {stages}")
     print(f"colour model: {model!r}")
-    print(f"labels: black background, " + ", ".join(
-        f"{c} {name}" for c, name in zip(("skin tone", "blue"), model.names))
+    palette = label_palette(model.m, model.names)
+    print("labels: black background, " + ", ".join(
+        f"RGB {tuple(int(v) for v in palette[c])} {name}" for c, name in enumerate(model.names, start=1))
         + ", grey unknown foreground")
     print(f"wrote {out}/labels, edges, distance (PNG), segment.mp4, colour_model.json, imaging.json")
     return 0

@@ -5,7 +5,13 @@ A pixel's HSV colour is ``(h, s, v)`` with hue ``h`` in degrees [0, 360) and sat
 360). The hue deviation from a class mean is wrapped to [-180, 180) degrees, so reds near 0
 and near 360 degrees are neighbours. Classes are learned from the first frame: skin from the
 face found by scikit-image's LBP frontal-face cascade (the paper's Adaboost detector), clothes
-from a box under the face; or from boxes the user gives.
+from a box under the face, hair from a box above it (foreground pixels only); or from boxes
+the user gives.
+
+Optional classes (:data:`mocap.labels.CLASS_MERGES_INTO`: hair, lower body) are kept only when
+the image supports them: a sample that is too small, or whose colour lies in the core of the
+class it merges into (a bald head is skin, trousers the colour of the shirt are clothes), drops
+the class (:meth:`ColourModel.from_samples` with ``merges``).
 """
 from __future__ import annotations
 
@@ -21,10 +27,10 @@ from mocap._numba import jit
 from mocap.imaging._validate import Box, check_box, check_mask, check_rgb, check_same_size
 from mocap.imaging.config import DEFAULT_COLOUR_THRESHOLD, ImagingConfig
 from mocap.io.jsonfile import read_json, write_json
-from mocap.labels import DEFAULT_CLASS_NAMES, MAX_CLASSES, UNKNOWN
+from mocap.labels import CLASS_MERGES_INTO, MAX_CLASSES, UNKNOWN
 
 __all__ = ["ColourModel", "learn_colour_model", "detect_face", "rgb_to_hsv", "skin_box_of_face",
-           "clothes_box_of_face"]
+           "clothes_box_of_face", "hair_box_of_face"]
 
 #: Standard deviations added (in quadrature) to every learned class (hue degrees,
 #: saturation, value): a uniform sample must still give an invertible covariance, and the
@@ -40,6 +46,11 @@ ACHROMATIC_CHROMA: float = 0.06
 _UNIFORM_HUE_VAR = 360.0 ** 2 / 12.0
 #: Fewest sample pixels a class is learned from.
 MIN_SAMPLES: int = 20
+#: An optional class is merged into its stand-in when its mean lies inside the central half of
+#: the stand-in's Gaussian: squared Mahalanobis distance below the chi-square median (3 degrees
+#: of freedom, 2.37). A bald head's "hair" is the face's colour (distance ~0); dark-brown hair
+#: against a face is ~10 even though the face's wide brightness spread holds most hair pixels.
+MERGE_DISTANCE2: float = float(stats.chi2.ppf(0.5, 3))
 
 
 # --------------------------------------------------------------------------- kernels
@@ -280,7 +291,8 @@ class ColourModel:
         return f"ColourModel({parts})"
 
     @classmethod
-    def from_samples(cls, samples: Mapping[str, np.ndarray]) -> ColourModel:
+    def from_samples(cls, samples: Mapping[str, np.ndarray],
+                     merges: Mapping[str, str] | None = None) -> ColourModel:
         """Learn one class per entry of ``samples`` (name -> RGB pixels).
 
         Parameters
@@ -289,23 +301,38 @@ class ColourModel:
             RGB sample pixels of each class, ``uint8`` or float in [0, 1], in label order.
             Each class is the dominant colour of its sample (robust to a minority of other
             colours, see the module notes).
+        merges : mapping of str to str, optional
+            Optional classes and the class each stands in for (e.g.
+            :data:`mocap.labels.CLASS_MERGES_INTO`). An optional class is left out when its
+            sample has fewer than :data:`MIN_SAMPLES` pixels or when its mean lies within :data:`MERGE_DISTANCE2` of the class it merges into (the
+            image does not tell them apart). Without ``merges`` every class must be learnable.
 
         Returns
         -------
         ColourModel
+            The learnt classes in the order of ``samples`` (without the merged ones).
         """
         if not samples:
             raise ValueError("no colour samples given")
-        means, covs = [], []
+        merges = {} if merges is None else dict(merges)
+        fitted = {}
         for name, pixels in samples.items():
             pixels = np.asarray(pixels)
             if pixels.ndim != 2 or pixels.shape[1] != 3:
                 raise ValueError(f"samples of {name!r} must have shape (N, 3), got {pixels.shape}")
-            hsv = rgb_to_hsv(pixels[np.newaxis]).reshape(-1, 3)
-            mean, cov = _fit_mode(hsv, name)
-            means.append(mean)
-            covs.append(cov)
-        return cls(tuple(samples), means, covs)
+            if name in merges and len(pixels) < MIN_SAMPLES:
+                continue
+            fitted[name] = _fit_mode(rgb_to_hsv(pixels[np.newaxis]).reshape(-1, 3), name)
+        if not any(n not in merges for n in fitted):
+            raise ValueError("at least one colour class that merges into no other is needed")
+        keep = []
+        for name, (mean, _) in fitted.items():
+            target = merges.get(name)
+            if target in fitted and target not in merges:
+                if _mahalanobis2(mean[np.newaxis], *fitted[target])[0] < MERGE_DISTANCE2:
+                    continue
+            keep.append(name)
+        return cls(keep, [fitted[n][0] for n in keep], [fitted[n][1] for n in keep])
 
     @classmethod
     def from_boxes(cls, frame: np.ndarray, boxes: Mapping[str, object],
@@ -321,6 +348,13 @@ class ColourModel:
         foreground : ndarray of bool, shape (H, W), optional
             Only foreground pixels of each box are used.
         """
+        return cls.from_samples(cls.sample_boxes(frame, boxes, foreground))
+
+    @staticmethod
+    def sample_boxes(frame: np.ndarray, boxes: Mapping[str, object], foreground: np.ndarray | None = None, *,
+                     min_pixels: int = MIN_SAMPLES) -> dict[str, np.ndarray]:
+        """The (foreground) pixels of each named box, RGB ``(N, 3)`` as ``frame``'s dtype; see
+        :meth:`from_boxes`. A box with fewer than ``min_pixels`` foreground pixels is an error."""
         frame, _ = check_rgb(frame, "frame")
         if foreground is not None:
             check_mask(foreground, frame.shape[:2], "foreground")
@@ -330,11 +364,11 @@ class ColourModel:
             pixels = frame[box.slices]
             if foreground is not None:
                 pixels = pixels[foreground[box.slices]]
-                if len(pixels) < MIN_SAMPLES:
+                if len(pixels) < min_pixels:
                     raise ValueError(f"{name} box {tuple(box)} holds only {len(pixels)} "
                                      "foreground pixels; is the person in it?")
             samples[name] = pixels.reshape(-1, 3)
-        return cls.from_samples(samples)
+        return samples
 
     def classify(self, frame: np.ndarray, foreground: np.ndarray | None = None,
                  threshold: float = DEFAULT_COLOUR_THRESHOLD) -> np.ndarray:
@@ -423,6 +457,13 @@ def clothes_box_of_face(face: Box) -> Box:
                face.height, 2 * face.width)
 
 
+def hair_box_of_face(face: Box) -> Box:
+    """The hair sample box above and around a face box: from 0.45 face heights above its top
+    down to 0.1 below it, 1.2 face widths wide, centred (forehead hair and crown)."""
+    return Box(face.row - round(0.45 * face.height), face.col - round(0.1 * face.width),
+               max(round(0.55 * face.height), 1), max(round(1.2 * face.width), 1))
+
+
 def detect_face(frame: np.ndarray, *, min_size: int = 24, max_side: int = 640) -> Box | None:
     """The most face-like frontal face in ``frame``, or None.
 
@@ -479,13 +520,18 @@ def detect_face(frame: np.ndarray, *, min_size: int = 24, max_side: int = 640) -
 
 def learn_colour_model(frame: np.ndarray, background: np.ndarray | None = None,
                        skin_box: object | None = None, clothes_box: object | None = None, *,
+                       hair_box: object | None = None, lower_body_box: object | None = None,
                        config: ImagingConfig | None = None) -> ColourModel:
-    """Learn the skin and clothes classes from the first frame, as the paper does.
+    """Learn the skin and clothes classes from the first frame, as the paper does, and hair
+    and lower body when the image supports them.
 
     The skin sample is the centre of the face found by :func:`detect_face`, the clothes
-    sample a box under it (:func:`clothes_box_of_face`). Boxes given by the user replace
-    the automatic ones (needed when no face is found). With a background, only foreground
-    pixels of the boxes are used.
+    sample a box under it (:func:`clothes_box_of_face`), the hair sample (with a background
+    only: its foreground pixels) a box above and around it (:func:`hair_box_of_face`). Boxes
+    given by the user replace the automatic ones (needed when no face is found); the lower
+    body is learnt only from a box the user gives. With a background, only foreground pixels
+    of the boxes are used. Hair and lower body are merged away when their sample is small or
+    looks like skin or clothes (:meth:`ColourModel.from_samples` with ``merges``).
 
     Parameters
     ----------
@@ -493,7 +539,7 @@ def learn_colour_model(frame: np.ndarray, background: np.ndarray | None = None,
         RGB first frame, ``uint8`` or float in [0, 1].
     background : ndarray, shape (H, W, 3), optional
         Empty-scene image (see :func:`mocap.imaging.subtract_background`).
-    skin_box, clothes_box : (row, col, height, width), optional
+    skin_box, clothes_box, hair_box, lower_body_box : (row, col, height, width), optional
         Sample boxes in pixels.
     config : ImagingConfig, optional
         Background-subtraction parameters used with ``background``.
@@ -501,7 +547,8 @@ def learn_colour_model(frame: np.ndarray, background: np.ndarray | None = None,
     Returns
     -------
     ColourModel
-        Classes ``("skin", "clothes")`` (labels 1 and 2).
+        Classes ``("skin", "clothes")`` (labels 1 and 2), then those of ``("hair",
+        "lower_body")`` that were sampled and kept.
 
     Raises
     ------
@@ -516,8 +563,10 @@ def learn_colour_model(frame: np.ndarray, background: np.ndarray | None = None,
         check_rgb(background, "background")
         check_same_size(frame, background, "background")
         foreground = subtract_background(frame, background, config)
-    if skin_box is None or clothes_box is None:
+    face = None
+    if skin_box is None or clothes_box is None or (hair_box is None and foreground is not None):
         face = detect_face(frame)
+    if skin_box is None or clothes_box is None:
         if face is None:
             missing = [n for n, b in (("skin_box", skin_box), ("clothes_box", clothes_box))
                        if b is None]
@@ -532,5 +581,18 @@ def learn_colour_model(frame: np.ndarray, background: np.ndarray | None = None,
             except ValueError:
                 raise ValueError(f"the clothes box under the face {tuple(face)} falls outside "
                                  "the image; pass clothes_box") from None
-    boxes = dict(zip(DEFAULT_CLASS_NAMES, (skin_box, clothes_box)))
-    return ColourModel.from_boxes(frame, boxes, foreground)
+    boxes = {"skin": skin_box, "clothes": clothes_box}
+    samples = ColourModel.sample_boxes(frame, boxes, foreground)
+    if hair_box is None and face is not None and foreground is not None:
+        hair_box = _clipped(hair_box_of_face(face), frame.shape[:2])
+    for name, box in (("hair", hair_box), ("lower_body", lower_body_box)):
+        if box is not None:
+            samples.update(ColourModel.sample_boxes(frame, {name: box}, foreground, min_pixels=0))
+    return ColourModel.from_samples(samples, CLASS_MERGES_INTO)
+
+
+def _clipped(box: Box, shape: tuple[int, int]) -> Box | None:
+    """``box`` cut to the image, or None when nothing of it is inside."""
+    r0, c0 = max(box.row, 0), max(box.col, 0)
+    r1, c1 = min(box.row + box.height, shape[0]), min(box.col + box.width, shape[1])
+    return Box(r0, c0, r1 - r0, c1 - c0) if r1 > r0 and c1 > c0 else None

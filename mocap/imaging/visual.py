@@ -8,11 +8,16 @@ from mocap.labels import UNKNOWN
 
 __all__ = ["label_palette", "colour_labels", "colour_distance", "overlay_edges", "tile"]
 
+#: Colours of the named classes (others: tab10).
+CLASS_COLOURS = {"skin": (255, 196, 150), "clothes": (40, 110, 255), "hair": (120, 60, 20),
+                 "lower_body": (40, 170, 110)}
 _FIRST_COLOURS = np.array([(255, 196, 150), (40, 110, 255)], dtype=np.uint8)  # skin, clothes
 
 
-def label_palette(n_classes: int) -> np.ndarray:
-    """RGB colour of every label value: 0 black, 1 skin tone, 2 blue, then tab10, 255 grey.
+def label_palette(n_classes: int, class_names: tuple[str, ...] | None = None) -> np.ndarray:
+    """RGB colour of every label value: 0 black, 255 grey; classes by name
+    (:data:`CLASS_COLOURS`: skin tone, blue clothes, brown hair, green lower body) when
+    ``class_names`` are given, else 1 skin tone, 2 blue, then tab10.
 
     Returns
     -------
@@ -20,16 +25,21 @@ def label_palette(n_classes: int) -> np.ndarray:
     """
     palette = np.zeros((256, 3), dtype=np.uint8)
     tab = (np.array(colormaps["tab10"].colors) * 255).round().astype(np.uint8)
+    if class_names is not None and len(class_names) != n_classes:
+        raise ValueError(f"need {n_classes} class names, got {class_names}")
     for c in range(1, n_classes + 1):
-        palette[c] = _FIRST_COLOURS[c - 1] if c <= 2 else tab[(c - 3) % len(tab)]
+        if class_names is not None and class_names[c - 1] in CLASS_COLOURS:
+            palette[c] = CLASS_COLOURS[class_names[c - 1]]
+        else:
+            palette[c] = _FIRST_COLOURS[c - 1] if c <= 2 else tab[(c - 3) % len(tab)]
     palette[UNKNOWN] = (150, 150, 150)
     return palette
 
 
-def colour_labels(labels: np.ndarray, n_classes: int) -> np.ndarray:
+def colour_labels(labels: np.ndarray, n_classes: int, class_names: tuple[str, ...] | None = None) -> np.ndarray:
     """Label image (uint8, shape (H, W)) as RGB (uint8, shape (H, W, 3)) with
     :func:`label_palette`."""
-    return label_palette(n_classes)[labels]
+    return label_palette(n_classes, class_names)[labels]
 
 
 def colour_distance(distance: np.ndarray, max_distance: float) -> np.ndarray:

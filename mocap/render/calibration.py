@@ -14,10 +14,10 @@ from typing import Mapping
 
 import numpy as np
 
-from mocap.body.dimensions import PART_NAMES, BodyDimensions
+from mocap.body.dimensions import BodyDimensions
 from mocap.body.model import BodyModel
 from mocap.body.pose import check_pose, neutral_pose, pose_from_dict, pose_to_dict
-from mocap.body.skeleton import DEFAULT_PART_CLASS
+from mocap.body.skeleton import DEFAULT_PART_CLASS, MESH_PART_NAMES
 from mocap.io.jsonfile import read_json, write_json
 from mocap.labels import DEFAULT_CLASS_NAMES
 from mocap.render.camera import Camera
@@ -40,7 +40,11 @@ class Calibration:
         Pose in the first frame (metres, radians).
     camera : Camera
     class_names : tuple of str
+        Colour classes (default: skin, clothes, hair, lower body; a file from before the
+        hair and lower-body classes has skin and clothes).
     part_class : mapping of part name to class name
+        Parts left out keep their default class; a part whose class is not in
+        ``class_names`` takes the class it merges into (:data:`mocap.labels.CLASS_MERGES_INTO`).
     """
 
     dims: BodyDimensions = field(default_factory=BodyDimensions)
@@ -66,7 +70,7 @@ class Calibration:
         return {"format": FORMAT, "dimensions": self.dims.to_dict(),
                 "initial_pose_deg": pose_to_dict(self.initial_pose, degrees=True),
                 "camera": self.camera.to_dict(), "class_names": list(self.class_names),
-                "part_class": {p: self.part_class[p] for p in PART_NAMES}}
+                "part_class": {p: c for p, c in zip(MESH_PART_NAMES, self.body_model(4).part_class)}}
 
     @classmethod
     def from_dict(cls, data: Mapping) -> "Calibration":

@@ -47,6 +47,16 @@ ACTOR_SHAPES = MappingProxyType({
     "l_hand": (0.75, 0.5, 0.15),
     "lower_body": (0.4, 0.6, 0.1),
 })
+#: The actor's lower body (hips and thighs): length (metres), and width and depth as fractions of
+#: the torso's; it starts LOWER_BODY_START_M above the chest base.
+LOWER_BODY_SIZE = (0.8, 0.92, 1.05)
+LOWER_BODY_START_M = 0.08
+#: Length of the lower body a calibration describes (the model's lower-body part), metres: the
+#: piece under the torso that the benchmark's framing shows.
+LOWER_BODY_VISIBLE_M = 0.45
+#: Forehead hairline of the actor's hair (see :mod:`mocap.synth.shading`), as
+#: :attr:`~mocap.body.dimensions.BodyDimensions.hairline`.
+ACTOR_HAIRLINE = 0.45
 #: Cloth-fold amplitude (fraction of the part's half width) of clothed parts.
 FOLD_AMPLITUDE = 0.035
 
@@ -126,8 +136,8 @@ def build_actor_mesh(dims: BodyDimensions, *, resolution: int = 32, folds: np.nd
     for p, name in enumerate(ACTOR_PART_NAMES):
         e_long, e_cross, taper = ACTOR_SHAPES[name]
         if name == "lower_body":
-            size = PartSize(0.8, 0.92 * torso.width, 1.05 * torso.depth)
-            seg, start = SEGMENT_NAMES.index("chest"), -0.08
+            size = PartSize(LOWER_BODY_SIZE[0], LOWER_BODY_SIZE[1] * torso.width, LOWER_BODY_SIZE[2] * torso.depth)
+            seg, start = SEGMENT_NAMES.index("chest"), -LOWER_BODY_START_M
             sign = 1                                        # downwards from the chest base
         else:
             size = dims[name]
@@ -160,7 +170,8 @@ def build_actor_mesh(dims: BodyDimensions, *, resolution: int = 32, folds: np.nd
 
 def random_dimensions(rng: np.random.Generator, *, base: BodyDimensions | None = None) -> BodyDimensions:
     """Adult proportions drawn around ``base``: overall size +-8 %, each part +-7 % in length and
-    +-12 % in width and depth, the two sides alike.
+    +-12 % in width and depth, the two sides alike; the lower body as the actor's (its width and
+    depth, :data:`LOWER_BODY_VISIBLE_M` of its length) and the actor's forehead hairline.
 
     Returns
     -------
@@ -180,7 +191,10 @@ def random_dimensions(rng: np.random.Generator, *, base: BodyDimensions | None =
         s = base[name]
         parts[name] = PartSize(round(s.length * overall * fl, 4), round(s.width * overall * fw, 4),
                                round(s.depth * overall * fd, 4))
-    return BodyDimensions(parts)
+    torso = parts["torso"]
+    parts["lower_body"] = PartSize(round(LOWER_BODY_VISIBLE_M * overall, 4),
+                                   round(LOWER_BODY_SIZE[1] * torso.width, 4), round(LOWER_BODY_SIZE[2] * torso.depth, 4))
+    return BodyDimensions(parts, hairline=ACTOR_HAIRLINE)
 
 
 #: Skin tones (sRGB 0-255), light to dark.

@@ -21,7 +21,7 @@ from mocap.body.dimensions import PART_NAMES
 from mocap.body.skeleton import HEAD_NECK_OVERLAP
 from mocap.render.camera import Camera
 from mocap.render.rasterize import rasterize_mesh
-from mocap.synth.actor import LOWER_BODY, Actor, srgb_to_linear
+from mocap.synth.actor import ACTOR_HAIRLINE, LOWER_BODY, Actor, srgb_to_linear
 
 __all__ = ["Light", "downsample", "render_actor"]
 
@@ -164,7 +164,7 @@ def _head_albedo(actor: Actor, p: np.ndarray, base: np.ndarray, noise: np.ndarra
     out = base.copy()
     hair = srgb_to_linear(actor.appearance.hair) * (1.0 + 0.12 * noise)[:, None]
     # hairline: high on the forehead, low at the back, with a ragged edge
-    line = 0.45 - 0.8 * _smoothstep(-0.3, 0.6, z) + 0.05 * noise
+    line = ACTOR_HAIRLINE - 0.8 * _smoothstep(-0.3, 0.6, z) + 0.05 * noise
     w_hair = _smoothstep(line - 0.04, line + 0.04, v)
     out = out * (1.0 - w_hair[:, None]) + hair * w_hair[:, None]
     front = _smoothstep(-0.35, -0.6, z)

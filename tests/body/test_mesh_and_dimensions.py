@@ -6,6 +6,8 @@ import pytest
 from hypothesis import given, strategies as st
 
 from mocap.body import PART_NAMES, BodyDimensions, BodyModel, PartSize, build_mesh
+from mocap.body.dimensions import SIZED_PART_NAMES
+from mocap.body.skeleton import MESH_PART_NAMES
 from mocap.body.mesh import part_mesh, part_resolution, signed_volume
 
 
@@ -14,16 +16,21 @@ def edge_directions(triangles):
 
 
 @pytest.mark.parametrize("resolution", [4, 8, 12, 33])
-def test_every_part_is_closed_and_outward(resolution):
-    mesh = build_mesh(BodyDimensions(), resolution)
+@pytest.mark.parametrize("dims", [BodyDimensions(), BodyDimensions().without_extensions()], ids=["full", "paper"])
+def test_every_part_is_closed_and_outward(resolution, dims):
+    mesh = build_mesh(dims, resolution)
+    sized = [p for p in SIZED_PART_NAMES if dims.has(p)]
     expected = 0
-    for part in PART_NAMES:
+    for part in sized:
         n = part_resolution(part, resolution)
-        expected += 2 * n * (n // 2 + 1)
+        expected += 2 * n * (n // 2 + 1)        # the hair cut moves rings, adds none
     assert mesh.n_triangles == expected
     assert part_resolution("torso", resolution) == resolution
-    for p in range(len(PART_NAMES)):
-        tris = mesh.triangles[mesh.triangle_part == p]
+    assert (mesh.triangle_part == MESH_PART_NAMES.index("hair")).any() == (dims.hairline is not None)
+    for part in sized:
+        # face and hair together are the closed head
+        ids = [MESH_PART_NAMES.index(part)] + ([MESH_PART_NAMES.index("hair")] if part == "head" else [])
+        tris = mesh.triangles[np.isin(mesh.triangle_part, ids)]
         directed = edge_directions(tris)
         # closed and consistently oriented: each directed edge once, its reverse once
         assert all(n == 1 for n in directed.values())

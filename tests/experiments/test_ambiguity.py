@@ -144,3 +144,21 @@ def test_two_way_option_cannot_go_with_from_truth(capsys):
 
     assert main(["--two-way", "--from-truth", "1"]) == 2
     assert "--two-way" in capsys.readouterr().err
+
+
+def test_pooled_table_weighs_rates_by_frames_and_takes_the_median_mpjpe():
+    from experiments.ambiguity import pooled_table
+    base = {"failure_rate": 0.0, "cost_equivalent_failure_rate": 0.0}
+    rows = [{**base, "sequence": "a", "seed": 0, "frames": 100, "mpjpe_mm": 50.0, "cost_equivalent_both_rate": 0.10},
+            {**base, "sequence": "a", "seed": 1, "frames": 300, "mpjpe_mm": 90.0, "cost_equivalent_both_rate": 0.02},
+            {**base, "sequence": "b", "seed": 0, "frames": 100, "mpjpe_mm": 70.0, "cost_equivalent_both_rate": 0.00}]
+    lines = pooled_table(rows).splitlines()
+    # a: (100 * 0.10 + 300 * 0.02) / 400 = 4 %; all: 16 / 500 = 3.2 %; medians 70 and 70
+    assert lines[2] == "| a | 0,1 | 400 | 70 | 0.0 % | 0.0 % | 4.0 % |"
+    assert lines[4] == "| **all** | 0,1 | 500 | 70 | 0.0 % | 0.0 % | 3.2 % |"
+
+
+def test_seed_option_rejects_non_integers(capsys):
+    from experiments.ambiguity import main
+    assert main(["--seed", "0,x"]) == 2
+    assert "--seed" in capsys.readouterr().err
