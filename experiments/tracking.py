@@ -33,7 +33,8 @@ from mocap.track import TrackerConfig
 REPORT_SECTION = "tracking"
 
 #: Named tracker configurations: changes from the defaults (``"paper"`` is the paper's method;
-#: ``"single"`` one hypothesis with recovery and hand re-acquisition, no jumps, no lag).
+#: ``"single"`` one hypothesis with recovery and hand re-acquisition, no jumps, no lag;
+#: ``"two-class"`` the default tracker on the paper's two-class model).
 CONFIGS = MappingProxyType({
     "default": {},
     "paper": None,
@@ -45,7 +46,11 @@ CONFIGS = MappingProxyType({
     "offline": {"offline": True},
     "no-prior": {"prior_weight": 0.0},
     "no-jumps": {"jumps": False},
+    "two-class": {},
 })
+#: Configurations tracked with the paper's two-class model (skin and clothes: no hair region, no
+#: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.
+TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
 
 
 def config_of(name: str) -> TrackerConfig:
@@ -56,18 +61,20 @@ def config_of(name: str) -> TrackerConfig:
 
 def unit_path(out: Path, name: str, sequence: str, seed: int) -> Path:
     from experiments.ambiguity import config_key
-    return out / "units" / f"{sequence}-s{seed}-{config_key(config_of(name))}.json"
+    model = "-two-class" if name in TWO_CLASS_MODEL else ""
+    return out / "units" / f"{sequence}-s{seed}-{config_key(config_of(name))}{model}.json"
 
 
 def run_unit(out: Path, name: str, sequence: str, seed: int) -> dict:
     """Measure one (configuration, sequence, seed), reusing its file when present."""
     from experiments.ambiguity import measure
+    from experiments.units import EXTENSIONS
 
     path = unit_path(out, name, sequence, seed)
     if path.is_file():
         return read_json(path)["result"]
     config = config_of(name)
-    row = measure(sequence, config, out, seed)
+    row = measure(sequence, config, out, seed, without=EXTENSIONS if name in TWO_CLASS_MODEL else ())
     write_json(path, {"config": config.to_dict(), "name": name, "seed": seed, "result": row})
     return row
 
