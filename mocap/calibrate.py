@@ -13,9 +13,8 @@ import numpy as np
 
 from mocap.body.dimensions import BodyDimensions
 from mocap.body.model import BodyModel
-from mocap.body.pose import neutral_pose
-from mocap.body.skeleton import DEFAULT_PART_CLASS
-from mocap.labels import CLASS_MERGES_INTO, DEFAULT_CLASS_NAMES
+from mocap.body.skeleton import DEFAULT_PART_CLASS, MESH_PART_NAMES
+from mocap.labels import CLASS_MERGES_INTO
 from mocap.render.calibration import FORMAT, Calibration
 from mocap.render.camera import Camera
 
