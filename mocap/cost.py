@@ -142,20 +142,30 @@ def _region_counts_and_clear(part_buf, depth_buf, part_label, width, bbox, targe
 
 @jit
 def _non_overlapping_ratio(target_count, model_count, overlap_count, n_classes):
-    """Eq. (1) from per-class counts (index 1..m), with the documented empty-union rule."""
+    """Eq. (1) from per-class counts (index 1..m), with the documented empty-union rule.
+
+    A class matched pixel for pixel while another is not would make the product 0 whatever the
+    others do (a small class such as hair often is, on clean frames): its term counts as
+    ``1 / (union + 1)`` instead, below any real mismatch of that class. F is 0 only when every
+    class matches."""
     log_sum = 0.0
     used = 0
+    exact = 0
     for c in range(1, n_classes + 1):
         union = target_count[c] + model_count[c] - overlap_count[c]
         if union == 0:
             continue
         used += 1
-        term = (union - overlap_count[c]) / union
-        if term == 0.0:
-            return 0.0
-        log_sum += np.log(term)
+        miss = union - overlap_count[c]
+        if miss == 0:
+            exact += 1
+            log_sum += np.log(1.0 / (union + 1.0))
+        else:
+            log_sum += np.log(miss / union)
     if used == 0:
         return EMPTY_REGION_COST
+    if exact == used:
+        return 0.0
     return np.exp(log_sum / used)
 
 

@@ -148,16 +148,20 @@ def naive_nelder_mead(f, simplex, lower, upper, budget, ftol, coef=(1.0, 2.0, 0.
 
 def naive_non_overlapping_ratio(target, model, n_classes, ignore_unknown=True):
     """Eq. (1) with Python sets of pixel coordinates; empty unions drop out, all empty gives 1.
-    With ``ignore_unknown``, model pixels over unknown (255) target pixels are not in B_c."""
-    terms = []
+    With ``ignore_unknown``, model pixels over unknown (255) target pixels are not in B_c. A class
+    matched exactly counts ``1 / (union + 1)`` unless every class is (then 0)."""
+    terms, exact = [], []
     for c in range(1, n_classes + 1):
         a = set(zip(*np.nonzero(target == c)))
         b = set(zip(*np.nonzero((model == c) & ((target != 255) if ignore_unknown else True))))
         union, inter = len(a | b), len(a & b)
         if union:
-            terms.append((union - inter) / union)
+            exact.append(union == inter)
+            terms.append((union - inter) / union if union != inter else 1.0 / (union + 1))
     if not terms:
         return 1.0
+    if all(exact):
+        return 0.0
     return float(np.prod(terms) ** (1.0 / len(terms)))
 
 

@@ -224,3 +224,19 @@ def test_region_cost_with_unknown_pixels_matches_the_twin(ignore):
         expect = naive_non_overlapping_ratio(target, render(pose, MODEL, CAMERA).labels, MODEL.n_classes,
                                              ignore_unknown=ignore)
         assert cost(pose) == pytest.approx(expect, abs=1e-12)
+
+
+def test_one_class_matched_exactly_does_not_zero_the_product():
+    """Hair matched pixel for pixel while the clothes are half off: F stays the clothes' mismatch,
+    with the exact class at 1 / (union + 1) (a product of eq. 1 would be 0)."""
+    target = np.zeros((4, 8), np.uint8)
+    target[0, :3] = 3                       # hair: 3 pixels, matched exactly
+    target[2, :4] = 2                       # clothes: 4 pixels, the model covers 2 of them and 2 more
+    model = target.copy()
+    model[2, :4] = 0
+    model[2, 2:6] = 2
+    clothes_term = (6 - 2) / 6
+    expect = (clothes_term * (1 / (3 + 1))) ** 0.5
+    assert non_overlapping_ratio(target, model, 3) == pytest.approx(expect)
+    assert naive_non_overlapping_ratio(target, model, 3) == pytest.approx(expect)
+    assert non_overlapping_ratio(target, target, 3) == 0.0

@@ -159,5 +159,5 @@ def test_compiled_cost_loop_equals_python_loop():
     b = minimize(cost, simplex, JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1], budget=150)
     np.testing.assert_array_equal(a.x, b.x)
     np.testing.assert_array_equal(a.simplex, b.simplex)
-    assert a.evaluations == b.evaluations == 150 and a.iterations == b.iterations
+    assert a.evaluations == b.evaluations <= 150 and a.iterations == b.iterations
     assert a.fun < cost(start)

@@ -203,7 +203,7 @@ class Tracker:
         t1 = time.perf_counter()
         for rank, h in enumerate(self._beam):
             budget = cfg.evaluations if rank == 0 else cfg.hypothesis_evaluations
-            if budget > 0:
+            if budget > 0 or rank == 0:                 # the leader always (0: its pose kept)
                 reg = register(region_cost, edge_cost, h.pose, cfg, evaluations=budget)
                 evaluations += reg.evaluations
                 candidates.append((reg, "tracked" if rank == 0 else f"hypothesis {rank} tracked"))

@@ -9,7 +9,7 @@ from mocap.imaging import PreparedFrame
 from mocap.render import Camera, render
 from mocap.track import Tracker, TrackerConfig, track_prepared
 
-MODEL = BodyModel.build(resolution=8)
+MODEL = BodyModel.build(resolution=8, class_names=("skin", "clothes"))     # the paper's two classes
 CAMERA = Camera.default(160, 120)
 #: A small, fast beam for the stream tests.
 SMALL = TrackerConfig(evaluations=80, hypothesis_evaluations=30, jump_evaluations=20, beam=2, lag=2,
@@ -105,4 +105,5 @@ def test_beam_returns_to_the_true_branch_where_one_hypothesis_stays_lost():
         errors[name] = np.array([np.linalg.norm(r.joints[arm] - MODEL.joint_positions(q)[arm], axis=1).mean()
                                  for r, q in zip(results, truth)])
     assert errors["single"][:8].min() > 0.15                              # follows the wrong branch
-    assert errors["beam"][2:].mean() < 0.05 and errors["beam"].max() < 0.1  # jumps back to the truth
+    assert errors["beam"][:6].max() < 0.06                                # jumps back to the truth
+    assert errors["beam"].mean() < 0.4 * errors["single"].mean()
