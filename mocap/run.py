@@ -1,13 +1,16 @@
 """Track a whole video: frames in; ``poses.csv``, ``poses.bvh``, ``overlay.mp4``,
 ``residuals.png`` and ``run.json`` out (DESIGN.md sections 3–4).
 
-``poses.csv`` is a journal: every finished frame is appended and flushed at once, so an
-interrupted run loses nothing and the same command resumes after the last finished frame
-(the settings must be the same; they are kept in ``run.json``). The other outputs are written
-atomically at the end.
+``poses.csv`` is a journal: every finished frame is appended and flushed at once, and after
+every frame the tracker's exact state is saved with the journal length it belongs to
+(:mod:`mocap.io.checkpoint`), so an interrupted run — even killed at any instant — loses
+nothing and the same command resumes bit for bit where it stopped (the settings must be the
+same; they are kept in ``run.json``). One run at a time may write to an output folder
+(:mod:`mocap.io.lock`). The other outputs are written atomically at the end.
 """
 from __future__ import annotations
 
+import collections
 import json
 import math
 import os
@@ -23,6 +26,8 @@ from mocap.body.skeleton import JOINT_NAMES
 from mocap.calibrate import Calibration, colour_model_from_pose
 from mocap.imaging import ColourModel, ImagingConfig, learn_colour_model, prepare_frame
 from mocap.io.atomic import write_text_atomic
+from mocap.io.checkpoint import Checkpoint, read_checkpoint, truncate_journal, write_checkpoint
+from mocap.io.lock import one_writer
 from mocap.io.pose_table import PoseTable
 from mocap.io.video import count_frames, iter_frames, read_image
 from mocap.track import FrameResult, Tracker, TrackerConfig
@@ -74,6 +79,7 @@ def _versions() -> dict:
             "numba": numba.__version__, "scipy": scipy.__version__, "scikit-image": skimage.__version__}
 
 
+@one_writer("out_dir")
 def track_video(source: str | Path, background: str | Path | None, calibration: Calibration, out_dir: str | Path,
                 config: TrackerConfig | None = None, *, imaging: ImagingConfig | None = None,
                 colour: str = "calibration", ground_truth: str | Path | None = None, fps: float = 25.0,
@@ -90,8 +96,8 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     calibration : Calibration
         Actor dimensions, initial pose, camera (its size must match the frames).
     out_dir : path
-        Output folder (created). If it holds an unfinished run with the same settings, the
-        run resumes after its last finished frame.
+        Output folder (created), locked for the run. If it holds an unfinished run with the
+        same settings, the run resumes exactly where it stopped.
     config : TrackerConfig, optional
     imaging : ImagingConfig, optional
     colour : {"calibration", "face"}
@@ -117,6 +123,8 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
         another size, an out folder holding a run with other settings, bad settings.
     FileNotFoundError
         Missing video, background or ground truth.
+    mocap.io.lock.FolderInUseError
+        Another run writes to ``out_dir``.
     """
     from tqdm import tqdm
 
@@ -153,7 +161,7 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     settings = _settings(source, background, calibration, config, imaging, colour, resolution)
     out_dir.mkdir(parents=True, exist_ok=True)
     journal, run_json = out_dir / "poses.csv", out_dir / "run.json"
-    done = _previous_run(journal, run_json, settings, overwrite)
+    checkpoint = _previous_run(journal, run_json, settings, overwrite)
 
     if colour == "calibration":
         colour_model = colour_model_from_pose(first, bg_image, model, camera, calibration.initial_pose, imaging)
@@ -164,60 +172,45 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     tracker = Tracker(model, camera, config, calibration.initial_pose)
     state_path = out_dir / STATE_FILE
     start = 0
-    if done is not None and len(done):
-        start = int(done.frames[-1]) + 1
-        tracker.resume_from(*_read_state(state_path, start, done))
+    if checkpoint is not None:
+        start = checkpoint.next_index
+        tracker.restore(checkpoint.state)
     else:
         write_text_atomic(run_json, json.dumps({"status": "running", "settings": settings}, indent=2))
     started = time.perf_counter()
-    results_ms: list[float] = []
+    results_ms: collections.deque[float] = collections.deque(maxlen=25)   # for the frame rate shown
     bar = tqdm(total=total, initial=start, desc="tracking", unit="frame", disable=not progress)
     try:
         for index, frame in enumerate(iter_frames(source, start, total), start=start):
             prepared = prepare_frame(frame, bg_image, colour_model, imaging)
-            result, = tracker.push(index, prepared)
-            _frame_row(result).append_to(journal)
-            _write_state(state_path, index, tracker)
-            results_ms.append(result.timings_ms["total"])
+            for result in tracker.push(index, prepared):
+                _frame_row(result).append_to(journal)
+                results_ms.append(result.timings_ms["total"])
+                bar.set_postfix(fps=f"{1e3 / np.mean(results_ms):.0f}", F=f"{result.region_residual:.2f}",
+                                D=f"{result.edge_residual:.1f}")
+            write_checkpoint(state_path, tracker.state(), index + 1, journal)
             bar.update(1)
-            bar.set_postfix(fps=f"{1e3 / np.mean(results_ms[-25:]):.0f}", F=f"{result.region_residual:.2f}",
-                            D=f"{result.edge_residual:.1f}")
+        # the held-back frames: not checkpointed, a resume continues from the last push instead
+        for result in tracker.finish():
+            _frame_row(result).append_to(journal)
     finally:
         bar.close()
-    table = PoseTable.read(journal)
-    table.write(journal)            # the journal, rewritten whole and atomically
+    table = PoseTable.read(journal)     # (not rewritten: the checkpoint records its length)
     return _finish(out_dir, table, settings, source, model, calibration, camera, gt, fps, start,
                    time.perf_counter() - started, write_overlay, bg_image)
 
 
-#: Exact (binary) tracker state after the last finished frame, for bit-identical resumes.
+#: Checkpoint (:mod:`mocap.io.checkpoint`): the tracker's exact state after the last pushed
+#: frame and the length of ``poses.csv`` that goes with it, for bit-identical resumes.
 STATE_FILE = ".tracker_state.npz"
 
 
-def _write_state(path: Path, frame: int, tracker: Tracker) -> None:
-    import io
-
-    from mocap.io.atomic import write_bytes_atomic
-    buf = io.BytesIO()
-    np.savez(buf, frame=frame, history=np.array(tracker.history[-2:]), last_good=tracker.last_good)
-    write_bytes_atomic(path, buf.getvalue())
-
-
-def _read_state(path: Path, next_frame: int, done: PoseTable) -> tuple[np.ndarray, np.ndarray]:
-    """History and last good pose to resume with: the exact state file when it matches the
-    journal, else the journal's (degree-rounded) poses."""
-    if path.exists():
-        with np.load(path) as state:
-            if int(state["frame"]) == next_frame - 1:
-                return state["history"], state["last_good"]
-    good = done.poses[done.extra["failed"] == 0]
-    return done.poses, (good[-1] if len(good) else done.poses[0])
-
-
-def _previous_run(journal: Path, run_json: Path, settings: dict, overwrite: bool) -> PoseTable | None:
-    if overwrite or not journal.exists():
+def _previous_run(journal: Path, run_json: Path, settings: dict, overwrite: bool) -> Checkpoint | None:
+    """The checkpoint to resume from (the journal cut back to it), or None to start afresh."""
+    state_path = journal.parent / STATE_FILE
+    if overwrite or not (journal.exists() or state_path.exists()):
         journal.unlink(missing_ok=True)
-        (journal.parent / STATE_FILE).unlink(missing_ok=True)
+        state_path.unlink(missing_ok=True)
         return None
     try:
         previous = json.loads(run_json.read_text()) if run_json.exists() else {}
@@ -226,9 +219,9 @@ def _previous_run(journal: Path, run_json: Path, settings: dict, overwrite: bool
     if previous.get("settings") != json.loads(json.dumps(settings)):
         raise ValueError(f"{journal.parent} holds a run with other settings (or no run.json); "
                          "use --overwrite or another --out")
-    done = PoseTable.read(journal, tolerate_partial=True)
-    done.write(journal)             # drop a partial last line before appending to it again
-    return done
+    checkpoint = read_checkpoint(state_path)
+    truncate_journal(journal, checkpoint)   # rows after the checkpoint (and a partial line) are redone
+    return checkpoint
 
 
 def _finish(out_dir, table, settings, source, model, calibration, camera, gt, fps, start, wall_s,

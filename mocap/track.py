@@ -581,8 +581,16 @@ class Tracker:
             model = model.with_resolution(config.mesh_resolution)
         self.model, self.camera, self.config = model, camera, config
         q = clamp_to_limits(check_pose(initial_pose, name="initial pose"))
-        self.history: list[np.ndarray] = [q]      # accepted poses, most recent last
+        self.history: list[np.ndarray] = [q]      # last accepted poses (at most two), most recent last
         self.last_good = q
+
+    #: Accepted poses kept: the prediction needs the last two, nothing else does.
+    HISTORY_LENGTH = 2
+
+    def _accept(self, pose: np.ndarray) -> None:
+        """Append an accepted pose, keeping only the last :attr:`HISTORY_LENGTH` (bounded memory)."""
+        self.history.append(pose)
+        del self.history[:-self.HISTORY_LENGTH]
 
     def predict(self) -> np.ndarray:
         """Start pose of the next frame (previous pose, or constant-velocity extrapolation)."""
@@ -636,7 +644,7 @@ class Tracker:
         timings["prepare"] = sum(timings.values())
         if prepared.is_empty:
             pose = self.history[-1].copy()
-            self.history.append(pose)
+            self._accept(pose)
             timings.update(region=0.0, edge=0.0, recovery=0.0)
             timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)
             return FrameResult(frame_index, pose, self.model.joint_positions(pose), math.nan, math.nan, math.nan,
@@ -663,7 +671,7 @@ class Tracker:
             reg, failed, action, used = self._reacquire(prepared, region_cost, edge_cost, reg, failed, action)
             evaluations += used
         timings["recovery"] = 1e3 * (time.perf_counter() - t2)
-        self.history.append(reg.pose)
+        self._accept(reg.pose)
         if not failed:
             self.last_good = reg.pose
         timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)

@@ -28,7 +28,13 @@ def tracker_config(args: argparse.Namespace):
     config = TrackerConfig.from_json(args.config) if args.config else TrackerConfig()
     changes = {}
     if args.iterations is not None:
+        if args.iterations < 1:
+            raise ValueError(f"--iterations must be at least 1, got {args.iterations}: with no cost "
+                             "evaluations every frame would keep the initial pose")
         changes["evaluations"] = args.iterations
+    elif config.evaluations < 1:
+        raise ValueError(f"{args.config}: evaluations must be at least 1, got {config.evaluations}: with no "
+                         "cost evaluations every frame would keep the initial pose")
     if args.split is not None:
         changes["split"] = args.split
     return dataclasses.replace(config, **changes) if changes else config

@@ -1,0 +1,118 @@
+"""Nothing lost, nothing silent: crash-exact resume, one writer per output folder.
+
+The runs are real processes killed with SIGKILL at chosen points (:mod:`tests.killpoints`);
+every resumed run must give bit for bit the poses of an uninterrupted one.
+"""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from mocap.cli import main
+from mocap.io.lock import LOCK_FILE, FolderLock
+from mocap.io.pose_table import PoseTable
+from mocap.run import STATE_FILE
+
+from tests.conftest import REPO_ROOT
+
+N_FRAMES = 8
+TRACK_ARGS = ["--iterations", "40", "--no-overlay"]
+
+
+@pytest.fixture(scope="module")
+def sequence(tmp_path_factory):
+    from mocap.synth import generate_sequence
+    return generate_sequence("gestures-2", tmp_path_factory.mktemp("seq") / "gestures-2", frames=N_FRAMES, seed=3,
+                             progress=False)
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(sequence, tmp_path_factory):
+    out = tmp_path_factory.mktemp("uninterrupted") / "run"
+    assert main(["track", str(sequence), "--out", str(out), *TRACK_ARGS]) == 0
+    return PoseTable.read(out / "poses.csv")
+
+
+def killed_run(mode: str, n: int, sequence, out, **popen) -> subprocess.CompletedProcess:
+    cmd = [sys.executable, "-m", "tests.killpoints", mode, str(n), "--", "track", str(sequence), "--out", str(out),
+           *TRACK_ARGS]
+    return subprocess.run(cmd, cwd=REPO_ROOT, capture_output=True, text=True, timeout=300, **popen)
+
+
+def journal_rows(out) -> int:
+    path = out / "poses.csv"
+    return len(path.read_text().splitlines()) - 1 if path.exists() else 0
+
+
+@pytest.mark.slow
+def test_resume_after_kill_9_anywhere_is_bit_identical(sequence, uninterrupted, tmp_path):
+    out = tmp_path / "run"
+    # 1. killed between the first row and its checkpoint: nothing exact to resume from yet
+    proc = killed_run("after-row", 1, sequence, out)
+    assert proc.returncode == -9, proc.stderr
+    assert journal_rows(out) == 1 and not (out / STATE_FILE).exists()
+    assert (out / LOCK_FILE).exists()                     # the dead process's lock file stays behind
+    # 2. starts afresh (the lock of the dead process is no obstacle), killed after 3 checkpoints
+    proc = killed_run("after-state", 3, sequence, out)
+    assert proc.returncode == -9, proc.stderr
+    assert journal_rows(out) == 3
+    # 3. resumes at frame 3, killed half-way through writing its second row (frame 4)
+    proc = killed_run("mid-row", 2, sequence, out)
+    assert proc.returncode == -9, proc.stderr
+    assert not (out / "poses.csv").read_text().endswith("\n")
+    # 4. resumes at frame 4, killed between the row of frame 6 and its checkpoint
+    proc = killed_run("after-row", 3, sequence, out)
+    assert proc.returncode == -9, proc.stderr
+    assert journal_rows(out) == 7
+    # 5. resumes at frame 6 (the row of frame 6 is done again) and finishes
+    assert main(["track", str(sequence), "--out", str(out), *TRACK_ARGS]) == 0
+    resumed = PoseTable.read(out / "poses.csv")
+    np.testing.assert_array_equal(resumed.frames, np.arange(N_FRAMES))
+    np.testing.assert_array_equal(resumed.poses, uninterrupted.poses)
+    np.testing.assert_array_equal(resumed.joints, uninterrupted.joints)
+    for name in ("region_residual", "edge_residual", "failed", "evaluations"):
+        np.testing.assert_array_equal(resumed.extra[name], uninterrupted.extra[name])
+
+
+def test_a_held_output_folder_is_refused_at_once(sequence, tmp_path, capsys):
+    out = tmp_path / "run"
+    with FolderLock(out):
+        assert main(["track", str(sequence), "--out", str(out), *TRACK_ARGS]) == 2
+        err = capsys.readouterr().err
+        assert f"pid {os.getpid()}" in err and "in use by another run" in err and len(err.strip().splitlines()) == 1
+        assert sorted(p.name for p in out.iterdir()) == [LOCK_FILE]      # nothing written
+        with pytest.raises(OSError, match="in use"):
+            FolderLock(out).acquire()                 # a second lock in the same process, too
+    FolderLock(out).acquire().release()               # released on leaving the block
+
+
+@pytest.mark.slow
+def test_two_runs_on_one_folder_one_refuses_the_other_is_exact(sequence, uninterrupted, tmp_path):
+    out, paused = tmp_path / "run", tmp_path / "paused"
+    first = subprocess.Popen([sys.executable, "-m", "tests.killpoints", "pause", "2", "--", "track", str(sequence),
+                              "--out", str(out), *TRACK_ARGS], cwd=REPO_ROOT, stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True, env={**os.environ, "KILLPOINTS_PAUSED": str(paused)})
+    try:
+        deadline = time.monotonic() + 240
+        while not paused.exists():                    # the first run is in the middle of its frames
+            assert first.poll() is None and time.monotonic() < deadline, first.communicate()
+            time.sleep(0.05)
+        second = subprocess.run([sys.executable, "-m", "mocap", "track", str(sequence), "--out", str(out),
+                                 *TRACK_ARGS], cwd=REPO_ROOT, capture_output=True, text=True, timeout=300)
+        assert second.returncode == 2
+        assert "in use by another run" in second.stderr and f"pid {first.pid}" in second.stderr
+        paused.unlink()
+        stdout, stderr = first.communicate(timeout=300)
+        assert first.returncode == 0, stderr
+    finally:
+        if first.poll() is None:
+            first.kill()
+            first.wait()
+    table = PoseTable.read(out / "poses.csv")
+    np.testing.assert_array_equal(table.frames, np.arange(N_FRAMES))
+    np.testing.assert_array_equal(table.poses, uninterrupted.poses)
