@@ -30,6 +30,7 @@ from mocap.io.checkpoint import Checkpoint, read_checkpoint, truncate_journal, w
 from mocap.io.lock import one_writer
 from mocap.io.pose_table import PoseTable
 from mocap.io.video import count_frames, iter_frames, read_image
+from mocap.io.video_check import check_video, format_frames
 from mocap.track import FrameResult, Tracker, TrackerConfig
 
 #: Per-frame columns of ``poses.csv`` after the pose and joint columns.
@@ -48,6 +49,7 @@ class RunSummary:
     fps: float
     metrics: dict | None
     failures: int
+    damaged_frames: tuple[int, ...] = ()
 
 
 def _frame_row(r: FrameResult) -> PoseTable:
@@ -84,7 +86,7 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
                 config: TrackerConfig | None = None, *, imaging: ImagingConfig | None = None,
                 colour: str = "calibration", ground_truth: str | Path | None = None, fps: float = 25.0,
                 max_frames: int | None = None, overwrite: bool = False, progress: bool = True,
-                write_overlay: bool = True) -> RunSummary:
+                write_overlay: bool = True, allow_damaged: bool = False) -> RunSummary:
     """Track every frame of a video or image folder and write the outputs.
 
     Parameters
@@ -111,6 +113,10 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
         Track only the first ``max_frames`` frames.
     overwrite : bool
         Start afresh even if ``out_dir`` holds a run.
+    allow_damaged : bool
+        Track a video whose frames do not all decode (:func:`mocap.io.video_check.check_video`)
+        instead of refusing it; the damaged frame numbers go to ``run.json``
+        (``damaged_frames``) and the summary.
 
     Returns
     -------
@@ -119,7 +125,8 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     Raises
     ------
     ValueError
-        Frames and calibration of different sizes, an undecodable video, a background of
+        Frames and calibration of different sizes, an undecodable or (without
+        ``allow_damaged``) damaged video, a background of
         another size, an out folder holding a run with other settings, bad settings.
     FileNotFoundError
         Missing video, background or ground truth.
@@ -136,7 +143,7 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
         raise ValueError(f"colour must be one of {COLOUR_SOURCES}, got {colour!r}")
     source, out_dir = Path(source), Path(out_dir)
     camera = calibration.camera
-    total = count_frames(source)
+    total, damaged = _frames_to_track(source, allow_damaged)
     if max_frames is not None:
         if max_frames < 1:
             raise ValueError(f"max_frames must be at least 1, got {max_frames}")
@@ -197,7 +204,18 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
         bar.close()
     table = PoseTable.read(journal)     # (not rewritten: the checkpoint records its length)
     return _finish(out_dir, table, settings, source, model, calibration, camera, gt, fps, start,
-                   time.perf_counter() - started, write_overlay, bg_image)
+                   time.perf_counter() - started, write_overlay, bg_image, damaged=damaged)
+
+
+def _frames_to_track(source: Path, allow_damaged: bool) -> tuple[int, list[int]]:
+    """Frames a video or folder delivers, and the damaged frame numbers of a video (what
+    decodes checked against what its container announces); ValueError on damage unless allowed."""
+    if source.is_dir():
+        return count_frames(source), []
+    check = check_video(source)
+    if check.damaged and not allow_damaged:
+        raise ValueError(f"{check.describe(source)}; to track the frames that decode anyway, add --allow-damaged")
+    return check.readable, check.damaged_frames
 
 
 #: Checkpoint (:mod:`mocap.io.checkpoint`): the tracker's exact state after the last pushed
@@ -225,7 +243,7 @@ def _previous_run(journal: Path, run_json: Path, settings: dict, overwrite: bool
 
 
 def _finish(out_dir, table, settings, source, model, calibration, camera, gt, fps, start, wall_s,
-            write_overlay, bg_image) -> RunSummary:
+            write_overlay, bg_image, *, damaged: list[int]) -> RunSummary:
     from mocap.io.bvh import write_bvh
 
     extra = table.extra
@@ -251,12 +269,15 @@ def _finish(out_dir, table, settings, source, model, calibration, camera, gt, fp
            "units": {"positions": "metres", "angles_in_csv": "degrees", "residual_edge": "pixels"}}
     if metrics is not None:
         run["metrics"] = metrics
+    if damaged:
+        run["damaged_frames"] = damaged
+        run["damaged_frames_text"] = format_frames(damaged)
     write_bvh(out_dir / "poses.bvh", table.poses, calibration.dims, fps)
     _residual_plot(out_dir / "residuals.png", table, settings["tracker"])
     if write_overlay:
         _overlay_video(out_dir / "overlay.mp4", source, table, model, camera, fps)
     write_text_atomic(out_dir / "run.json", json.dumps(run, indent=2))
-    return RunSummary(out_dir, tracked, start, run["fps"], metrics, failures)
+    return RunSummary(out_dir, tracked, start, run["fps"], metrics, failures, tuple(damaged))
 
 
 def _residual_plot(path: Path, table: PoseTable, tracker: dict) -> None:

@@ -116,3 +116,31 @@ def test_two_runs_on_one_folder_one_refuses_the_other_is_exact(sequence, uninter
     table = PoseTable.read(out / "poses.csv")
     np.testing.assert_array_equal(table.frames, np.arange(N_FRAMES))
     np.testing.assert_array_equal(table.poses, uninterrupted.poses)
+
+
+@pytest.mark.slow
+def test_a_damaged_video_stops_the_run_or_is_tracked_with_its_frames_marked(sequence, tmp_path, capsys):
+    import json
+
+    import imageio.v3 as iio
+
+    from mocap.io.video import image_files
+    frames = np.stack([iio.imread(f) for f in image_files(sequence / "frames")])
+    clip, cut = tmp_path / "clip.mkv", tmp_path / "cut.mkv"
+    iio.imwrite(clip, np.concatenate([frames, frames]), plugin="FFMPEG", fps=10, macro_block_size=8)   # 16 frames
+    data = clip.read_bytes()
+    cut.write_bytes(data[: len(data) * 9 // 10])
+    common = ["--background", str(sequence / "background.png"), "--calibration", str(sequence / "calibration.json"),
+              *TRACK_ARGS]
+    assert main(["track", str(cut), "--out", str(tmp_path / "refused"), *common]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "cut.mkv is damaged: 16 announced" in err and "--allow-damaged" in err and len(err.splitlines()) == 1
+    missing = err.split("do not decode (frames ")[1].split(")")[0]                   # e.g. "9-15"
+    first, last = (int(v) for v in missing.split("-"))
+    assert 0 < first and last == 15
+    assert not (tmp_path / "refused" / "poses.csv").exists()
+    assert main(["track", str(cut), "--out", str(tmp_path / "allowed"), *common, "--allow-damaged"]) == 0
+    assert f"warning: the video is damaged: frames {first}-15" in capsys.readouterr().err
+    run = json.loads((tmp_path / "allowed" / "run.json").read_text())
+    assert run["damaged_frames"] == list(range(first, 16)) and run["frames"] == first
+    assert PoseTable.read(tmp_path / "allowed" / "poses.csv").frames.tolist() == list(range(first))

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 
@@ -44,6 +45,10 @@ def print_summary(summary) -> None:
     """One paragraph about a finished run."""
     print(f"tracked {summary.frames} frames ({summary.failures} failed) at {summary.fps:.1f} frames/s "
           f"(one core, image processing included); outputs in {summary.out_dir}")
+    if summary.damaged_frames:
+        from mocap.io.video_check import format_frames
+        print(f"warning: the video is damaged: {format_frames(list(summary.damaged_frames))} did not decode "
+              "cleanly (listed in run.json as damaged_frames)", file=sys.stderr)
     if summary.metrics:
         m = summary.metrics
         print(f"accuracy vs ground truth: MPJPE {m['mpjpe_mm']:.1f} mm, PA-MPJPE {m['pa_mpjpe_mm']:.1f} mm, "
