@@ -86,7 +86,7 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
                 config: TrackerConfig | None = None, *, imaging: ImagingConfig | None = None,
                 colour: str = "calibration", ground_truth: str | Path | None = None, fps: float = 25.0,
                 max_frames: int | None = None, overwrite: bool = False, progress: bool = True,
-                write_overlay: bool = True, allow_damaged: bool = False) -> RunSummary:
+                write_overlay: bool = True, allow_damaged: bool = False, start_frame: int = 0) -> RunSummary:
     """Track every frame of a video or image folder and write the outputs.
 
     Parameters
@@ -103,16 +103,21 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     config : TrackerConfig, optional
     imaging : ImagingConfig, optional
     colour : {"calibration", "face"}
-        Learn the colour classes from the first frame inside the calibrated model's projected
-        parts, or from the detected face and a box under it (the paper's way).
+        Learn the colour classes inside the calibrated model's projected parts, or from the
+        detected face and a box under it (the paper's way), on the first frame (from
+        ``start_frame``) that shows the person: whose foreground covers at least
+        :data:`PLAUSIBLE_FOREGROUND` of the model's silhouette, or where a face is detected.
+        The frame used goes to ``run.json`` (``colour_model_frame``).
     ground_truth : path, optional
         ``ground_truth.csv``: adds the ``metrics`` object to ``run.json``.
     fps : float
         Frame rate of the output video and BVH.
     max_frames : int, optional
-        Track only the first ``max_frames`` frames.
+        Track only the first ``max_frames`` frames (from ``start_frame``).
     overwrite : bool
         Start afresh even if ``out_dir`` holds a run.
+    start_frame : int
+        First frame to track (0-based); the calibration's initial pose is the pose there.
     allow_damaged : bool
         Track a video whose frames do not all decode (:func:`mocap.io.video_check.check_video`)
         instead of refusing it; the damaged frame numbers go to ``run.json``
@@ -144,13 +149,17 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     source, out_dir = Path(source), Path(out_dir)
     camera = calibration.camera
     total, damaged = _frames_to_track(source, allow_damaged)
+    if isinstance(start_frame, bool) or not isinstance(start_frame, int) or start_frame < 0:
+        raise ValueError(f"the start frame must be a non-negative integer, got {start_frame!r}")
+    if total == 0:
+        raise ValueError(f"{source} has no frames")
+    if start_frame >= total:
+        raise ValueError(f"start frame {start_frame} is past the end of {source} ({total} frames)")
     if max_frames is not None:
         if max_frames < 1:
             raise ValueError(f"max_frames must be at least 1, got {max_frames}")
-        total = min(total, max_frames)
-    if total == 0:
-        raise ValueError(f"{source} has no frames")
-    first = next(iter_frames(source, 0, 1))
+        total = min(total, start_frame + max_frames)
+    first = next(iter_frames(source, start_frame, start_frame + 1))
     if first.shape[:2] != camera.shape:
         raise ValueError(f"frames are {first.shape[1]}x{first.shape[0]} but the calibration's camera is "
                          f"{camera.width}x{camera.height}: calibrate for this video (python -m mocap calibrate)")
@@ -166,19 +175,18 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     resolution = config.mesh_resolution or resolution_for_image(camera.width, camera.height)
     model = calibration.body_model(resolution)
     settings = _settings(source, background, calibration, config, imaging, colour, resolution)
+    settings["start_frame"] = start_frame
     out_dir.mkdir(parents=True, exist_ok=True)
     journal, run_json = out_dir / "poses.csv", out_dir / "run.json"
     checkpoint = _previous_run(journal, run_json, settings, overwrite)
 
-    if colour == "calibration":
-        colour_model = colour_model_from_pose(first, bg_image, model, camera, calibration.initial_pose, imaging)
-    else:
-        colour_model = learn_colour_model(first, bg_image, config=imaging)
+    colour_model, colour_frame = _learn_colours(source, start_frame, total, bg_image, model, camera,
+                                                calibration.initial_pose, imaging, colour)
     colour_model.to_json(out_dir / "colour_model.json")
 
     tracker = Tracker(model, camera, config, calibration.initial_pose)
     state_path = out_dir / STATE_FILE
-    start = 0
+    start = start_frame
     if checkpoint is not None:
         start = checkpoint.next_index
         tracker.restore(checkpoint.state)
@@ -204,7 +212,40 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
         bar.close()
     table = PoseTable.read(journal)     # (not rewritten: the checkpoint records its length)
     return _finish(out_dir, table, settings, source, model, calibration, camera, gt, fps, start,
-                   time.perf_counter() - started, write_overlay, bg_image, damaged=damaged)
+                   time.perf_counter() - started, write_overlay, bg_image, damaged=damaged,
+                   colour_frame=colour_frame)
+
+
+#: Fraction of the calibrated model's silhouette (pixels) the foreground must cover for a frame to
+#: be taken as showing the person, to learn the colours on.
+PLAUSIBLE_FOREGROUND = 0.5
+
+
+def _learn_colours(source: Path, first: int, stop: int, bg_image, model, camera, pose, imaging,
+                   colour: str) -> tuple[ColourModel, int]:
+    """Colour model from the first frame in ``first``..``stop - 1`` that shows the person, and that
+    frame's number; ValueError (with the last frame's reason) when none does."""
+    from mocap.imaging import subtract_background
+    from mocap.render import render
+
+    silhouette = np.count_nonzero(render(pose, model, camera).labels)
+    reason = "no frame"
+    for index, frame in enumerate(iter_frames(source, first, stop), start=first):
+        try:
+            if colour == "face":
+                return learn_colour_model(frame, bg_image, config=imaging), index
+            if bg_image is not None:
+                covered = np.count_nonzero(subtract_background(frame, bg_image, imaging))
+                if covered < PLAUSIBLE_FOREGROUND * silhouette:
+                    reason = (f"frame {index} has {covered} foreground pixels, fewer than {PLAUSIBLE_FOREGROUND:g} "
+                              f"of the calibrated model's {silhouette}")
+                    continue
+            return colour_model_from_pose(frame, bg_image, model, camera, pose, imaging), index
+        except ValueError as exc:
+            reason = f"frame {index}: {exc}"
+    raise ValueError(f"no frame of {source} from frame {first} shows the person to learn the colours from "
+                     f"({'a detected face' if colour == 'face' else 'a foreground the size of the model'}); "
+                     f"last: {reason}")
 
 
 def _frames_to_track(source: Path, allow_damaged: bool) -> tuple[int, list[int]]:
@@ -243,7 +284,7 @@ def _previous_run(journal: Path, run_json: Path, settings: dict, overwrite: bool
 
 
 def _finish(out_dir, table, settings, source, model, calibration, camera, gt, fps, start, wall_s,
-            write_overlay, bg_image, *, damaged: list[int]) -> RunSummary:
+            write_overlay, bg_image, *, damaged: list[int], colour_frame: int) -> RunSummary:
     from mocap.io.bvh import write_bvh
 
     extra = table.extra
@@ -269,6 +310,7 @@ def _finish(out_dir, table, settings, source, model, calibration, camera, gt, fp
            "units": {"positions": "metres", "angles_in_csv": "degrees", "residual_edge": "pixels"}}
     if metrics is not None:
         run["metrics"] = metrics
+    run["colour_model_frame"] = colour_frame
     if damaged:
         run["damaged_frames"] = damaged
         run["damaged_frames_text"] = format_frames(damaged)

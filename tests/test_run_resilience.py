@@ -144,3 +144,38 @@ def test_a_damaged_video_stops_the_run_or_is_tracked_with_its_frames_marked(sequ
     run = json.loads((tmp_path / "allowed" / "run.json").read_text())
     assert run["damaged_frames"] == list(range(first, 16)) and run["frames"] == first
     assert PoseTable.read(tmp_path / "allowed" / "poses.csv").frames.tolist() == list(range(first))
+
+
+@pytest.mark.slow
+def test_colours_are_learned_where_the_person_is_and_start_skips_frames(sequence, tmp_path, capsys):
+    import json
+    import shutil
+
+    from mocap.io.video import image_files
+    folder = tmp_path / "seq"
+    shutil.copytree(sequence, folder)
+    files = image_files(folder / "frames")
+    for f in files[:2]:                                   # an empty room before the actor is in view
+        shutil.copy(folder / "background.png", f)
+    out = tmp_path / "run"
+    assert main(["track", str(folder), "--out", str(out), *TRACK_ARGS]) == 0
+    run = json.loads((out / "run.json").read_text())
+    assert run["colour_model_frame"] == 2
+    table = PoseTable.read(out / "poses.csv")
+    assert table.extra["empty"].tolist() == [1, 1] + [0] * (N_FRAMES - 2)
+    assert np.all(table.extra["region_residual"][2:] < 0.45)     # the colours fit the actor
+    # --start: the first frames are not tracked at all
+    started = tmp_path / "started"
+    assert main(["track", str(folder), "--out", str(started), "--start", "3", "--max-frames", "2", *TRACK_ARGS]) == 0
+    assert PoseTable.read(started / "poses.csv").frames.tolist() == [3, 4]
+    run = json.loads((started / "run.json").read_text())
+    assert run["colour_model_frame"] == 3 and run["settings"]["start_frame"] == 3
+    capsys.readouterr()
+    assert main(["track", str(folder), "--out", str(tmp_path / "late"), "--start", str(N_FRAMES), *TRACK_ARGS]) == 2
+    assert f"start frame {N_FRAMES} is past the end" in capsys.readouterr().err
+    # nobody in any frame: a clear error, not a colour model of the room
+    for f in files:
+        shutil.copy(folder / "background.png", f)
+    assert main(["track", str(folder), "--out", str(tmp_path / "nobody"), *TRACK_ARGS]) == 2
+    err = capsys.readouterr().err
+    assert "shows the person to learn the colours from" in err and f"frame {N_FRAMES - 1} has 0 foreground pixels" in err
