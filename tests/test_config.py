@@ -102,3 +102,19 @@ def test_atomic_writes_follow_the_umask(tmp_path, umask):
         os.umask(old)
     mode = stat.S_IMODE((tmp_path / "a.txt").stat().st_mode)
     assert mode == stat.S_IMODE((tmp_path / "b.txt").stat().st_mode) == 0o666 & ~umask
+
+
+def test_calibration_numbers_are_numbers():
+    data = json.loads(json.dumps(Calibration().to_dict()))
+    for where, key, value, match in (("camera", "fx", True, "camera fx must be a finite number"),
+                                     ("camera", "width", 160.0, "camera width must be an integer"),
+                                     ("camera", "cy", "60", "camera cy must be a finite number")):
+        bad = json.loads(json.dumps(data))
+        bad[where][key] = value
+        with pytest.raises(ValueError, match=match):
+            Calibration.from_dict(bad)
+    bad = json.loads(json.dumps(data))
+    part = next(iter(bad["dimensions"]["parts"]))
+    bad["dimensions"]["parts"][part]["length"] = True
+    with pytest.raises(ValueError, match=f"part '{part}' length must be a number of metres"):
+        Calibration.from_dict(bad)
