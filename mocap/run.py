@@ -116,12 +116,16 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
         Track only the first ``max_frames`` frames (from ``start_frame``).
     overwrite : bool
         Start afresh even if ``out_dir`` holds a run.
-    start_frame : int
-        First frame to track (0-based); the calibration's initial pose is the pose there.
+    progress : bool
+        Show a progress bar.
+    write_overlay : bool
+        Also write ``overlay.mp4``.
     allow_damaged : bool
         Track a video whose frames do not all decode (:func:`mocap.io.video_check.check_video`)
         instead of refusing it; the damaged frame numbers go to ``run.json``
         (``damaged_frames``) and the summary.
+    start_frame : int
+        First frame to track (0-based); the calibration's initial pose is the pose there.
 
     Returns
     -------
