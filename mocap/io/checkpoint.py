@@ -11,6 +11,7 @@ the saved state. A step interrupted between its rows and its checkpoint is simpl
 from __future__ import annotations
 
 import io
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -71,7 +72,7 @@ def read_checkpoint(path: str | Path) -> Checkpoint | None:
             arrays = {k: data[k] for k in data.files}
         next_index = int(arrays.pop(f"{_META}next_index"))
         size = int(arrays.pop(f"{_META}journal_bytes"))
-    except (OSError, ValueError, KeyError, EOFError) as exc:
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
         raise ValueError(f"{path} is not a readable checkpoint ({type(exc).__name__}); start afresh "
                          "with --overwrite") from None
     return Checkpoint(arrays, next_index, size)
