@@ -111,6 +111,9 @@ def ffmpeg_failure(path: str | Path, log: str) -> str:
         return f"{path} is a damaged or truncated video: not even its first frame decodes"
     if "does not contain any stream" in low or "matches no streams" in low or "no video stream" in low:
         return f"{path} has no video stream (no frames)"
+    if "ended prematurely" in low or "error opening input: end of file" in low \
+            or "error opening input: input/output error" in low:
+        return f"{path} is a truncated or damaged video: it ends before its first frame"
     if "invalid data found when processing input" in low or "could not load meta information" in low \
             or "moov atom not found" in low:
         return f"{path} is not a video ffmpeg can read (unknown format or a damaged header)"

@@ -57,9 +57,10 @@ def test_garbage_inside_a_video_is_found(clips, ext):
 
 def test_ffmpeg_failures_are_one_sentence(clips, tmp_path):
     cases = {"half.mp4": (clips / "half.mp4").read_bytes(), "empty.mp4": b"", "text.mp4": b"hello, not a video\n",
-             "text.mkv": b"hello, not a video\n"}
+             "text.mkv": b"hello, not a video\n", "header.mkv": (clips / "clip.mkv").read_bytes()[:200]}
     expected = {"half.mp4": "is a truncated video", "empty.mp4": "is empty (0 bytes): not a video",
-                "text.mp4": "is not a video ffmpeg can read", "text.mkv": "is not a video ffmpeg can read"}
+                "text.mp4": "is not a video ffmpeg can read", "text.mkv": "is not a video ffmpeg can read",
+                "header.mkv": "is a truncated or damaged video: it ends before its first frame"}
     for name, data in cases.items():
         (tmp_path / name).write_bytes(data)
         for read in (check_video, count_frames, lambda p: list(iter_frames(p))):
