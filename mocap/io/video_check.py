@@ -119,6 +119,11 @@ def ffmpeg_failure(path: str | Path, log: str) -> str:
         return f"{path} is not a video ffmpeg can read (unknown format or a damaged header)"
     if "permission denied" in low:
         return f"{path} cannot be read: permission denied"
+    if "could not convert string to float: 'n/a'" in low:     # imageio-ffmpeg's count of a frameless file
+        return f"{path} has no video frames"
+    first = log.strip().splitlines()[0] if log.strip() else ""
+    if first and not low.startswith(("ffmpeg call failed", "could not load meta", "ffmpeg version")):
+        return f"{path} could not be decoded as a video ({first})"     # a reader's own one-line reason
     return f"{path} could not be decoded as a video"
 
 

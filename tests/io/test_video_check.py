@@ -76,6 +76,14 @@ def test_ffmpeg_failures_are_one_sentence(clips, tmp_path):
         check_video(silent)
 
 
+def test_reader_messages_become_sentences():
+    from mocap.io.video_check import ffmpeg_failure
+    assert ffmpeg_failure("x.mp4", "could not convert string to float: 'N/A'") == "x.mp4 has no video frames"
+    assert ffmpeg_failure("x.mp4", "FFMPEG call failed with 183:\nffmpeg version 9") == "x.mp4 could not be decoded as a video"
+    assert ffmpeg_failure("x.mp4", "frame 3 has unsupported shape (2, 2)") == \
+        "x.mp4 could not be decoded as a video (frame 3 has unsupported shape (2, 2))"
+
+
 def test_frame_lists_read_like_text():
     assert format_frames([4]) == "frame 4"
     assert format_frames([3, 7, 8, 9, 12]) == "frames 3, 7-9 and 12"
