@@ -5,6 +5,7 @@ every resumed run must give bit for bit the poses of an uninterrupted one.
 """
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -69,8 +70,14 @@ def test_resume_after_kill_9_anywhere_is_bit_identical(sequence, uninterrupted, 
     proc = killed_run("after-row", 3, sequence, out)
     assert proc.returncode == -9, proc.stderr
     assert journal_rows(out) == 7
-    # 5. resumes at frame 6 (the row of frame 6 is done again) and finishes
+    # 5. resumes at frame 6 (the row of frame 6 is done again), killed after the last frame's checkpoint,
+    #    before any final output is written
+    proc = killed_run("after-state", 2, sequence, out)
+    assert proc.returncode == -9, proc.stderr
+    assert journal_rows(out) == N_FRAMES and not (out / "poses.bvh").exists()
+    # 6. has no frame left to track: writes the outputs
     assert main(["track", str(sequence), "--out", str(out), *TRACK_ARGS]) == 0
+    assert json.loads((out / "run.json").read_text())["resumed_from_frame"] == N_FRAMES
     resumed = PoseTable.read(out / "poses.csv")
     np.testing.assert_array_equal(resumed.frames, np.arange(N_FRAMES))
     np.testing.assert_array_equal(resumed.poses, uninterrupted.poses)
@@ -120,8 +127,6 @@ def test_two_runs_on_one_folder_one_refuses_the_other_is_exact(sequence, uninter
 
 @pytest.mark.slow
 def test_a_damaged_video_stops_the_run_or_is_tracked_with_its_frames_marked(sequence, tmp_path, capsys):
-    import json
-
     import imageio.v3 as iio
 
     from mocap.io.video import image_files
@@ -148,7 +153,6 @@ def test_a_damaged_video_stops_the_run_or_is_tracked_with_its_frames_marked(sequ
 
 @pytest.mark.slow
 def test_colours_are_learned_where_the_person_is_and_start_skips_frames(sequence, tmp_path, capsys):
-    import json
     import shutil
 
     from mocap.io.video import image_files
