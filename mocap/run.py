@@ -1,15 +1,17 @@
 """Track a whole video: frames in; ``poses.csv``, ``poses.bvh``, ``overlay.mp4``,
 ``residuals.png`` and ``run.json`` out (DESIGN.md sections 3–4).
 
-``poses.csv`` is a journal: every finished frame is appended and flushed at once, so an
-interrupted run loses nothing and the same command resumes after the last finished frame
-(the settings must be the same; they are kept in ``run.json``). The other outputs are written
-atomically at the end.
+``poses.csv`` is a journal: every finished frame is appended and flushed at once, and after
+every frame the tracker's exact state is saved with the journal length it belongs to
+(:mod:`mocap.io.checkpoint`), so an interrupted run — even killed at any instant — loses
+nothing and the same command resumes bit for bit where it stopped (the settings must be the
+same; they are kept in ``run.json``). One run at a time may write to an output folder
+(:mod:`mocap.io.lock`). The other outputs are written atomically at the end.
 """
 from __future__ import annotations
 
+import collections
 import json
-import math
 import os
 import platform
 import time
@@ -18,13 +20,14 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap.body.pose import N_PARAMETERS
-from mocap.body.skeleton import JOINT_NAMES
 from mocap.calibrate import Calibration, colour_model_from_pose
 from mocap.imaging import ColourModel, ImagingConfig, learn_colour_model, prepare_frame
 from mocap.io.atomic import write_text_atomic
+from mocap.io.checkpoint import Checkpoint, read_checkpoint, truncate_journal, write_checkpoint
+from mocap.io.lock import one_writer
 from mocap.io.pose_table import PoseTable
 from mocap.io.video import count_frames, iter_frames, read_image
+from mocap.io.video_check import check_video, format_frames
 from mocap.track import FrameResult, Tracker, TrackerConfig
 
 #: Per-frame columns of ``poses.csv`` after the pose and joint columns.
@@ -44,6 +47,7 @@ class RunSummary:
     fps: float
     metrics: dict | None
     failures: int
+    damaged_frames: tuple[int, ...] = ()
 
 
 def _frame_row(r: FrameResult) -> PoseTable:
@@ -76,11 +80,12 @@ def _versions() -> dict:
             "numba": numba.__version__, "scipy": scipy.__version__, "scikit-image": skimage.__version__}
 
 
+@one_writer("out_dir")
 def track_video(source: str | Path, background: str | Path | None, calibration: Calibration, out_dir: str | Path,
                 config: TrackerConfig | None = None, *, imaging: ImagingConfig | None = None,
                 colour: str = "calibration", ground_truth: str | Path | None = None, fps: float = 25.0,
                 max_frames: int | None = None, overwrite: bool = False, progress: bool = True,
-                write_overlay: bool = True) -> RunSummary:
+                write_overlay: bool = True, allow_damaged: bool = False, start_frame: int = 0) -> RunSummary:
     """Track every frame of a video or image folder and write the outputs.
 
     Parameters
@@ -92,21 +97,34 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     calibration : Calibration
         Actor dimensions, initial pose, camera (its size must match the frames).
     out_dir : path
-        Output folder (created). If it holds an unfinished run with the same settings, the
-        run resumes after its last finished frame.
+        Output folder (created), locked for the run. If it holds an unfinished run with the
+        same settings, the run resumes exactly where it stopped.
     config : TrackerConfig, optional
     imaging : ImagingConfig, optional
     colour : {"calibration", "face"}
-        Learn the colour classes from the first frame inside the calibrated model's projected
-        parts, or from the detected face and a box under it (the paper's way).
+        Learn the colour classes inside the calibrated model's projected parts, or from the
+        detected face and a box under it (the paper's way), on the first frame (from
+        ``start_frame``) that shows the person: whose foreground covers at least
+        :data:`PLAUSIBLE_FOREGROUND` of the model's silhouette, or where a face is detected.
+        The frame used goes to ``run.json`` (``colour_model_frame``).
     ground_truth : path, optional
         ``ground_truth.csv``: adds the ``metrics`` object to ``run.json``.
     fps : float
         Frame rate of the output video and BVH.
     max_frames : int, optional
-        Track only the first ``max_frames`` frames.
+        Track only the first ``max_frames`` frames (from ``start_frame``).
     overwrite : bool
         Start afresh even if ``out_dir`` holds a run.
+    progress : bool
+        Show a progress bar.
+    write_overlay : bool
+        Also write ``overlay.mp4``.
+    allow_damaged : bool
+        Track a video whose frames do not all decode (:func:`mocap.io.video_check.check_video`)
+        instead of refusing it; the damaged frame numbers go to ``run.json``
+        (``damaged_frames``) and the summary.
+    start_frame : int
+        First frame to track (0-based); the calibration's initial pose is the pose there.
 
     Returns
     -------
@@ -115,10 +133,13 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     Raises
     ------
     ValueError
-        Frames and calibration of different sizes, an undecodable video, a background of
+        Frames and calibration of different sizes, an undecodable or (without
+        ``allow_damaged``) damaged video, a background of
         another size, an out folder holding a run with other settings, bad settings.
     FileNotFoundError
         Missing video, background or ground truth.
+    mocap.io.lock.FolderInUseError
+        Another run writes to ``out_dir``.
     """
     from tqdm import tqdm
 
@@ -130,14 +151,18 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
         raise ValueError(f"colour must be one of {COLOUR_SOURCES}, got {colour!r}")
     source, out_dir = Path(source), Path(out_dir)
     camera = calibration.camera
-    total = count_frames(source)
+    total, damaged = _frames_to_track(source, allow_damaged)
+    if isinstance(start_frame, bool) or not isinstance(start_frame, int) or start_frame < 0:
+        raise ValueError(f"the start frame must be a non-negative integer, got {start_frame!r}")
+    if total == 0:
+        raise ValueError(f"{source} has no frames")
+    if start_frame >= total:
+        raise ValueError(f"start frame {start_frame} is past the end of {source} ({total} frames)")
     if max_frames is not None:
         if max_frames < 1:
             raise ValueError(f"max_frames must be at least 1, got {max_frames}")
-        total = min(total, max_frames)
-    if total == 0:
-        raise ValueError(f"{source} has no frames")
-    first = next(iter_frames(source, 0, 1))
+        total = min(total, start_frame + max_frames)
+    first = next(iter_frames(source, start_frame, start_frame + 1))
     if first.shape[:2] != camera.shape:
         raise ValueError(f"frames are {first.shape[1]}x{first.shape[0]} but the calibration's camera is "
                          f"{camera.width}x{camera.height}: calibrate for this video (python -m mocap calibrate)")
@@ -153,83 +178,102 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     resolution = config.mesh_resolution or resolution_for_image(camera.width, camera.height)
     model = calibration.body_model(resolution)
     settings = _settings(source, background, calibration, config, imaging, colour, resolution)
+    settings["start_frame"] = start_frame
     out_dir.mkdir(parents=True, exist_ok=True)
     journal, run_json = out_dir / "poses.csv", out_dir / "run.json"
-    done = _previous_run(journal, run_json, settings, overwrite)
+    checkpoint = _previous_run(journal, run_json, settings, overwrite)
 
-    if colour == "calibration":
-        colour_model = colour_model_from_pose(first, bg_image, model, camera, calibration.initial_pose, imaging)
-    else:
-        colour_model = learn_colour_model(first, bg_image, config=imaging)
+    colour_model, colour_frame = _learn_colours(source, start_frame, total, bg_image, model, camera,
+                                                calibration.initial_pose, imaging, colour)
     colour_model.to_json(out_dir / "colour_model.json")
     model = model.with_class_names(colour_model.names)        # classes the first frame supports
 
     tracker = Tracker(model, camera, config, calibration.initial_pose)
     state_path = out_dir / STATE_FILE
-    start = 0
-    if done is not None and len(done):
-        tracker, start = _resume(tracker, state_path, done, model, camera, config)
+    start = start_frame
+    if checkpoint is not None:
+        start = checkpoint.next_index
+        tracker.restore(checkpoint.state)
     else:
         write_text_atomic(run_json, json.dumps({"status": "running", "settings": settings}, indent=2))
     started = time.perf_counter()
-    results_ms: list[float] = []
-    rows = 0 if done is None else len(done)
+    results_ms: collections.deque[float] = collections.deque(maxlen=25)   # for the frame rate shown
     bar = tqdm(total=total, initial=start, desc="tracking", unit="frame", disable=not progress)
     try:
         for index, frame in enumerate(iter_frames(source, start, total), start=start):
             prepared = prepare_frame(frame, bg_image, colour_model, imaging)
             for result in tracker.push(index, prepared):
                 _frame_row(result).append_to(journal)
-                rows += 1
                 results_ms.append(result.timings_ms["total"])
-                bar.set_postfix(fps=f"{1e3 / np.mean(results_ms[-25:]):.0f}", F=f"{result.region_residual:.2f}",
+                bar.set_postfix(fps=f"{1e3 / np.mean(results_ms):.0f}", F=f"{result.region_residual:.2f}",
                                 D=f"{result.edge_residual:.1f}")
-            _write_state(state_path, index + 1, rows, tracker)
+            write_checkpoint(state_path, tracker.state(), index + 1, journal)
             bar.update(1)
-        for result in tracker.finish():                 # the frames the decoder still held back
+        # the held-back frames: not checkpointed, a resume continues from the last push instead
+        for result in tracker.finish():
             _frame_row(result).append_to(journal)
     finally:
         bar.close()
-    table = PoseTable.read(journal)
-    table.write(journal)            # the journal, rewritten whole and atomically
+    table = PoseTable.read(journal)     # (not rewritten: the checkpoint records its length)
     return _finish(out_dir, table, settings, source, model, calibration, camera, gt, fps, start,
-                   time.perf_counter() - started, write_overlay, bg_image)
+                   time.perf_counter() - started, write_overlay, bg_image, damaged=damaged,
+                   colour_frame=colour_frame)
 
 
-#: Exact (binary) tracker state after the last finished frame, for bit-identical resumes.
+#: Fraction of the calibrated model's silhouette (pixels) the foreground must cover for a frame to
+#: be taken as showing the person, to learn the colours on.
+PLAUSIBLE_FOREGROUND = 0.5
+
+
+def _learn_colours(source: Path, first: int, stop: int, bg_image, model, camera, pose, imaging,
+                   colour: str) -> tuple[ColourModel, int]:
+    """Colour model from the first frame in ``first``..``stop - 1`` that shows the person, and that
+    frame's number; ValueError (with the last frame's reason) when none does."""
+    from mocap.imaging import subtract_background
+    from mocap.render import render
+
+    silhouette = np.count_nonzero(render(pose, model, camera).labels)
+    reason = "no frame"
+    for index, frame in enumerate(iter_frames(source, first, stop), start=first):
+        try:
+            if colour == "face":
+                return learn_colour_model(frame, bg_image, config=imaging), index
+            if bg_image is not None:
+                covered = np.count_nonzero(subtract_background(frame, bg_image, imaging))
+                if covered < PLAUSIBLE_FOREGROUND * silhouette:
+                    reason = (f"frame {index} has {covered} foreground pixels, fewer than {PLAUSIBLE_FOREGROUND:g} "
+                              f"of the calibrated model's {silhouette}")
+                    continue
+            return colour_model_from_pose(frame, bg_image, model, camera, pose, imaging), index
+        except ValueError as exc:
+            reason = f"frame {index}: {exc}"
+    raise ValueError(f"no frame of {source} from frame {first} shows the person to learn the colours from "
+                     f"({'a detected face' if colour == 'face' else 'a foreground the size of the model'}); "
+                     f"last: {reason}")
+
+
+def _frames_to_track(source: Path, allow_damaged: bool) -> tuple[int, list[int]]:
+    """Frames a video or folder delivers, and the damaged frame numbers of a video (what
+    decodes checked against what its container announces); ValueError on damage unless allowed."""
+    if source.is_dir():
+        return count_frames(source), []
+    check = check_video(source)
+    if check.damaged and not allow_damaged:
+        raise ValueError(f"{check.describe(source)}; to track the frames that decode anyway, add --allow-damaged")
+    return check.readable, check.damaged_frames
+
+
+#: Checkpoint (:mod:`mocap.io.checkpoint`): the tracker's exact state after the last pushed
+#: frame and the length of ``poses.csv`` that goes with it, for bit-identical resumes.
 STATE_FILE = ".tracker_state.npz"
 
 
-def _write_state(path: Path, next_frame: int, rows: int, tracker: Tracker) -> None:
-    """The tracker's exact state after pushing frames ``0 .. next_frame - 1``, with ``rows``
-    rows of the journal decided by then."""
-    import io
-
-    from mocap.io.atomic import write_bytes_atomic
-    buf = io.BytesIO()
-    np.savez(buf, next_frame=next_frame, rows=rows, **tracker.state())
-    write_bytes_atomic(path, buf.getvalue())
-
-
-def _resume(tracker: Tracker, path: Path, done: PoseTable, model, camera,
-            config: TrackerConfig) -> tuple[Tracker, int]:
-    """The tracker of a resumed run and the next frame to push.
-
-    The exact state file is used when it belongs to the journal's rows (bit-identical resume);
-    otherwise tracking restarts after the journal's last row from its (degree-rounded) pose.
-    """
-    if path.exists():
-        with np.load(path) as state:
-            if int(state["rows"]) == len(done):
-                tracker.restore({k: state[k] for k in state.files if k not in ("next_frame", "rows")})
-                return tracker, int(state["next_frame"])
-    return Tracker(model, camera, config, done.poses[-1]), int(done.frames[-1]) + 1
-
-
-def _previous_run(journal: Path, run_json: Path, settings: dict, overwrite: bool) -> PoseTable | None:
-    if overwrite or not journal.exists():
+def _previous_run(journal: Path, run_json: Path, settings: dict, overwrite: bool) -> Checkpoint | None:
+    """The checkpoint to resume from (the journal cut back to it), or None to start afresh."""
+    state_path = journal.parent / STATE_FILE
+    if overwrite or not (journal.exists() or state_path.exists()):
         journal.unlink(missing_ok=True)
-        (journal.parent / STATE_FILE).unlink(missing_ok=True)
+        state_path.unlink(missing_ok=True)
         return None
     try:
         previous = json.loads(run_json.read_text()) if run_json.exists() else {}
@@ -238,13 +282,13 @@ def _previous_run(journal: Path, run_json: Path, settings: dict, overwrite: bool
     if previous.get("settings") != json.loads(json.dumps(settings)):
         raise ValueError(f"{journal.parent} holds a run with other settings (or no run.json); "
                          "use --overwrite or another --out")
-    done = PoseTable.read(journal, tolerate_partial=True)
-    done.write(journal)             # drop a partial last line before appending to it again
-    return done
+    checkpoint = read_checkpoint(state_path)
+    truncate_journal(journal, checkpoint)   # rows after the checkpoint (and a partial line) are redone
+    return checkpoint
 
 
 def _finish(out_dir, table, settings, source, model, calibration, camera, gt, fps, start, wall_s,
-            write_overlay, bg_image) -> RunSummary:
+            write_overlay, bg_image, *, damaged: list[int], colour_frame: int) -> RunSummary:
     from mocap.io.bvh import write_bvh
 
     extra = table.extra
@@ -270,12 +314,16 @@ def _finish(out_dir, table, settings, source, model, calibration, camera, gt, fp
            "units": {"positions": "metres", "angles_in_csv": "degrees", "residual_edge": "pixels"}}
     if metrics is not None:
         run["metrics"] = metrics
+    run["colour_model_frame"] = colour_frame
+    if damaged:
+        run["damaged_frames"] = damaged
+        run["damaged_frames_text"] = format_frames(damaged)
     write_bvh(out_dir / "poses.bvh", table.poses, calibration.dims, fps)
     _residual_plot(out_dir / "residuals.png", table, settings["tracker"])
     if write_overlay:
         _overlay_video(out_dir / "overlay.mp4", source, table, model, camera, fps)
     write_text_atomic(out_dir / "run.json", json.dumps(run, indent=2))
-    return RunSummary(out_dir, tracked, start, run["fps"], metrics, failures)
+    return RunSummary(out_dir, tracked, start, run["fps"], metrics, failures, tuple(damaged))
 
 
 def _residual_plot(path: Path, table: PoseTable, tracker: dict) -> None:

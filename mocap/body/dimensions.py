@@ -167,6 +167,9 @@ class BodyDimensions:
         for name, size in data["parts"].items():
             if not isinstance(size, Mapping) or set(size) != {"length", "width", "depth"}:
                 raise ValueError(f"part {name!r} needs exactly length, width and depth")
+            for key, value in size.items():
+                if isinstance(value, bool) or not isinstance(value, (int, float)):
+                    raise ValueError(f"part {name!r} {key} must be a number of metres, got {value!r}")
             parts[name] = PartSize(size["length"], size["width"], size["depth"])
         return cls(parts, data.get("hairline"))
 

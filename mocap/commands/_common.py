@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 
@@ -39,9 +40,15 @@ def tracker_config(args: argparse.Namespace):
     config = (TrackerConfig.from_json(args.config) if args.config
               else TrackerConfig.paper() if args.paper else TrackerConfig())
     changes = {}
+    if args.iterations is not None and args.iterations < 1:
+        raise ValueError(f"--iterations must be at least 1, got {args.iterations}: with no cost "
+                         "evaluations every frame would keep the initial pose")
     for option, name in (("iterations", "evaluations"), ("split", "split"), ("beam", "beam"), ("lag", "lag")):
         if getattr(args, option) is not None:
             changes[name] = getattr(args, option)
+    if args.iterations is None and config.evaluations < 1:
+        raise ValueError(f"{args.config}: evaluations must be at least 1, got {config.evaluations}: with no "
+                         "cost evaluations every frame would keep the initial pose")
     if args.offline:
         changes["offline"] = True
     return dataclasses.replace(config, **changes) if changes else config
@@ -51,6 +58,10 @@ def print_summary(summary) -> None:
     """One paragraph about a finished run."""
     print(f"tracked {summary.frames} frames ({summary.failures} failed) at {summary.fps:.1f} frames/s "
           f"(one core, image processing included); outputs in {summary.out_dir}")
+    if summary.damaged_frames:
+        from mocap.io.video_check import format_frames
+        print(f"warning: the video is damaged: {format_frames(list(summary.damaged_frames))} did not decode "
+              "cleanly (listed in run.json as damaged_frames)", file=sys.stderr)
     if summary.metrics:
         m = summary.metrics
         print(f"accuracy vs ground truth: MPJPE {m['mpjpe_mm']:.1f} mm, root-relative "

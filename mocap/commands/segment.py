@@ -5,11 +5,15 @@ clothes, brown = hair, green = lower body, grey = unknown foreground; hair and l
 when the first frame supports them), the edge mask (white on black) and the truncated
 distance map (viridis: dark on edges), as PNG in ``labels/``, ``edges/`` and ``distance/``,
 plus ``segment.mp4`` (frame | labels / edges | distance), the colour model
-(``colour_model.json``) and the parameters (``imaging.json``) it used.
+(``colour_model.json``, learned on the first frame that shows the person) and the parameters
+(``imaging.json``) it used. An interrupted run resumes: the same command keeps the frames
+already written (``segment.json`` holds the settings they were made with).
 """
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import time
 from pathlib import Path
 
@@ -20,6 +24,8 @@ from tqdm import tqdm
 from mocap.imaging import ColourModel, ImagingConfig, learn_colour_model, median_background, \
     prepare_frame
 from mocap.imaging.visual import colour_distance, colour_labels, label_palette, overlay_edges, tile
+from mocap.io.atomic import write_bytes_atomic
+from mocap.io.jsonfile import read_json, write_json
 from mocap.io.video import VideoWriter, count_frames, frame_rate, iter_frames, read_image
 
 
@@ -57,7 +63,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--out", type=Path, metavar="DIR",
                    help="output folder (default: <VIDEO name>_segment)")
     p.add_argument("--colour-model", type=Path, metavar="JSON",
-                   help="colour model to use (default: learned on the first frame processed)")
+                   help="colour model to use (default: learned on the first frame that shows the person)")
     p.add_argument("--skin-box", type=_box, metavar="R,C,H,W",
                    help="skin sample box (row, col, height, width in pixels) instead of the face")
     p.add_argument("--clothes-box", type=_box, metavar="R,C,H,W",
@@ -73,6 +79,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from mocap.io.lock import FolderLock
+
     if args.background is None and args.background_frames is None and not args.no_background:
         raise ValueError("give --background IMG, --background-frames A:B (median of empty "
                          "frames of VIDEO) or --no-background")
@@ -85,6 +93,51 @@ def run(args: argparse.Namespace) -> int:
     if args.start >= total:
         raise ValueError(f"--start {args.start} is past the end of {args.video} ({total} frames)")
     stop = total if args.max_frames is None else min(total, args.start + args.max_frames)
+    out = args.out if args.out is not None else Path(f"{args.video.stem}_segment")
+    with FolderLock(out):
+        return _segment(args, out, config, stop)
+
+
+def _settings(args: argparse.Namespace, config: ImagingConfig, stop: int) -> dict:
+    """What the output folder's images depend on (``segment.json``): a resume needs the same."""
+    path = lambda p: None if p is None else str(Path(p).resolve())
+    return {"video": path(args.video), "background": path(args.background),
+            "background_frames": list(args.background_frames) if args.background_frames else None,
+            "no_background": bool(args.no_background), "colour_model": path(args.colour_model),
+            "skin_box": list(args.skin_box) if args.skin_box else None,
+            "clothes_box": list(args.clothes_box) if args.clothes_box else None,
+            "hair_box": list(args.hair_box) if args.hair_box else None,
+            "lower_body_box": list(args.lower_body_box) if args.lower_body_box else None,
+            "start": args.start, "stop": stop, "imaging": config.to_dict()}
+
+
+def _learn(frames, background, args, config) -> tuple[ColourModel, int]:
+    """Colour model learned on the first frame that shows the person (a face, or the sample
+    boxes on foreground), and that frame's number."""
+    reason = "no frame"
+    for index, frame in frames:
+        try:
+            return learn_colour_model(frame, background, args.skin_box, args.clothes_box, hair_box=args.hair_box,
+                                      lower_body_box=args.lower_body_box, config=config), index
+        except ValueError as exc:
+            reason = f"frame {index}: {exc}"
+    raise ValueError(f"no frame of {args.video} shows the person to learn the colours from; last: {reason}")
+
+
+def _write_png(path: Path, image: np.ndarray) -> None:
+    write_bytes_atomic(path, iio.imwrite("<bytes>", image, extension=".png"))
+
+
+def _segment(args: argparse.Namespace, out: Path, config: ImagingConfig, stop: int) -> int:
+    settings = _settings(args, config, stop)
+    settings_file = out / "segment.json"
+    if settings_file.is_file():
+        if read_json(settings_file) != json.loads(json.dumps(settings)):
+            raise ValueError(f"{out} holds a segmentation with other settings; choose another --out "
+                             "(or delete the folder)")
+    for sub in ("labels", "edges", "distance"):
+        (out / sub).mkdir(parents=True, exist_ok=True)
+    write_json(settings_file, settings)
 
     if args.background is not None:
         background = read_image(args.background)
@@ -92,57 +145,63 @@ def run(args: argparse.Namespace) -> int:
         a, b = args.background_frames
         empty = list(iter_frames(args.video, a, b))
         if not empty:
-            raise ValueError(f"--background-frames {a}:{b}: {args.video} has only {total} frames")
+            raise ValueError(f"--background-frames {a}:{b}: {args.video} has only {count_frames(args.video)} frames")
         background = median_background(empty)
     else:
         background = None
 
-    frames = iter_frames(args.video, args.start, stop)
-    first = next(frames)
+    first = next(iter_frames(args.video, args.start, stop))
     if background is not None and background.shape != first.shape:
         raise ValueError(f"background is {background.shape[1]}x{background.shape[0]} but the "
                          f"video is {first.shape[1]}x{first.shape[0]}")
+    learned = out / "colour_model.json"
     if args.colour_model is not None:
         model = ColourModel.from_json(args.colour_model)
+    elif learned.is_file():                   # a resumed run: the model its first images were made with
+        model = ColourModel.from_json(learned)
     else:
-        model = learn_colour_model(first, background, args.skin_box, args.clothes_box,
-                                   hair_box=args.hair_box, lower_body_box=args.lower_body_box,
-                                   config=config)
-
-    out = args.out if args.out is not None else Path(f"{args.video.stem}_segment")
-    for sub in ("labels", "edges", "distance"):
-        (out / sub).mkdir(parents=True, exist_ok=True)
-    model.to_json(out / "colour_model.json")
+        model, index = _learn(enumerate(iter_frames(args.video, args.start, stop), start=args.start),
+                              background, args, config)
+        if index != args.start:
+            print(f"colours learned on frame {index}, the first that shows the person")
+    model.to_json(learned)
     config.to_json(out / "imaging.json")
 
     fps = frame_rate(args.video) or 10.0
     timings: dict[str, list[float]] = {}
-    empty_frames = 0
+    empty_frames = resumed = 0
     started = time.perf_counter()
-
-    def all_frames():
-        yield first
-        yield from frames
-
-    with VideoWriter(out / "segment.mp4", fps) as video:
-        progress = tqdm(all_frames(), total=stop - args.start, unit="frame", desc="segment")
+    video_path = out / "segment.mp4"
+    partial = out / f".{video_path.stem}.partial{video_path.suffix}"
+    with VideoWriter(partial, fps) as video:
+        progress = tqdm(iter_frames(args.video, args.start, stop), total=stop - args.start, unit="frame",
+                        desc="segment")
         for index, frame in enumerate(progress, start=args.start):
-            prepared = prepare_frame(frame, background, model, config)
-            for key, value in prepared.timings.items():
-                timings.setdefault(key, []).append(value)
-            empty_frames += prepared.is_empty
-            labels_rgb = colour_labels(prepared.labels, model.m, model.names)
-            distance_rgb = colour_distance(prepared.distance, config.max_distance)
             name = f"{index:06d}.png"
-            iio.imwrite(out / "labels" / name, labels_rgb)
-            iio.imwrite(out / "edges" / name, prepared.edges.astype(np.uint8) * 255)
-            iio.imwrite(out / "distance" / name, distance_rgb)
-            video.write(tile([frame, labels_rgb, overlay_edges(frame, prepared.edges),
-                              distance_rgb]))
+            paths = [out / sub / name for sub in ("labels", "edges", "distance")]
+            if all(p.is_file() for p in paths):           # written by an interrupted run: kept
+                labels_rgb, edges_img, distance_rgb = (read_image(p, allow_gray=True) for p in paths)
+                edges = edges_img[..., 0] > 127
+                resumed += 1
+                empty_frames += not labels_rgb.any()
+            else:
+                prepared = prepare_frame(frame, background, model, config)
+                for key, value in prepared.timings.items():
+                    timings.setdefault(key, []).append(value)
+                empty_frames += prepared.is_empty
+                labels_rgb = colour_labels(prepared.labels, model.m, model.names)
+                distance_rgb = colour_distance(prepared.distance, config.max_distance)
+                edges = prepared.edges
+                # the distance map last: a frame counts as done when all three are there
+                for path, image in zip(paths, (labels_rgb, edges.astype(np.uint8) * 255, distance_rgb)):
+                    _write_png(path, image)
+            video.write(tile([frame, labels_rgb, overlay_edges(frame, edges), distance_rgb]))
         n = video.frames
+    os.replace(partial, video_path)
     elapsed = time.perf_counter() - started
     stages = ", ".join(f"{k} {np.median(v) * 1e3:.1f}" for k, v in timings.items())
-    print(f"segmented {n} frames ({empty_frames} with nobody in them) in {elapsed:.1f} s; "
+    again = f"; {resumed} kept from an interrupted run" if resumed else ""
+    print(f"segmented {n} frames ({empty_frames} with nobody in them{again}) in {elapsed:.1f} s; "
           f"median ms per frame: {stages}")
     print(f"colour model: {model!r}")
     palette = label_palette(model.m, model.names)

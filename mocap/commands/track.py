@@ -21,6 +21,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("--colour", choices=("calibration", "face"), default="calibration",
                    help="learn colours inside the calibrated model (default) or from the detected face")
     p.add_argument("--ground-truth", type=Path, default=None, help="ground_truth.csv for accuracy metrics")
+    p.add_argument("--start", type=int, default=0, metavar="N",
+                   help="first frame to track (default 0); the calibration's initial pose is the pose there")
+    p.add_argument("--allow-damaged", action="store_true",
+                   help="track a video whose frames do not all decode (they are listed in run.json) instead of stopping")
     add_tracker_options(p)
     p.set_defaults(run=run)
 
@@ -42,6 +46,7 @@ def run(args: argparse.Namespace) -> int:
             raise FileNotFoundError(f"{what} file not found: {path}")
     summary = track_video(seq.frames, background, Calibration.from_json(calibration), args.out, tracker_config(args),
                           colour=args.colour, ground_truth=args.ground_truth or seq.ground_truth, fps=seq.fps(),
-                          max_frames=args.max_frames, overwrite=args.overwrite, write_overlay=not args.no_overlay)
+                          max_frames=args.max_frames, overwrite=args.overwrite, write_overlay=not args.no_overlay,
+                          allow_damaged=args.allow_damaged, start_frame=args.start)
     print_summary(summary)
     return 0

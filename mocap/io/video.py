@@ -14,6 +14,8 @@ import imageio.v3 as iio
 import imageio_ffmpeg
 import numpy as np
 
+from mocap.io.video_check import ffmpeg_failure
+
 __all__ = ["IMAGE_SUFFIXES", "read_image", "iter_frames", "count_frames", "frame_rate",
            "image_files", "VideoWriter"]
 
@@ -164,8 +166,7 @@ def iter_frames(source: str | Path, start: int = 0, stop: int | None = None) -> 
             if index >= start:
                 yield _to_rgb_uint8(np.asarray(frame), f"{source} frame {index}", True)
     except _DECODE_ERRORS as exc:
-        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ValueError(f"cannot decode video {source}: {reason}") from None
+        raise ValueError(ffmpeg_failure(source, str(exc))) from None
 
 
 def count_frames(source: str | Path) -> int:
@@ -177,8 +178,7 @@ def count_frames(source: str | Path) -> int:
     try:
         n, _ = imageio_ffmpeg.count_frames_and_secs(str(source))
     except _DECODE_ERRORS as exc:
-        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ValueError(f"cannot read video {source}: {reason}") from None
+        raise ValueError(ffmpeg_failure(source, str(exc))) from None
     return int(n)
 
 
@@ -191,8 +191,7 @@ def frame_rate(source: str | Path) -> float | None:
     try:
         fps = iio.immeta(source, plugin="FFMPEG").get("fps")
     except _DECODE_ERRORS as exc:
-        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ValueError(f"cannot read video {source}: {reason}") from None
+        raise ValueError(ffmpeg_failure(source, str(exc))) from None
     return float(fps) if fps and np.isfinite(fps) and fps > 0 else None
 
 

@@ -7,6 +7,7 @@ is data only, low in the layers so that every module can read it; fitting one to
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
@@ -16,7 +17,7 @@ import numpy as np
 
 from mocap.body.dimensions import BodyDimensions
 from mocap.body.model import BodyModel
-from mocap.body.pose import check_pose, neutral_pose, pose_from_dict, pose_to_dict
+from mocap.body.pose import JOINT_LIMITS, PARAMETER_NAMES, check_pose, neutral_pose, pose_from_dict, pose_to_dict
 from mocap.body.skeleton import DEFAULT_PART_CLASS, MESH_PART_NAMES
 from mocap.io.jsonfile import read_json, write_json
 from mocap.labels import DEFAULT_CLASS_NAMES
@@ -85,7 +86,7 @@ class Calibration:
         if data["format"] != FORMAT:
             raise ValueError(f"calibration format {data['format']!r} is not {FORMAT!r}")
         return cls(BodyDimensions.from_dict(data["dimensions"]),
-                   pose_from_dict(data["initial_pose_deg"], degrees=True),
+                   _pose_within_limits(data["initial_pose_deg"]),
                    Camera.from_dict(data["camera"]), tuple(data["class_names"]), dict(data["part_class"]))
 
     def to_json(self, path: str | Path) -> None:
@@ -100,3 +101,22 @@ class Calibration:
             return cls.from_dict(data)
         except (ValueError, TypeError, KeyError) as exc:
             raise ValueError(f"{path}: {exc}") from None
+
+
+def _pose_within_limits(values_deg) -> np.ndarray:
+    """The calibration file's ``initial_pose_deg`` as a pose (metres, radians); ValueError naming
+    the first parameter that is not a number or lies outside :data:`JOINT_LIMITS`."""
+    if not isinstance(values_deg, Mapping):
+        raise ValueError("initial_pose_deg must be an object of parameter: value")
+    for name, value in values_deg.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"initial_pose_deg {name} must be a number, got {value!r}")
+    pose = pose_from_dict(dict(values_deg), degrees=True)
+    for i, name in enumerate(PARAMETER_NAMES):
+        lo, hi = JOINT_LIMITS[i]
+        if not lo - 1e-9 <= pose[i] <= hi + 1e-9:           # (slack for the degree round trip)
+            unit = " m" if i < 3 else " deg"
+            lo, hi = (lo, hi) if i < 3 else (math.degrees(lo), math.degrees(hi))
+            raise ValueError(f"initial_pose_deg {name} = {values_deg[name]:g}{unit} is outside its joint limits "
+                             f"[{lo:g}, {hi:g}]{unit}")
+    return pose

@@ -47,7 +47,7 @@ class Camera:
             object.__setattr__(self, key, int(v))
         for key in ("fx", "fy", "cx", "cy"):
             v = getattr(self, key)
-            if not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(v):
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(v):
                 raise ValueError(f"camera {key} must be a finite number of pixels, got {v!r}")
             object.__setattr__(self, key, float(v))
         if self.fx <= 0 or self.fy <= 0:

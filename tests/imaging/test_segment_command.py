@@ -91,3 +91,45 @@ def test_segment_rejects_malformed_boxes(clip):
     with pytest.raises(SystemExit):
         main(["segment", str(root / "frames"), "--background", str(root / "background.png"),
               "--skin-box", "1,2,3"])
+
+
+def test_interrupted_segment_resumes_where_it_stopped(clip, capsys, monkeypatch):
+    import mocap.commands.segment as segment
+    root, scene = clip
+    args = ["segment", str(root / "frames"), "--background", str(root / "background.png"), *_boxes(scene)]
+    assert main([*args, "--out", str(root / "whole")]) == 0
+    prepare, calls = segment.prepare_frame, []
+
+    def interrupt_at_third(frame, *rest):
+        calls.append(frame)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return prepare(frame, *rest)
+
+    monkeypatch.setattr(segment, "prepare_frame", interrupt_at_third)
+    out = root / "resumed"
+    assert main([*args, "--out", str(out)]) == 130
+    assert "run the same command again to resume" in capsys.readouterr().err
+    assert sorted(p.name for p in (out / "distance").iterdir()) == ["000000.png", "000001.png"]
+    calls.clear()
+    assert main([*args, "--out", str(out)]) == 0
+    assert len(calls) == 2                                 # frames 2 and 3 only
+    assert "(1 with nobody in them; 2 kept from an interrupted run)" in capsys.readouterr().out
+    for sub in ("labels", "edges", "distance"):
+        for i in range(4):
+            np.testing.assert_array_equal(read_image(out / sub / f"{i:06d}.png", allow_gray=True),
+                                          read_image(root / "whole" / sub / f"{i:06d}.png", allow_gray=True))
+    assert count_frames(out / "segment.mp4") == 4
+    # other settings in the same folder: refused, nothing changed
+    assert main([*args, "--out", str(out), "--start", "1"]) == 2
+    assert "holds a segmentation with other settings" in capsys.readouterr().err
+
+
+def test_colours_are_learned_on_the_first_frame_that_shows_the_person(clip, capsys):
+    root, scene = clip
+    frames = root / "frames"
+    (frames / "000000.png").rename(root / "first.png")
+    iio.imwrite(frames / "000000.png", scene.background)          # the room is empty at first
+    assert main(["segment", str(frames), "--background", str(root / "background.png"), "--out", str(root / "o"),
+                 *_boxes(scene)]) == 0
+    assert "colours learned on frame 1, the first that shows the person" in capsys.readouterr().out

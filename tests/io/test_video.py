@@ -114,9 +114,9 @@ def test_video_errors(tmp_path):
     with pytest.raises(FileNotFoundError):
         count_frames(tmp_path / "missing.mp4")
     (tmp_path / "bad.mp4").write_bytes(b"\x00\x00\x00\x18ftypmp42" + b"junk" * 100)
-    with pytest.raises(ValueError, match="cannot"):
+    with pytest.raises(ValueError, match="bad.mp4 is a truncated video"):
         list(iter_frames(tmp_path / "bad.mp4"))
-    with pytest.raises(ValueError, match="cannot"):
+    with pytest.raises(ValueError, match="bad.mp4 is a truncated video"):
         count_frames(tmp_path / "bad.mp4")
     with pytest.raises(ValueError, match="start"):
         list(iter_frames(tmp_path, start=-1))

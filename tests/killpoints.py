@@ -1,0 +1,71 @@
+"""``python -m tests.killpoints MODE N -- CLI ARGS...``: the mocap CLI, stopped at a chosen point.
+
+Test helper for crash-exact resume and the output-folder lock. It wraps the two writes of a
+tracking run — a ``poses.csv`` row (:meth:`mocap.io.pose_table.PoseTable.append_to`) and the
+checkpoint (:func:`mocap.run.write_checkpoint`) — and at the ``N``-th one (1-based, counted in
+this process) does what ``MODE`` says:
+
+``after-row``    SIGKILL itself right after the row is on disk, before the checkpoint
+``mid-row``      write the first half of the row's line, then SIGKILL itself
+``after-state``  SIGKILL itself right after the checkpoint
+``pause``        after the checkpoint, create the file ``$KILLPOINTS_PAUSED`` and wait until
+                 it has been removed (another run can then meet the held lock)
+
+SIGKILL cannot be caught: nothing of the run's own clean-up happens, as with ``kill -9``.
+"""
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import time
+from pathlib import Path
+
+
+def main(argv: list[str]) -> int:
+    mode, n, sep, *cli_args = argv
+    if mode not in ("after-row", "mid-row", "after-state", "pause") or sep != "--":
+        raise SystemExit(f"usage: MODE N -- CLI ARGS (got {argv})")
+    n = int(n)
+
+    import mocap.run as run
+    from mocap.cli import main as cli_main
+    from mocap.io.pose_table import PoseTable
+
+    counts = {"row": 0, "state": 0}
+    append_to, write_checkpoint = PoseTable.append_to, run.write_checkpoint
+
+    def die() -> None:
+        os.kill(os.getpid(), signal.SIGKILL)
+
+    def append_and_maybe_die(self, path) -> None:
+        counts["row"] += 1
+        if mode == "mid-row" and counts["row"] == n:
+            line = self.to_csv_text().split("\n")[1]
+            with open(path, "a") as fh:
+                fh.write(line[: len(line) // 2])
+                fh.flush()
+                os.fsync(fh.fileno())
+            die()
+        append_to(self, path)
+        if mode == "after-row" and counts["row"] == n:
+            die()
+
+    def checkpoint_and_maybe_die(*args) -> None:
+        write_checkpoint(*args)
+        counts["state"] += 1
+        if counts["state"] == n and mode == "after-state":
+            die()
+        if counts["state"] == n and mode == "pause":
+            flag = Path(os.environ["KILLPOINTS_PAUSED"])
+            flag.touch()
+            while flag.exists():
+                time.sleep(0.05)
+
+    PoseTable.append_to = append_and_maybe_die
+    run.write_checkpoint = checkpoint_and_maybe_die
+    return cli_main(cli_args)
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
