@@ -136,7 +136,13 @@ def real_row(video: Path, work: Path, out: Path) -> dict:
 
     table = _track(video, work / f"{video.stem}-run", [])
     frames = list(iter_frames(video))
-    mp = run_mediapipe(frames)
+    cache = work / f"{video.stem}-mediapipe.npz"       # MediaPipe's landmarks do not change between our runs
+    if cache.exists():
+        with np.load(cache) as stored:
+            mp = {k: stored[k] for k in ("uv", "world", "ms")}
+    else:
+        mp = run_mediapipe(frames)
+        np.savez(cache, **mp)
     ours = ours_uv(table)
     n = min(len(ours), len(mp["uv"]))
     ours, ref = ours[:n], mp["uv"][:n]
@@ -198,7 +204,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=Path, default=EXPERIMENTS_DIR / "peers", help="results folder")
     p.add_argument("--work", type=Path, default=None, help="scratch folder for clips and runs (default OUT/work)")
     p.add_argument("--seed", type=int, default=0, help="synthetic clips' seed")
-    p.add_argument("--only", choices=("synthetic", "real"), default=None)
+    p.add_argument("--only", choices=("synthetic", "real"), default=None,
+                   help="run one part; the other part's stored results in OUT are kept")
     args = p.parse_args(argv)
     try:
         import mediapipe  # noqa: F401
@@ -207,7 +214,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     work = args.work or args.out / "work"
     work.mkdir(parents=True, exist_ok=True)
-    results = {"synthetic": [], "real": []}
+    stored = args.out / "results.json"
+    results = json.loads(stored.read_text()) if stored.exists() and args.only else {"synthetic": [], "real": []}
     if args.only in (None, "synthetic"):
         results["synthetic"] = [synthetic_row(name, work, args.seed) for name in SYNTHETIC]
     if args.only in (None, "real"):

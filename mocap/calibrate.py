@@ -94,8 +94,8 @@ class Calibration:
             raise ValueError(f"{path}: {exc}") from None
 
 
-#: Fewest sample pixels a colour class needs to be learnt.
-MIN_COLOUR_SAMPLES = 12
+#: Fewest sample pixels a colour class needs to be learnt (what :class:`mocap.imaging.ColourModel` needs).
+MIN_COLOUR_SAMPLES = 20
 
 
 def colour_model_from_pose(frame: np.ndarray, background: np.ndarray | None, model: BodyModel, camera: Camera,
@@ -156,6 +156,8 @@ def colour_model_from_pose(frame: np.ndarray, background: np.ndarray | None, mod
         mask = ndimage.binary_erosion(inside) & foreground
         if np.count_nonzero(mask) < MIN_COLOUR_SAMPLES:
             mask = inside & foreground
+        if np.count_nonzero(mask) < MIN_COLOUR_SAMPLES:     # a small part far away: one pixel around it too
+            mask = ndimage.binary_dilation(inside) & foreground
         if np.count_nonzero(mask) < MIN_COLOUR_SAMPLES:
             raise ValueError(f"the calibrated model covers only {np.count_nonzero(mask)} foreground pixels of "
                              f"class {name!r} in the first frame; is the initial pose right?")
@@ -279,16 +281,18 @@ def _silhouette_starts(foreground: np.ndarray, camera: Camera, base: BodyDimensi
 
 
 def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: BodyDimensions,
-              config: AutoCalibrationConfig, imaging, *, background=None, face=None, depths=None):
+              config: AutoCalibrationConfig, imaging, *, background=None, face=None, depths=None, seed_colour=None):
     """Fit pose and proportions to a foreground mask, learn the colours, refine on them.
 
-    Returns the Calibration and the ColourModel learnt inside the fitted model.
+    Returns the Calibration and the ColourModel learnt inside the fitted model (``seed_colour``,
+    when given, where the fitted model covers too few foreground pixels of a class).
     """
     from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX, neutral_pose
     from mocap.cost import RegionCost
     from mocap.imaging import prepare_frame
     from mocap.optimize import initial_simplex, minimize
 
+    depths = config.depth_grid_m if depths is None else depths
     one_class = {p: "body" for p in PART_NAMES}
     pose_index = np.array([PARAMETER_INDEX[n] for n in CALIBRATED_POSE_PARAMETERS])
     n_pose, n_fac = len(pose_index), len(PROPORTION_FACTORS)
@@ -298,6 +302,9 @@ def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: B
     for name, limit in (("chest_yaw", 0.6), ("chest_roll", 0.3)):
         k = CALIBRATED_POSE_PARAMETERS.index(name)
         lower[k], upper[k] = -limit, limit
+    if face is not None:            # the face's size bounds the depth to the grid's range
+        k = CALIBRATED_POSE_PARAMETERS.index("root_z")
+        lower[k], upper[k] = max(lower[k], min(depths)), min(upper[k], max(depths))
 
     def unpack(x):
         pose = neutral_pose()
@@ -316,7 +323,6 @@ def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: B
     start = neutral_pose()
     best = (np.inf, None)
     cost1 = objective(target, one_class, ("body",))
-    depths = config.depth_grid_m if depths is None else depths
     for root in _silhouette_starts(foreground, camera, base, depths, face):
         x = np.r_[start[pose_index], np.ones(n_fac)]
         x[:3] = root
@@ -330,7 +336,16 @@ def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: B
     # (2) colours from the fitted pose, (3) two-class refinement
     pose, dims = unpack(res.x)
     model = BodyModel.build(dims, resolution=config.resolution)
-    colour = colour_model_from_pose(frame, None, model, camera, pose, imaging, foreground=foreground)
+
+    def colours(model, pose):
+        try:
+            return colour_model_from_pose(frame, None, model, camera, pose, imaging, foreground=foreground)
+        except ValueError:
+            if seed_colour is None:
+                raise
+            return seed_colour
+
+    colour = colours(model, pose)
     labels = prepare_frame(frame, background, colour, imaging).labels
     labels[~foreground] = 0
     cost2 = objective(labels, dict(DEFAULT_PART_CLASS), DEFAULT_CLASS_NAMES)
@@ -338,9 +353,7 @@ def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: B
                     budget=config.evaluations, ftol=1e-6)
     pose, dims = unpack(res2.x)
     calibration = Calibration(dims, pose, camera)
-    colour = colour_model_from_pose(frame, None, calibration.body_model(config.resolution), camera, pose, imaging,
-                                    foreground=foreground)
-    return calibration, colour
+    return calibration, colours(calibration.body_model(config.resolution), pose)
 
 
 #: Stature (metres) the default proportions (:data:`mocap.body.dimensions.DEFAULT_PART_SIZES`) stand for.
@@ -412,7 +425,7 @@ def calibrate_person(frame: np.ndarray, camera: Camera, *, background: np.ndarra
         if not 1.0 <= height_m <= 2.5:
             raise ValueError(f"the person's height must be 1.0-2.5 metres, got {height_m}")
         base = base.scaled(height_m / DEFAULT_STATURE_M)
-    scene = None
+    scene = seed = None
     if face is None and background is None:
         raise ValueError("no face found and no background: cannot tell the person from the scene")
     if background is not None:
@@ -437,7 +450,7 @@ def calibrate_person(frame: np.ndarray, camera: Camera, *, background: np.ndarra
         z0 = camera.fx * base["head"].width * FACE_BOX_HEAD_WIDTHS / face.width
         depths = tuple(np.round(z0 * np.linspace(0.7, 1.4, 8), 3))
     calibration, colour = _fit_body(frame, foreground, camera, base, config, imaging, background=background,
-                                    face=face, depths=depths)
+                                    face=face, depths=depths, seed_colour=seed)
     return PersonCalibration(calibration, colour, scene, foreground)
 
 

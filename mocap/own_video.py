@@ -22,15 +22,16 @@ What was chosen and why goes into ``run.json`` (``settings.own_video``).
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from mocap.calibrate import AutoCalibrationConfig, Calibration, calibrate_person
-from mocap.imaging import Box, ColourModel, ImagingConfig, detect_face, median_background
+from mocap.imaging import Box, ColourModel, ImagingConfig, detect_face, median_background, rgb_to_hsv
 from mocap.imaging.background import PERSON_MIN_SHARE, estimate_background, person_against_background, \
     subtract_background
-from mocap.imaging.resample import downscale
+from mocap.imaging.resample import downscale, working_factor
 from mocap.render.camera import DEFAULT_HFOV_DEG, Camera
 
 __all__ = ["BACKGROUND_MODES", "OwnVideoSetup", "choose_background", "setup_own_video", "working_camera"]
@@ -40,8 +41,17 @@ __all__ = ["BACKGROUND_MODES", "OwnVideoSetup", "choose_background", "setup_own_
 BACKGROUND_MODES = ("auto", "image", "frames", "none")
 #: Share of the sample frames with someone in view (against the estimate) needed to use it.
 MIN_FRAMES_WITH_PERSON = 0.3
+#: Smallest part of the foreground (share of the image) kept when the background is estimated
+#: or absent: smaller specks (a misjudged background pixel, a colour patch) are not a person,
+#: and a frame with nothing larger has nobody in view.
+MIN_PERSON_FRACTION = 0.01
+#: Face width in working pixels the automatic working resolution aims at (at most): the
+#: synthetic benchmark's actors at 160x120 have faces of 12-15 pixels.
+FACE_WORKING_PX = 14
 #: Smallest face looked for, in working pixels (its skin sample must hold enough pixels).
 MIN_FACE_WORKING_PX = 9
+#: Share of skin-toned pixels a face's centre must hold to be calibrated on.
+MIN_FACE_SKIN = 0.3
 #: Share of the face box that must be foreground against the estimate to use it.
 MIN_FACE_FOREGROUND = 0.5
 
@@ -67,6 +77,9 @@ class OwnVideoSetup:
     calibration : Calibration
     colour_model : ColourModel
     scene : SceneColours or None
+    imaging : ImagingConfig
+        The image side's settings for the run: with a found (not given) background, parts
+        smaller than :data:`MIN_PERSON_FRACTION` of the image are not a person.
     record : dict
         JSON-ready account of the choices (background mode and evidence, calibration frame,
         face, field of view, height).
@@ -77,6 +90,7 @@ class OwnVideoSetup:
     calibration: Calibration
     colour_model: ColourModel
     scene: object
+    imaging: ImagingConfig
     record: dict
 
 
@@ -87,6 +101,33 @@ def _sample(frames, count: int, limit: int) -> list[tuple[int, np.ndarray]]:
         return frames
     picks = np.unique(np.linspace(0, len(frames) - 1, count).round().astype(int))
     return [frames[i] for i in picks]
+
+
+def _whole_person(foreground: np.ndarray) -> bool:
+    """Someone to calibrate on without a face: a foreground covering :data:`PERSON_MIN_SHARE` of
+    the image whose largest part stays a pixel clear of the image's borders."""
+    from scipy import ndimage
+
+    if foreground.mean() < PERSON_MIN_SHARE:
+        return False
+    parts, n = ndimage.label(foreground)
+    largest = 1 + int(np.argmax(ndimage.sum(foreground, parts, range(1, n + 1))))
+    rows, cols = np.nonzero(parts == largest)
+    h, w = foreground.shape
+    return bool(rows.min() > 0 and cols.min() > 0 and rows.max() < h - 1 and cols.max() < w - 1)
+
+
+def _plausible_face(frame: np.ndarray, face: Box) -> bool:
+    """A detection to calibrate on: skin-toned (at least :data:`MIN_FACE_SKIN` of its centre
+    under the broad skin prior) and with room for the clothes box under it."""
+    from mocap.imaging.colour import _skin_prior, clothes_box_of_face, skin_box_of_face
+
+    h, w = frame.shape[:2]
+    clothes = clothes_box_of_face(face)
+    if clothes.row + clothes.height > h or clothes.col < 0 or clothes.col + clothes.width > w:
+        return False
+    centre = frame[skin_box_of_face(face).slices]
+    return float(_skin_prior(rgb_to_hsv(centre)).mean()) >= MIN_FACE_SKIN
 
 
 def choose_background(frames: list[np.ndarray], imaging: ImagingConfig | None = None, *, face: Box | None = None,
@@ -123,11 +164,11 @@ def choose_background(frames: list[np.ndarray], imaging: ImagingConfig | None = 
     return (estimate if moves else None), record
 
 
-def setup_own_video(source, factor: int, *, background_mode: str = "auto", background_image=None,
+def setup_own_video(source, factor: int | None = None, *, background_mode: str = "auto", background_image=None,
                     background_frames: tuple[int, int] | None = None, calibration: Calibration | None = None,
                     hfov_deg: float = DEFAULT_HFOV_DEG, height_m: float | None = None,
                     imaging: ImagingConfig | None = None, auto: AutoCalibrationConfig | None = None,
-                    sample_frames: int = 60, sample_limit: int = 600, search_frames: int = 90,
+                    sample_frames: int = 60, sample_limit: int = 1500, search_frames: int = 90,
                     progress: bool = True) -> tuple[OwnVideoSetup, list[np.ndarray]]:
     """Background and calibration of a video of a person, found from the video itself.
 
@@ -135,8 +176,12 @@ def setup_own_video(source, factor: int, *, background_mode: str = "auto", backg
     ----------
     source : VideoSource or CameraSource
         :mod:`mocap.io.frames`.
-    factor : int
-        Working-resolution factor (:func:`mocap.imaging.resample.working_factor`).
+    factor : int, optional
+        Working-resolution factor. By default the tracker chooses: the factor that brings the
+        width nearest to 160 pixels (:func:`mocap.imaging.resample.working_factor`), or a
+        larger one when the face found is bigger than :data:`FACE_WORKING_PX` working pixels
+        (a person close to the camera fills the frame: fewer pixels describe them as well,
+        and every cost evaluation is cheaper).
     background_mode : {"auto", "image", "frames", "none"}
     background_image : ndarray of uint8, shape (H, W, 3), optional
         Input-size image of the empty scene (mode ``image``).
@@ -175,8 +220,13 @@ def setup_own_video(source, factor: int, *, background_mode: str = "auto", backg
 
     if background_mode not in BACKGROUND_MODES:
         raise ValueError(f"background mode must be one of {BACKGROUND_MODES}, got {background_mode!r}")
+    auto_factor = factor is None
+    if auto_factor:
+        factor = working_factor(source.width, source.height)
     imaging = ImagingConfig() if imaging is None else imaging
-    camera = working_camera(source.width, source.height, factor, hfov_deg)
+    if background_mode in ("auto", "none"):
+        imaging = dataclasses.replace(imaging, min_object_fraction=max(imaging.min_object_fraction,
+                                                                       MIN_PERSON_FRACTION))
     record: dict = {"hfov_deg": hfov_deg, "height_m": height_m}
     consumed: list[np.ndarray] = []
     # frames the setup may look at: a file is read again later, a camera is not
@@ -193,7 +243,24 @@ def setup_own_video(source, factor: int, *, background_mode: str = "auto", backg
         def early(limit):
             return list(enumerate(source.frames(0, limit)))
 
-    # 1. background
+    # 1. the first usable frame: a face (or, with a background, a person-sized foreground)
+    face = None
+    calib_index = None
+    candidates = early(search_frames)
+    if not candidates:
+        raise ValueError(f"{source.name} has no frames")
+    if calibration is None:
+        for index, frame in tqdm(candidates[::3], desc="looking for a face", unit="frame", disable=not progress):
+            found = detect_face(frame, min_size=max(24, MIN_FACE_WORKING_PX * factor))
+            if found is not None and _plausible_face(frame, found):
+                face_full, calib_index = found, index
+                if auto_factor:
+                    factor = max(factor, int(found.width // FACE_WORKING_PX))
+                face = Box(*(int(round(v / factor)) for v in found))
+                break
+
+    # 2. background (at the working resolution now settled)
+    camera = working_camera(source.width, source.height, factor, hfov_deg)
     background = None
     if background_mode == "image":
         if background_image.shape[:2] != (source.height, source.width):
@@ -213,20 +280,6 @@ def setup_own_video(source, factor: int, *, background_mode: str = "auto", backg
     elif source.live:
         record["background"] = {"mode": "none", "reason": "live camera without --background: colour-only foreground"}
 
-    # 2. the first usable frame: a face (or, with a background, a person-sized foreground)
-    face = None
-    calib_index = None
-    candidates = early(search_frames)
-    if not candidates:
-        raise ValueError(f"{source.name} has no frames")
-    if calibration is None:
-        for index, frame in tqdm(candidates[::3], desc="looking for a face", unit="frame", disable=not progress):
-            found = detect_face(frame, min_size=max(24, MIN_FACE_WORKING_PX * factor))
-            if found is not None:
-                face_full, calib_index = found, index
-                face = Box(*(int(round(v / factor)) for v in found))
-                break
-
     if background_mode == "auto" and not source.live:
         sample = _sample(enumerate(source.frames(0, sample_limit)), sample_frames, sample_limit)
         face_frame = downscale(candidates[calib_index][1], factor) if face is not None else None
@@ -241,23 +294,39 @@ def setup_own_video(source, factor: int, *, background_mode: str = "auto", backg
         model = calibration.body_model()
         colour = colour_model_from_pose(first, background, model, calibration.camera, calibration.initial_pose,
                                         imaging)
+        record["working_factor"] = factor
         record["calibration"] = {"from": "given"}
-        return OwnVideoSetup(factor, background, calibration, colour, None, record), consumed
+        return OwnVideoSetup(factor, background, calibration, colour, None, imaging, record), consumed
 
-    if face is None:
+    if face is not None:
+        frame = downscale(candidates[calib_index][1], factor)
+        person = calibrate_person(frame, camera, background=background, face=face, height_m=height_m,
+                                  imaging=imaging, config=auto)
+    else:
         if background is None:
             raise ValueError(f"no face found in the first {len(candidates)} frames and no background to find the "
                              "person by: pass --background IMG or --background-frames A:B, or --calibration JSON")
-        for index, frame in candidates:
-            if subtract_background(downscale(frame, factor), background, imaging).mean() >= PERSON_MIN_SHARE:
-                calib_index = index
-                break
-        if calib_index is None:
-            raise ValueError(f"nobody in view in the first {len(candidates)} frames: cannot calibrate")
-    frame = downscale(candidates[calib_index][1], factor)
-    person = calibrate_person(frame, camera, background=background, face=face, height_m=height_m,
-                              imaging=imaging, config=auto)
+        person = None
+        stream = candidates if source.live else enumerate(source.frames(0, sample_limit))
+        for index, full in stream:
+            if index % 3:
+                continue
+            frame = downscale(full, factor)
+            if not _whole_person(subtract_background(frame, background, imaging)):
+                continue
+            try:
+                person = calibrate_person(frame, camera, background=background, height_m=height_m,
+                                          imaging=imaging, config=auto)
+            except ValueError:
+                continue            # a person too small or cut off for every colour class: the next frame
+            calib_index = index
+            break
+        if person is None:
+            raise ValueError("nobody wholly in view (a person covering 2 % of the image, clear of its borders) "
+                             f"in the first {sample_limit} frames: cannot calibrate")
+    record["working_factor"] = factor
     record["calibration"] = {"from": "automatic", "frame": int(calib_index),
                              "face_input_px": [int(v) for v in face_full] if face is not None else None,
                              "depth_m": round(float(person.calibration.initial_pose[2]), 3)}
-    return OwnVideoSetup(factor, background, person.calibration, person.colour_model, person.scene, record), consumed
+    return OwnVideoSetup(factor, background, person.calibration, person.colour_model, person.scene, imaging,
+                         record), consumed

@@ -44,6 +44,8 @@ class RunSummary:
     fps: float
     metrics: dict | None
     failures: int
+    empty_frames: int = 0
+    dark_frames: int = 0
 
 
 def joint_pixels(joints: np.ndarray, camera, work_factor: int = 1) -> np.ndarray:
@@ -75,7 +77,11 @@ def joint_pixels(joints: np.ndarray, camera, work_factor: int = 1) -> np.ndarray
 PIXEL_COLUMNS = tuple(f"{j}_{a}" for j in JOINT_NAMES for a in "uv")
 
 
-def _frame_row(r: FrameResult, camera=None, work_factor: int = 1) -> PoseTable:
+#: Mean brightness (0-255) below which a frame counts as very dark (column ``dark`` of ``poses.csv``).
+DARK_MEAN = 20.0
+
+
+def _frame_row(r: FrameResult, camera=None, work_factor: int = 1, dark: bool | None = None) -> PoseTable:
     t = r.timings_ms
     extra = {}
     if camera is not None:
@@ -88,6 +94,8 @@ def _frame_row(r: FrameResult, camera=None, work_factor: int = 1) -> PoseTable:
              "edge_iterations": np.array([r.edge_iterations]), "ms_prepare": [t.get("prepare", 0.0)],
              "ms_region": [t.get("region", 0.0)], "ms_edge": [t.get("edge", 0.0)],
              "ms_recovery": [t.get("recovery", 0.0)], "ms_total": [t.get("total", 0.0)]}
+    if dark is not None:
+        extra["dark"] = np.array([int(dark)])
     return PoseTable([r.frame], r.pose[None], r.joints[None], {k: np.asarray(v) for k, v in extra.items()})
 
 
@@ -244,12 +252,13 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     results_ms: list[float] = []
     live = _LiveView(frames_in, out_dir, fps, model, camera, show) if (frames_in.live or show) else None
     pending: dict[int, np.ndarray] = {}
+    dark: dict[int, bool] = {}
     bar = tqdm(total=total, initial=start, desc="tracking", unit="frame", disable=not progress)
     interrupted = False
 
     def emit(results: list[FrameResult]) -> None:
         for result in results:
-            _frame_row(result, camera, work_factor).append_to(journal)
+            _frame_row(result, camera, work_factor, dark.pop(result.frame, None)).append_to(journal)
             results_ms.append(result.timings_ms["total"])
             frame = pending.pop(result.frame, None)
             if live is not None and frame is not None:
@@ -263,6 +272,7 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     try:
         for index, frame in enumerate(frames_in.frames(start, total), start=start):
             small = downscale(frame, work_factor)
+            dark[index] = bool(small.mean() < DARK_MEAN)
             if live is not None:
                 pending[index] = small
             prepared = prepare_frame(small, bg_image, colour_model, imaging, scene=scene)
@@ -358,8 +368,11 @@ def _finish(out_dir, table, settings, source, model, calibration, camera, gt, fp
     _residual_plot(out_dir / "residuals.png", table, settings["tracker"])
     if write_overlay:
         _overlay_video(out_dir / "overlay.mp4", source, table, model, camera, fps, work_factor)
+    if "dark" in extra:
+        run["dark_frames"] = int(extra["dark"].sum())
     write_text_atomic(out_dir / "run.json", json.dumps(run, indent=2))
-    return RunSummary(out_dir, tracked, start, run["fps"], metrics, failures)
+    return RunSummary(out_dir, tracked, start, run["fps"], metrics, failures, run["empty_frames"],
+                      run.get("dark_frames", 0))
 
 
 def _residual_plot(path: Path, table: PoseTable, tracker: dict) -> None:

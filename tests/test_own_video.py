@@ -146,3 +146,20 @@ def test_track_real_clip_with_no_options(shared_data, tmp_path, capsys):
     run = json.loads((out / "run.json").read_text())
     assert run["settings"]["own_video"]["background"]["mode"] in ("estimated", "none")
     assert run["settings"]["own_video"]["hfov_deg"] == 60.0
+
+
+@pytest.mark.slow
+def test_dark_and_empty_frames_are_marked_and_tracking_goes_on(sequence, tmp_path, capsys):
+    folder = tmp_path / "seq"
+    shutil.copytree(sequence, folder)
+    frame = folder / "frames" / "000002.png"
+    iio.imwrite(frame, (iio.imread(frame) * 0.03).astype(np.uint8))              # lights out
+    shutil.copy(folder / "background.png", folder / "frames" / "000003.png")     # nobody in view
+    out = tmp_path / "run"
+    assert main(["track", str(folder), "--out", str(out), "--iterations", "60", "--no-overlay"]) == 0
+    table = PoseTable.read(out / "poses.csv")
+    assert list(table.frames) == list(range(N_FRAMES))
+    assert list(table.extra["dark"]) == [0, 0, 1, 0]
+    assert table.extra["empty"][3] == 1
+    printed = capsys.readouterr().out
+    assert "1 frames with nobody in view" in printed and "1 very dark frames" in printed

@@ -38,6 +38,9 @@ def print_summary(summary) -> None:
     """One paragraph about a finished run."""
     print(f"tracked {summary.frames} frames ({summary.failures} failed) at {summary.fps:.1f} frames/s "
           f"(one core, image processing included); outputs in {summary.out_dir}")
+    if getattr(summary, "empty_frames", 0) or getattr(summary, "dark_frames", 0):
+        print(f"{summary.empty_frames} frames with nobody in view (marked empty = 1 in poses.csv, pose kept), "
+              f"{summary.dark_frames} very dark frames (marked dark = 1); tracking went on through them")
     if summary.metrics:
         m = summary.metrics
         print(f"accuracy vs ground truth: MPJPE {m['mpjpe_mm']:.1f} mm, PA-MPJPE {m['pa_mpjpe_mm']:.1f} mm, "

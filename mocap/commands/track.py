@@ -39,9 +39,10 @@ def add_parser(subparsers) -> None:
                    help=f"camera horizontal field of view without a calibration (default {DEFAULT_HFOV_DEG:g}, a webcam)")
     p.add_argument("--height", type=float, default=None, metavar="M",
                    help="the person's height in metres: fixes the absolute scale (else default adult proportions)")
-    p.add_argument("--work-width", type=int, default=DEFAULT_WORK_WIDTH, metavar="PX",
+    p.add_argument("--work-width", type=int, default=None, metavar="PX",
                    help=f"working width: frames are reduced by the integer factor that brings them nearest to it "
-                        f"(default {DEFAULT_WORK_WIDTH})")
+                        f"(default: the tracker chooses, near {DEFAULT_WORK_WIDTH} or less for a person close to "
+                        "the camera; see docs/own-video.md)")
     p.add_argument("--show", action="store_true", help="show the overlay live in a window (needs a display)")
     p.add_argument("--out", type=Path, default=Path("mocap-track"), help="output folder (default ./mocap-track)")
     p.add_argument("--colour", choices=("calibration", "face"), default="calibration",
@@ -84,17 +85,16 @@ def run(args: argparse.Namespace) -> int:
     for what, path in (("background", background), ("calibration", calibration)):
         if path is not None and not Path(path).is_file():
             raise FileNotFoundError(f"{what} file not found: {path}")
-    factor = working_factor(source.width, source.height, args.work_width)
+    factor = None if args.work_width is None else working_factor(source.width, source.height, args.work_width)
     given = None
     if calibration is not None:
         given = Calibration.from_json(calibration)
         cam = given.camera
+        factor = factor or working_factor(source.width, source.height)
         if cam.shape == (source.height, source.width) and factor > 1:
             from dataclasses import replace
-            from mocap.own_video import working_camera
-            small = working_camera(source.width, source.height, factor)
-            given = replace(given, camera=type(cam)(small.width, small.height, cam.fx / factor, cam.fy / factor,
-                                                    cam.cx / factor, cam.cy / factor))
+            given = replace(given, camera=type(cam)(source.width // factor, source.height // factor, cam.fx / factor,
+                                                    cam.fy / factor, cam.cx / factor, cam.cy / factor))
         elif cam.shape != (source.height // factor, source.width // factor):
             raise ValueError(f"frames are {source.width}x{source.height} but the calibration's camera is "
                              f"{cam.width}x{cam.height}: calibrate for this video (python -m mocap calibrate)")
@@ -106,6 +106,7 @@ def run(args: argparse.Namespace) -> int:
         source.hold(consumed)
     bg_note = setup.record["background"]
     cal_note = setup.record["calibration"]
+    factor = setup.factor
     print(f"working resolution {setup.calibration.camera.width}x{setup.calibration.camera.height} "
           f"(input {source.width}x{source.height} reduced {factor}x)")
     print(f"background: {bg_note['mode']} ({bg_note['reason']})")
@@ -117,7 +118,8 @@ def run(args: argparse.Namespace) -> int:
     summary = track_video(source, setup.background, setup.calibration, args.out, tracker_config(args),
                           colour=args.colour, ground_truth=args.ground_truth or (seq.ground_truth if seq else None),
                           fps=fps, max_frames=args.max_frames, overwrite=args.overwrite,
-                          write_overlay=not args.no_overlay, work_factor=factor, colour_model=setup.colour_model,
+                          imaging=setup.imaging, write_overlay=not args.no_overlay, work_factor=factor,
+                          colour_model=setup.colour_model,
                           scene=setup.scene, setup_record=setup.record, show=args.show)
     print_summary(summary)
     return 0

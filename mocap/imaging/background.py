@@ -212,11 +212,14 @@ def estimate_background(frames: Iterable[np.ndarray], config: ImagingConfig | No
                         motion_dilation: int = 3, min_free_share: float = 0.2) -> tuple[np.ndarray, np.ndarray]:
     """Background of a clip with nobody standing still: temporal median with a motion mask.
 
-    A first per-pixel median of all frames gives a rough background; in every frame the
+    A first rough background takes at every pixel the colour seen most often: the sample with
+    the most other samples within ``config.change_threshold`` of it (a mode; people who come and
+    go differ from one another, the empty scene does not, so it wins even when someone covers
+    the pixel in more than half of the frames). In every frame the
     pixels that differ from it (:func:`subtract_background`, dilated by ``motion_dilation``
     pixels) are taken for the moving actor and left out, and the median of what is left is
     the estimate. A pixel the actor covers in fewer than half of the frames is recovered
-    exactly; one covered in more keeps the rough median (the actor, when nobody moves: see
+    exactly; one covered by the same still actor in most frames keeps the actor (see
     :func:`person_against_background` to tell).
 
     Parameters
@@ -251,7 +254,7 @@ def estimate_background(frames: Iterable[np.ndarray], config: ImagingConfig | No
     if len(stack) < 3:
         raise ValueError(f"estimating a background needs at least 3 frames, got {len(stack)}")
     video = np.stack(stack)
-    rough = np.median(video, axis=0).round().astype(np.uint8)
+    rough = _densest_sample(video, config.change_threshold)
     moving = np.empty(video.shape[:3], dtype=np.bool_)
     for t, frame in enumerate(video):
         raw = _change_mask(frame, 1.0, rough, 1.0, config)
@@ -262,6 +265,17 @@ def estimate_background(frames: Iterable[np.ndarray], config: ImagingConfig | No
     reliable = free_share >= min_free_share
     background = np.where(reliable[..., None], estimate, rough)
     return background, free_share
+
+
+def _densest_sample(video: np.ndarray, radius: float) -> np.ndarray:
+    """Per pixel, the sample (of ``video`` (N, H, W, 3) uint8) with the most samples within
+    ``radius`` (0-255 units) of it; ties go to the earlier sample."""
+    data = video.astype(np.float32)
+    counts = np.empty(video.shape[:3], np.int32)
+    for i in range(len(data)):
+        counts[i] = (np.sum((data - data[i]) ** 2, axis=3) <= radius * radius).sum(axis=0)
+    best = np.argmax(counts, axis=0)
+    return np.take_along_axis(video, best[None, ..., None], axis=0)[0]
 
 
 def person_against_background(frames: Iterable[np.ndarray], background: np.ndarray,

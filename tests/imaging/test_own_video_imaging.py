@@ -84,3 +84,21 @@ def test_scene_colours_leave_the_scene_out_and_keep_the_person():
     outside = np.ones(mask.shape, bool)
     outside[12:42, 28:46] = False
     assert mask[outside].mean() < 0.1                       # the scene outside the box
+
+
+def test_background_is_found_where_different_people_stand_most_of_the_time():
+    # one spot: three people in turn (25 %, 25 %, 20 % of the frames), empty the other 30 %; a
+    # median gives a person there, the most frequent colour is the empty scene's
+    frames, truth = _clip(moving=False, n=20)
+    rng = np.random.default_rng(5)
+    colours = [(200, 40, 40)] * 5 + [(40, 60, 200)] * 5 + [(40, 160, 40)] * 4 + [None] * 6
+    clip = []
+    for frame, colour in zip(frames, colours):
+        frame = frame.copy()
+        region = truth[14:40, 30:44] if colour is None else np.array(colour, float)
+        frame[14:40, 30:44] = np.clip(np.round(region + rng.normal(0, 2, (26, 14, 3))), 0, 255)
+        clip.append(frame)
+    median = np.median(np.stack(clip), axis=0)
+    assert np.abs(median[20:34, 32:42] - truth[20:34, 32:42]).max() > 20     # the median is not the scene there
+    estimate, _ = estimate_background(clip)
+    assert np.abs(estimate.astype(float) - truth).max() <= BACKGROUND_ERROR_BOUND
