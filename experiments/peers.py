@@ -194,6 +194,33 @@ def markdown(results: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def report_section(folder: Path, rel: str = "peers") -> list[str]:
+    """The REPORT.md section from ``folder/results.json`` and its stills (links relative to
+    the report: ``rel``); empty when the comparison has not been run."""
+    stored = folder / "results.json"
+    if not stored.exists():
+        return []
+    results = json.loads(stored.read_text())
+    real = results.get("real", [])
+    L = ["## MediaPipe side by side (`python -m experiments.peers`)", "",
+         "What a user with their own video would otherwise pick: MediaPipe Pose 0.10.14 (BlazePose, model "
+         "complexity 1, video mode), on the same frames. Synthetic: PA-MPJPE of shoulders, elbows and wrists "
+         "against the ground truth, our tracker with the clip's true calibration and background, MediaPipe's "
+         "world landmarks from the frames enlarged 4x. Real: `python -m mocap track CLIP` with no other option "
+         "(no background plate, automatic calibration, working resolution chosen by the tracker); the share of "
+         "our projected shoulders, elbows and wrists (`poses.csv` `_u`/`_v`) within half of MediaPipe's "
+         "shoulder width of its 2D landmarks, MediaPipe taken as the reference. One view cannot tell size from "
+         "distance, so the 3D comparison is after Procrustes alignment. Times are wall-clock milliseconds per "
+         "frame on the development machine while other jobs shared its two cores (load average 8-10): they "
+         "compare the two tools on the same machine at the same time, not either's speed on an idle core "
+         "(`python -m mocap bench --groups video` for ours).", "",
+         markdown(results).rstrip("\n"), ""]
+    if real:
+        L.append(" ".join(f"![{r['clip']}]({rel}/still_{Path(r['clip']).stem}.png)" for r in real))
+        L += ["", "Middle frame of each clip: our arms orange, MediaPipe's cyan.", ""]
+    return L
+
+
 def main(argv: list[str] | None = None) -> int:
     from experiments import EXPERIMENTS_DIR
 
