@@ -103,6 +103,25 @@ def _sample(frames, count: int, limit: int) -> list[tuple[int, np.ndarray]]:
     return [frames[i] for i in picks]
 
 
+def _scene_around_model(frame: np.ndarray, model, calibration: Calibration):
+    """Scene colours learnt outside the calibrated model's silhouette grown by a fifth of its
+    size each way, and the foreground they leave inside the silhouette."""
+    from mocap.calibrate import SCENE_RATIO
+    from mocap.imaging.scene import SceneColours
+    from mocap.render import render
+
+    silhouette = render(calibration.initial_pose, model, calibration.camera).labels > 0
+    rows, cols = np.nonzero(silhouette)
+    if rows.size == 0:
+        raise ValueError("the calibration's initial pose is outside the image")
+    h, w = silhouette.shape
+    dr, dc = (rows.max() - rows.min()) // 5 + 1, (cols.max() - cols.min()) // 5 + 1
+    top, left = max(rows.min() - dr, 0), max(cols.min() - dc, 0)
+    box = (top, left, min(rows.max() + dr, h - 1) - top + 1, min(cols.max() + dc, w - 1) - left + 1)
+    scene = SceneColours.learn(frame, box, ratio=SCENE_RATIO)
+    return scene, scene.foreground(frame) & silhouette
+
+
 def _whole_person(foreground: np.ndarray) -> bool:
     """Someone to calibrate on without a face: a foreground covering :data:`PERSON_MIN_SHARE` of
     the image whose largest part stays a pixel clear of the image's borders."""
@@ -292,11 +311,14 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
             raise ValueError(f"the calibration's camera is {calibration.camera.width}x{calibration.camera.height}, "
                              f"the working frames {first.shape[1]}x{first.shape[0]}")
         model = calibration.body_model()
+        scene = foreground = None
+        if background is None:      # colour-only: the scene's colours outside a box around the calibrated model
+            scene, foreground = _scene_around_model(first, model, calibration)
         colour = colour_model_from_pose(first, background, model, calibration.camera, calibration.initial_pose,
-                                        imaging)
+                                        imaging, foreground=foreground)
         record["working_factor"] = factor
         record["calibration"] = {"from": "given"}
-        return OwnVideoSetup(factor, background, calibration, colour, None, imaging, record), consumed
+        return OwnVideoSetup(factor, background, calibration, colour, scene, imaging, record), consumed
 
     if face is not None:
         frame = downscale(candidates[calib_index][1], factor)

@@ -129,6 +129,15 @@ def test_track_synthetic_clip_without_background_or_calibration(tmp_path):
     true_head = camera.project(truth.joints[:, 0])
     ours_head = np.stack([table.extra["head_u"], table.extra["head_v"]], axis=1)
     assert np.median(np.linalg.norm(ours_head - true_head, axis=1)) < 25.0     # input pixels (320x240)
+    # calibrate alone, as track found it: written at the input size, and track takes it back
+    calibration = tmp_path / "calibration.json"
+    assert main(["calibrate", str(frames), "--out", str(calibration), "--height", "1.8"]) == 0
+    written = Calibration.from_json(calibration)
+    assert written.camera.shape == (240, 320)
+    assert written.camera.fx == pytest.approx(Camera.default(320, 240).fx)
+    assert written.dims["torso"].length > 0.5 * 1.8 / 1.75 * 0.75          # scaled to the stature, then fitted
+    assert main(["track", str(frames), "--calibration", str(calibration), "--out", str(tmp_path / "again"),
+                 "--iterations", "60", "--no-overlay", "--max-frames", "2"]) == 0
 
 
 @pytest.mark.slow

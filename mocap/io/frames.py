@@ -121,7 +121,7 @@ class CameraSource:
             meta = next(self._reader)
         except (RuntimeError, OSError, StopIteration) as exc:
             reason = str(exc).strip().splitlines()[-1] if str(exc).strip() else type(exc).__name__
-            raise ValueError(f"cannot open camera {self._name}: {reason}") from None
+            raise ValueError(f"cannot open {self._name}: {reason}") from None
         self.width, self.height = (int(v) for v in meta["size"])
         fps = meta.get("fps")
         self.fps = float(fps) if fps and np.isfinite(fps) and fps > 0 else None
@@ -135,7 +135,7 @@ class CameraSource:
     def open(cls, index: int) -> "CameraSource":
         """Capture device ``index`` (0 = the first webcam)."""
         device, params = camera_device(index)
-        return cls(device, params, name=f"camera {index} ({device})")
+        return cls(device, params, name=f"webcam {index} ({device})")
 
     @classmethod
     def replaying(cls, path: str | Path) -> "CameraSource":
