@@ -246,7 +246,8 @@ def video_rows(*, frames: int) -> list[BenchRow]:
         per_frame = PoseTable.read(tmp / "run" / "poses.csv").extra["ms_total"] * 1e3
         n = source.count
         p10, p90 = np.percentile(per_frame, [10, 90])
-        triangles = setup.calibration.body_model().mesh.n_triangles
+        from mocap.body.mesh import resolution_for_image
+        triangles = setup.calibration.body_model(resolution_for_image(*setup.calibration.camera.shape[::-1])).mesh.n_triangles
         return [BenchRow("video_640x480", source.width, source.height, int(triangles), 1e6 * wall / n,
                          float(p10), float(p90), int(n)),
                 BenchRow("video_640x480_cpu", source.width, source.height, int(triangles), 1e6 * cpu / n,
