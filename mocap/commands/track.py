@@ -27,7 +27,11 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser("track", help="track a video with a calibrated body model", description=__doc__,
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("video", type=Path, nargs="?", help="video file, image folder or sequence folder")
-    p.add_argument("--camera", type=int, default=None, metavar="N", help="track webcam N live instead of a file")
+    cam = p.add_mutually_exclusive_group()
+    cam.add_argument("--camera", type=int, default=None, metavar="N", help="track webcam N live instead of a file")
+    cam.add_argument("--camera-device", default=None, metavar="NAME",
+                     help="track a capture device by its ffmpeg name (/dev/video2, video=NAME on Windows), or a "
+                          "video file streamed as a live camera (a rehearsal)")
     bg = p.add_mutually_exclusive_group()
     bg.add_argument("--background", type=Path, default=None, help="image of the empty scene")
     bg.add_argument("--background-frames", type=_range, metavar="A:B",
@@ -69,12 +73,15 @@ def run(args: argparse.Namespace) -> int:
     from mocap.own_video import setup_own_video
     from mocap.run import track_video
 
-    if (args.video is None) == (args.camera is None):
+    live = args.camera is not None or args.camera_device is not None
+    if (args.video is None) == (not live):
         raise ValueError("give a VIDEO or --camera N (not both)")
-    if args.camera is not None:
+    if live:
         if args.background_frames is not None:
             raise ValueError("--background-frames needs a video file")
-        seq, source = None, CameraSource.open(args.camera)
+        seq = None
+        source = CameraSource.open(args.camera) if args.camera is not None else \
+            CameraSource.from_device(args.camera_device)
     else:
         seq = find_sequence(args.video)
         source = VideoSource(seq.frames)

@@ -77,7 +77,7 @@ def camera_device(index: int) -> tuple[str, list[str]]:
     if system == "Darwin":
         return f"{index}:none", ["-f", "avfoundation", "-framerate", "30"]
     if system == "Windows":
-        raise ValueError("on Windows pass the camera by name: --camera-device 'video=NAME' (see ffmpeg -list_devices)")
+        return f"video={index}", ["-f", "dshow"]
     raise ValueError(f"no known camera input for {system}")
 
 
@@ -136,6 +136,16 @@ class CameraSource:
         """Capture device ``index`` (0 = the first webcam)."""
         device, params = camera_device(index)
         return cls(device, params, name=f"webcam {index} ({device})")
+
+    @classmethod
+    def from_device(cls, device: str) -> "CameraSource":
+        """A capture device by its ffmpeg name (``/dev/video2``; ``video=NAME`` on Windows), or a
+        video file streamed as a fake camera."""
+        if Path(device).is_file():
+            return cls.replaying(device)
+        system = platform.system()
+        params = {"Linux": ["-f", "v4l2"], "Darwin": ["-f", "avfoundation"], "Windows": ["-f", "dshow"]}.get(system, [])
+        return cls(device, params, name=f"camera device {device}")
 
     @classmethod
     def replaying(cls, path: str | Path) -> "CameraSource":
