@@ -250,7 +250,10 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
         write_text_atomic(run_json, json.dumps({"status": "running", "settings": settings}, indent=2))
     started = time.perf_counter()
     results_ms: list[float] = []
-    live = _LiveView(frames_in, out_dir, fps, model, camera, show) if (frames_in.live or show) else None
+    # the overlay is drawn as frames come (no second decoding pass) unless an earlier session's
+    # frames must be in it too (a resumed file run redraws it whole at the end)
+    overlay_now = frames_in.live or (write_overlay and start == 0)
+    live = _LiveView(out_dir, fps, model, camera, show, overlay_now) if (overlay_now or show) else None
     pending: dict[int, np.ndarray] = {}
     dark: dict[int, bool] = {}
     bar = tqdm(total=total, initial=start, desc="tracking", unit="frame", disable=not progress)
@@ -293,7 +296,7 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     table = PoseTable.read(journal)
     table.write(journal)            # the journal, rewritten whole and atomically
     return _finish(out_dir, table, settings, frames_in, model, calibration, camera, gt, fps, start,
-                   time.perf_counter() - started, write_overlay and not frames_in.live, work_factor)
+                   time.perf_counter() - started, write_overlay and not overlay_now, work_factor)
 
 
 #: Exact (binary) tracker state after the last finished frame, for bit-identical resumes.
@@ -420,14 +423,15 @@ def _overlay_video(path: Path, source, table: PoseTable, model, camera, fps: flo
 
 
 class _LiveView:
-    """Overlay of a live run: written to ``overlay.mp4`` as frames come, and shown in a
+    """The overlay as frames come: written to ``overlay.mp4`` (``write``), and shown in a
     window when asked and a display exists."""
 
-    def __init__(self, source, out_dir: Path, fps: float, model, camera, show: bool) -> None:
+    def __init__(self, out_dir: Path, fps: float, model, camera, show: bool, write: bool) -> None:
         from mocap.io.video import VideoWriter
 
         self.model, self.camera = model, camera
-        self.video = VideoWriter(out_dir / "overlay.mp4", source.fps or fps) if source.live else None
+        self.path, self.tmp = out_dir / "overlay.mp4", out_dir / ".overlay.tmp.mp4"
+        self.video = VideoWriter(self.tmp, fps) if write else None
         self.figure = self.image = None
         if show and (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") or platform.system() != "Linux"):
             import matplotlib.pyplot as plt
@@ -456,5 +460,8 @@ class _LiveView:
     def close(self) -> None:
         if self.video is not None:
             self.video.close()
+            if self.video.frames:
+                os.replace(self.tmp, self.path)
+            self.video = None
         if self.figure is not None:
             self.plt.close(self.figure)
