@@ -8,8 +8,15 @@ and the same three of the paper's model (two classes, no hair region, no lower b
 ``render_paper``, ``cost_region_paper``, ``cost_edge_paper``, measured in the same run,
 ``llvmpipe_render`` (the same mesh through OpenGL on Mesa llvmpipe + read-back, when the
 ``bench`` extra is installed), ``prepare_frame`` and its parts ``prepare_background``,
-``prepare_colour``, ``prepare_edges``, ``prepare_distance``, ``frame_100`` / ``frame_500`` (the paper's method) and ``frame_beam`` (the default tracker)
-(a whole frame of registration, image side included, at that many cost evaluations).
+``prepare_colour``, ``prepare_edges``, ``prepare_distance``, ``frame_100`` / ``frame_500`` (a
+whole frame of the paper's method, image side included, at that many cost evaluations),
+``frame_beam`` (a whole frame of the default tracker), and
+``video_640x480`` (group ``video``): the whole own-video path of ``python -m mocap track`` on a
+640x480 clip — decode, reduction to the 160x120 working resolution, image side, registration
+at the default budget and every output (journal, BVH, residual plot, overlay video) — as wall
+time of the run divided by its frames (``runs`` is the frame count; p10/p90 are those of the
+per-frame image side and registration alone); ``video_640x480_cpu`` is the same run's CPU time
+(this process and its ffmpeg children) per frame, the figure that holds on a busy machine.
 
 Everything runs on one core (the process is pinned to one CPU where the OS allows, llvmpipe
 gets one thread), after a warm-up call that also triggers Numba compilation.
@@ -208,6 +215,57 @@ def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, mi
     return rows
 
 
+def video_rows(*, frames: int) -> list[BenchRow]:
+    """Row ``video_640x480``: ``track_video`` end to end on a 640x480 MP4 (the synthetic
+    ``gestures-1`` clip rendered at 160x120 and enlarged 4x, so that the working resolution
+    sees the benchmark's own frames), with its true calibration and background."""
+    import resource
+    import tempfile
+    from pathlib import Path
+
+    from mocap.calibrate import Calibration
+    from mocap.imaging.resample import working_factor
+    from mocap.io.frames import VideoSource
+    from mocap.io.pose_table import PoseTable
+    from mocap.io.video import VideoWriter, iter_frames, read_image
+    from mocap.own_video import setup_own_video
+    from mocap.run import track_video
+    from mocap.synth import generate_sequence
+    from mocap.track import TrackerConfig
+
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        seq = generate_sequence("gestures-1", tmp / "seq", frames=frames + 1, seed=0, progress=False)
+        video = tmp / "clip.mp4"
+        with VideoWriter(video, 25) as writer:
+            for frame in iter_frames(seq / "frames"):
+                writer.write(np.repeat(np.repeat(frame, 4, 0), 4, 1))
+        background = np.repeat(np.repeat(read_image(seq / "background.png"), 4, 0), 4, 1)
+        source = VideoSource(video)
+        factor = working_factor(source.width, source.height)
+        setup, _ = setup_own_video(source, factor, background_mode="image", background_image=background,
+                                   calibration=Calibration.from_json(seq / "calibration.json"), progress=False)
+        run = lambda out, n: track_video(source, setup.background, setup.calibration, out, TrackerConfig(),
+                                         imaging=setup.imaging, colour_model=setup.colour_model, work_factor=factor, max_frames=n,
+                                         progress=False, setup_record=setup.record)
+        run(tmp / "warm-up", 2)                     # compile and load every kernel first
+        children = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0, c0 = time.perf_counter(), time.process_time()
+        run(tmp / "run", None)
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)      # ffmpeg: decoding and the overlay's encoding
+        cpu += (after.ru_utime - children.ru_utime) + (after.ru_stime - children.ru_stime)
+        per_frame = PoseTable.read(tmp / "run" / "poses.csv").extra["ms_total"] * 1e3
+        n = source.count
+        p10, p90 = np.percentile(per_frame, [10, 90])
+        from mocap.body.mesh import resolution_for_image
+        triangles = setup.calibration.body_model(resolution_for_image(*setup.calibration.camera.shape[::-1])).mesh.n_triangles
+        return [BenchRow("video_640x480", source.width, source.height, int(triangles), 1e6 * wall / n,
+                         float(p10), float(p90), int(n)),
+                BenchRow("video_640x480_cpu", source.width, source.height, int(triangles), 1e6 * cpu / n,
+                         float(p10), float(p90), int(n))]
+
+
 def environment() -> tuple[dict, str]:
     """Versions of the libraries that matter and the CPU model."""
     import numba
@@ -262,7 +320,7 @@ def format_table(rows: Sequence[BenchRow], notes: Sequence[str]) -> str:
 
 
 #: Groups of stages, in the order a full run measures them.
-GROUPS: tuple[str, ...] = ("render", "imaging", "frame")
+GROUPS: tuple[str, ...] = ("render", "imaging", "frame", "video")
 
 
 def run_benchmark(*, quick: bool = False, with_llvmpipe: bool = True, stages: Sequence[str] = GROUPS,
@@ -280,7 +338,8 @@ def run_benchmark(*, quick: bool = False, with_llvmpipe: bool = True, stages: Se
                                             with_llvmpipe=with_llvmpipe),
               "imaging": lambda: (imaging_rows(TABLE2_SIZES, min_runs=min_runs // 3, min_seconds=min_seconds), []),
               "frame": lambda: (frame_rows((160, 120), (100, 500), frames=12 if quick else 50,
-                                           min_runs=12 if quick else 100), [])}
+                                           min_runs=12 if quick else 100), []),
+              "video": lambda: (video_rows(frames=12 if quick else 100), [])}
     for name in tqdm(stages, desc="bench", unit="group", disable=not progress, file=sys.stderr):
         if name not in groups:
             raise ValueError(f"unknown benchmark group {name!r}; known: {', '.join(groups)}")

@@ -21,12 +21,12 @@ from mocap.render.camera import Camera
 __all__ = ["FORMAT", "MIN_COLOUR_SAMPLES", "PROPORTION_FACTORS", "PROPORTION_RANGE", "AutoCalibrationConfig",
            "Calibration", "auto_calibrate", "colour_model_from_pose"]
 
-#: Fewest sample pixels a colour class needs to be learnt.
-MIN_COLOUR_SAMPLES = 12
+#: Fewest sample pixels a colour class needs to be learnt (what :class:`mocap.imaging.ColourModel` needs).
+MIN_COLOUR_SAMPLES = 20
 
 
 def colour_model_from_pose(frame: np.ndarray, background: np.ndarray | None, model: BodyModel, camera: Camera,
-                           pose, imaging=None):
+                           pose, imaging=None, *, foreground: np.ndarray | None = None):
     """Learn the colour classes from a frame where the model's pose is known (calibration).
 
     Each class is sampled from the frame's foreground pixels inside the projection of the
@@ -49,6 +49,9 @@ def colour_model_from_pose(frame: np.ndarray, background: np.ndarray | None, mod
         The actor's pose in ``frame`` (metres, radians).
     imaging : ImagingConfig, optional
         Background-subtraction settings.
+    foreground : ndarray of bool, shape (H, W), optional
+        The actor's pixels, when known otherwise (no background image); replaces the
+        subtraction of ``background``.
 
     Returns
     -------
@@ -70,8 +73,13 @@ def colour_model_from_pose(frame: np.ndarray, background: np.ndarray | None, mod
     frame = np.asarray(frame)
     if frame.ndim != 3 or frame.shape[:2] != camera.shape:
         raise ValueError(f"frame of shape {frame.shape} does not match the camera ({camera.height}, {camera.width}, 3)")
-    foreground = np.ones(camera.shape, bool)
-    if background is not None:
+    if foreground is not None:
+        foreground = np.asarray(foreground, dtype=bool)
+        if foreground.shape != camera.shape:
+            raise ValueError(f"foreground of shape {foreground.shape} does not match the camera {camera.shape}")
+    elif background is None:
+        foreground = np.ones(camera.shape, bool)
+    else:
         foreground = subtract_background(frame, background, imaging)
     labels = render(pose, model, camera).labels
     samples = {}
@@ -80,6 +88,8 @@ def colour_model_from_pose(frame: np.ndarray, background: np.ndarray | None, mod
         mask = ndimage.binary_erosion(inside) & foreground
         if np.count_nonzero(mask) < max(MIN_COLOUR_SAMPLES, MIN_SAMPLES):
             mask = inside & foreground                  # small regions (hair): keep the boundary
+        if np.count_nonzero(mask) < MIN_COLOUR_SAMPLES:     # a small part far away: one pixel around it too
+            mask = ndimage.binary_dilation(inside) & foreground
         if np.count_nonzero(mask) < MIN_COLOUR_SAMPLES and name not in CLASS_MERGES_INTO:
             raise ValueError(f"the calibrated model covers only {np.count_nonzero(mask)} foreground pixels of "
                              f"class {name!r} in the first frame; is the initial pose right?")
@@ -179,10 +189,7 @@ def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *,
     ValueError
         If sizes differ or no actor is visible.
     """
-    from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX, neutral_pose
-    from mocap.cost import RegionCost
-    from mocap.imaging import ImagingConfig, prepare_frame, subtract_background
-    from mocap.optimize import initial_simplex, minimize
+    from mocap.imaging import ImagingConfig, subtract_background
 
     config = AutoCalibrationConfig() if config is None else config
     imaging = ImagingConfig() if imaging is None else imaging
@@ -193,6 +200,42 @@ def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *,
     foreground = subtract_background(frame, background, imaging)
     if np.count_nonzero(foreground) < 50:
         raise ValueError("no actor in the first frame (the foreground is empty): cannot calibrate")
+    calibration, _ = _fit_body(frame, foreground, camera, base, config, imaging, background=background)
+    return calibration
+
+
+def _silhouette_starts(foreground: np.ndarray, camera: Camera, base: BodyDimensions, depths,
+                       face=None) -> list[tuple[float, float, float]]:
+    """Root positions (metres) to try first: the head on the silhouette's top (or on the face
+    box's centre) at each depth."""
+    rows, cols = np.nonzero(foreground)
+    above_root = base["torso"].length + base["neck"].length * 0.7
+    starts = []
+    for z in depths:
+        if face is not None:
+            u = face.col + 0.5 * face.width
+            v = face.row + 0.5 * face.height
+            y = (v - camera.cy) * z / camera.fy + above_root + 0.5 * base["head"].length
+        else:
+            u, v = cols.mean() + 0.5, rows.min() + 0.5
+            y = (v - camera.cy) * z / camera.fy + above_root + base["head"].length
+        starts.append(((u - camera.cx) * z / camera.fx, y, float(z)))
+    return starts
+
+
+def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: BodyDimensions,
+              config: AutoCalibrationConfig, imaging, *, background=None, face=None, depths=None, seed_colour=None):
+    """Fit pose and proportions to a foreground mask, learn the colours, refine on them.
+
+    Returns the Calibration and the ColourModel learnt inside the fitted model (``seed_colour``,
+    when given, where the fitted model covers too few foreground pixels of a class).
+    """
+    from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX, neutral_pose
+    from mocap.cost import RegionCost
+    from mocap.imaging import prepare_frame
+    from mocap.optimize import initial_simplex, minimize
+
+    depths = config.depth_grid_m if depths is None else depths
     one_class = {p: "body" for p in MESH_PART_NAMES}
     pose_index = np.array([PARAMETER_INDEX[n] for n in CALIBRATED_POSE_PARAMETERS])
     n_pose, n_fac = len(pose_index), len(PROPORTION_FACTORS)
@@ -202,6 +245,9 @@ def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *,
     for name, limit in (("chest_yaw", 0.6), ("chest_roll", 0.3)):
         k = CALIBRATED_POSE_PARAMETERS.index(name)
         lower[k], upper[k] = -limit, limit
+    if face is not None:            # the face's size bounds the depth to the grid's range
+        k = CALIBRATED_POSE_PARAMETERS.index("root_z")
+        lower[k], upper[k] = max(lower[k], min(depths)), min(upper[k], max(depths))
 
     def unpack(x):
         pose = neutral_pose()
@@ -218,17 +264,12 @@ def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *,
 
     # (1) silhouette: depth grid, then simplex
     target = foreground.astype(np.uint8)
-    rows, cols = np.nonzero(foreground)
-    top, centre_col = rows.min(), cols.mean()
     start = neutral_pose()
-    head_top = -(base["torso"].length + base["neck"].length * 0.7 + base["head"].length)
     best = (np.inf, None)
     cost1 = objective(target, one_class, ("body",))
-    for z in config.depth_grid_m:
+    for root in _silhouette_starts(foreground, camera, base, depths, face):
         x = np.r_[start[pose_index], np.ones(n_fac)]
-        x[0] = (centre_col + 0.5 - camera.cx) * z / camera.fx
-        x[1] = (top + 0.5 - camera.cy) * z / camera.fy - head_top
-        x[2] = z
+        x[:3] = root
         x = np.clip(x, lower, upper)
         f = cost1(x)
         if f < best[0]:
@@ -239,8 +280,18 @@ def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *,
     # (2) colours from the fitted pose, (3) refinement on the label image of those classes
     pose, dims = unpack(res.x)
     model = BodyModel.build(dims, resolution=config.resolution)
-    colour = colour_model_from_pose(frame, background, model, camera, pose, imaging)
+
+    def colours(model, pose):
+        try:
+            return colour_model_from_pose(frame, None, model, camera, pose, imaging, foreground=foreground)
+        except ValueError:
+            if seed_colour is None:
+                raise
+            return seed_colour
+
+    colour = colours(model, pose)
     labels = prepare_frame(frame, background, colour, imaging).labels
+    labels[~foreground] = 0
     cost2 = objective(labels, dict(DEFAULT_PART_CLASS), colour.names)
     x, step2 = res.x, 0.5 * steps
     if "hair" in colour.names:
@@ -250,4 +301,123 @@ def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *,
     res2 = minimize(cost2, initial_simplex(np.clip(x, lower, upper), step2, lower, upper), lower, upper,
                     budget=config.evaluations, ftol=1e-6)
     pose, dims = unpack(res2.x)
-    return Calibration(dims, pose, camera, colour.names)
+    calibration = Calibration(dims, pose, camera, colour.names)
+    return calibration, colours(calibration.body_model(config.resolution), pose)
+
+
+#: Stature (metres) the default proportions (:data:`mocap.body.dimensions.DEFAULT_PART_SIZES`) stand for.
+DEFAULT_STATURE_M = 1.75
+#: How much more frequent outside the person's box than inside a colour must be to be the scene's.
+SCENE_RATIO = 1.25
+#: Width of a detected face box in head widths (the LBP cascade's box spans the face, temple to temple).
+FACE_BOX_HEAD_WIDTHS = 0.95
+
+
+def calibrate_person(frame: np.ndarray, camera: Camera, *, background: np.ndarray | None = None, face=None,
+                     height_m: float | None = None, imaging=None,
+                     config: AutoCalibrationConfig | None = None):
+    """Calibrate a real person on one frame: body proportions, initial pose and colours.
+
+    The person need not hold a special pose (arms down is the common case) but should face
+    the camera roughly. The face (:func:`mocap.imaging.detect_face`), when given, seeds the
+    colours (skin inside it, clothes under it), the position (the head on the face) and the
+    depth (the face box is :data:`FACE_BOX_HEAD_WIDTHS` head widths wide); then
+    :func:`auto_calibrate`'s fit runs on the foreground: against ``background`` when there
+    is one, else the pixels the face-seeded colour classes explain (colour-only), kept to
+    the connected parts that touch the region under the face.
+
+    One view cannot tell size from distance: without ``height_m`` the actor has the default
+    adult proportions (:data:`DEFAULT_STATURE_M`) and the depth follows from them; with it
+    the proportions are scaled to that stature first, which fixes the absolute scale.
+
+    Parameters
+    ----------
+    frame : ndarray of uint8, shape (H, W, 3)
+        RGB frame at the tracker's working resolution.
+    camera : Camera
+        Matching the frame size.
+    background : ndarray of uint8, shape (H, W, 3), optional
+        Empty scene (given or estimated).
+    face : Box, optional
+        The person's face in ``frame`` (pixels). Needed without a background.
+    height_m : float, optional
+        The person's stature in metres (1.0-2.5).
+    imaging : ImagingConfig, optional
+    config : AutoCalibrationConfig, optional
+
+    Returns
+    -------
+    PersonCalibration
+        The calibration (at ``camera``), the colour classes learnt inside the fitted model's
+        projected parts, and without a background the scene's colours
+        (:class:`mocap.imaging.scene.SceneColours`, learnt outside a box around the person).
+
+    Raises
+    ------
+    ValueError
+        No face and no background, no person in the foreground, bad sizes.
+    """
+    from scipy import ndimage
+
+    from mocap.imaging import ImagingConfig, learn_colour_model, prepare_frame, subtract_background
+    from mocap.imaging._validate import check_box
+    from mocap.imaging.colour import clothes_box_of_face, skin_box_of_face
+    from mocap.imaging.scene import SceneColours, person_box_of_face
+
+    config = AutoCalibrationConfig() if config is None else config
+    imaging = ImagingConfig() if imaging is None else imaging
+    frame = np.asarray(frame)
+    if frame.ndim != 3 or frame.shape[:2] != camera.shape:
+        raise ValueError(f"frame of shape {frame.shape} does not match the camera ({camera.height}, {camera.width}, 3)")
+    base = BodyDimensions()
+    if height_m is not None:
+        if not 1.0 <= height_m <= 2.5:
+            raise ValueError(f"the person's height must be 1.0-2.5 metres, got {height_m}")
+        base = base.scaled(height_m / DEFAULT_STATURE_M)
+    scene = seed = None
+    if face is None and background is None:
+        raise ValueError("no face found and no background: cannot tell the person from the scene")
+    if background is not None:
+        foreground = subtract_background(frame, background, imaging)
+    else:
+        h, w = camera.shape
+        clothes = check_box(clothes_box_of_face(face), (h, w), "clothes box under the face")
+        seed = learn_colour_model(frame, None, skin_box_of_face(face), clothes, config=imaging)
+        scene = SceneColours.learn(frame, person_box_of_face(face, (h, w)), ratio=SCENE_RATIO)
+        foreground = prepare_frame(frame, None, seed, imaging, scene=scene).foreground
+        # the person: connected parts touching the face or the box under it
+        parts, _ = ndimage.label(foreground)
+        near = np.zeros_like(foreground)
+        near[face.row:clothes.row + clothes.height, clothes.col:clothes.col + clothes.width] = True
+        near[face.slices] = True
+        keep = np.unique(parts[near & foreground])
+        foreground = np.isin(parts, keep[keep > 0])
+    if np.count_nonzero(foreground) < 50:
+        raise ValueError("no person in the calibration frame (the foreground is empty): cannot calibrate")
+    depths = None
+    if face is not None:
+        z0 = camera.fx * base["head"].width * FACE_BOX_HEAD_WIDTHS / face.width
+        depths = tuple(np.round(z0 * np.linspace(0.7, 1.4, 8), 3))
+    calibration, colour = _fit_body(frame, foreground, camera, base, config, imaging, background=background,
+                                    face=face, depths=depths, seed_colour=seed)
+    return PersonCalibration(calibration, colour, scene, foreground)
+
+
+@dataclass(frozen=True, eq=False)
+class PersonCalibration:
+    """What :func:`calibrate_person` found.
+
+    Attributes
+    ----------
+    calibration : Calibration
+    colour_model : mocap.imaging.ColourModel
+    scene : mocap.imaging.scene.SceneColours or None
+        The scene's colours (colour-only foreground), None with a background.
+    foreground : ndarray of bool, shape (H, W)
+        The person's pixels in the calibration frame.
+    """
+
+    calibration: Calibration
+    colour_model: object
+    scene: object
+    foreground: np.ndarray

@@ -19,6 +19,8 @@ function               definition
                        wrap-around aware (179 vs -179 degrees is 2 degrees apart)
 :func:`reprojection_error` mean 2D distance between the projected joints, pixels
 :func:`failure_rate`   fraction of frames whose MPJPE exceeds a threshold (100 mm)
+:func:`pck_2d`         share of 2D joints within a fraction of the reference's shoulder
+                       width of the reference (another tool's keypoints), in [0, 1]
 :func:`summary`        all of the above as the ``metrics`` object of ``run.json``
 =====================  ===================================================================
 """
@@ -34,7 +36,7 @@ from mocap.body.skeleton import JOINT_NAMES
 from mocap.render.camera import Camera
 
 __all__ = ["DEFAULT_FAILURE_MM", "ROOT_JOINT", "SUMMARY_KEYS", "failure_rate", "joint_angle_error", "mpjpe",
-           "pa_mpjpe", "reprojection_error", "root_relative_mpjpe", "summary"]
+           "pa_mpjpe", "pck_2d", "reprojection_error", "root_relative_mpjpe", "summary"]
 
 #: Frames whose MPJPE exceeds this many millimetres count as failures (docs/design.md section 5).
 DEFAULT_FAILURE_MM: float = 100.0
@@ -257,6 +259,53 @@ def failure_rate(pred, true, threshold_mm: float = DEFAULT_FAILURE_MM) -> float:
             or not np.isfinite(threshold_mm) or threshold_mm <= 0:
         raise ValueError(f"failure threshold must be a positive number of millimetres, got {threshold_mm!r}")
     return float(np.mean(mpjpe(pred, true, per_frame=True) > threshold_mm))
+
+
+def pck_2d(pred_uv, ref_uv, ref_shoulder_width, fraction: float = 0.5, *, per_frame: bool = False):
+    """Percentage of correct 2D keypoints: share of joints within ``fraction`` of the
+    reference's shoulder width (per frame) of the reference keypoints.
+
+    Parameters
+    ----------
+    pred_uv, ref_uv : array_like, shape (N, J, 2), pixels
+        Keypoints of the same joints in the same images. Joint-frames where either is NaN
+        (not detected) are left out.
+    ref_shoulder_width : array_like, shape (N,), pixels
+        The reference's shoulder width in every frame (positive; NaN leaves the frame out).
+    fraction : float
+        Threshold in shoulder widths (0.5: half a shoulder width).
+    per_frame : bool
+        Return every frame's share (NaN for a frame with no joint left).
+
+    Returns
+    -------
+    float in [0, 1], or ndarray of shape (N,) with ``per_frame``
+
+    Raises
+    ------
+    ValueError
+        On shapes that differ, a non-positive fraction, or no joint-frame to count.
+    """
+    p = np.asarray(pred_uv, dtype=np.float64)
+    r = np.asarray(ref_uv, dtype=np.float64)
+    w = np.asarray(ref_shoulder_width, dtype=np.float64)
+    if p.ndim != 3 or p.shape[2] != 2 or p.shape != r.shape:
+        raise ValueError(f"keypoints must both have shape (N, J, 2), got {p.shape} and {r.shape}")
+    if w.shape != (p.shape[0],):
+        raise ValueError(f"shoulder widths must have shape ({p.shape[0]},), got {w.shape}")
+    if not fraction > 0:
+        raise ValueError(f"fraction must be positive, got {fraction}")
+    distance = np.linalg.norm(p - r, axis=2)
+    valid = np.isfinite(distance) & np.isfinite(w)[:, None] & (w > 0)[:, None]
+    with np.errstate(invalid="ignore"):
+        hit = valid & (distance <= fraction * w[:, None])
+    if per_frame:
+        counts = valid.sum(axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(counts > 0, hit.sum(axis=1) / np.maximum(counts, 1), np.nan)
+    if not valid.any():
+        raise ValueError("no joint-frame has both keypoints and a shoulder width")
+    return float(hit.sum() / valid.sum())
 
 
 def summary(pred_poses, true_poses, pred_joints, true_joints, camera: Camera, *,

@@ -20,13 +20,15 @@ from pathlib import Path
 
 import numpy as np
 
+from mocap.body.skeleton import JOINT_NAMES
 from mocap.calibrate import Calibration, colour_model_from_pose
 from mocap.imaging import ColourModel, ImagingConfig, learn_colour_model, prepare_frame
 from mocap.io.atomic import write_text_atomic
 from mocap.io.checkpoint import Checkpoint, read_checkpoint, truncate_journal, write_checkpoint
 from mocap.io.lock import one_writer
 from mocap.io.pose_table import PoseTable
-from mocap.io.video import count_frames, iter_frames, read_image
+from mocap.io.frames import VideoSource
+from mocap.io.video import count_frames, read_image
 from mocap.io.video_check import check_video, format_frames
 from mocap.track import FrameResult, Tracker, TrackerConfig
 
@@ -48,11 +50,50 @@ class RunSummary:
     metrics: dict | None
     failures: int
     damaged_frames: tuple[int, ...] = ()
+    empty_frames: int = 0
+    dark_frames: int = 0
 
 
-def _frame_row(r: FrameResult) -> PoseTable:
+def joint_pixels(joints: np.ndarray, camera, work_factor: int = 1) -> np.ndarray:
+    """Joints projected into the input video's pixels.
+
+    Parameters
+    ----------
+    joints : ndarray, shape (..., J, 3), metres
+        Camera coordinates.
+    camera : Camera
+        The working-resolution camera.
+    work_factor : int
+        Input pixels per working pixel (:mod:`mocap.imaging.resample`).
+
+    Returns
+    -------
+    ndarray, shape (..., J, 2), float64, input pixels ``(u right, v down)``
+        NaN for joints at or behind the camera.
+    """
+    joints = np.asarray(joints, dtype=np.float64)
+    z = joints[..., 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = np.where(z > 0, camera.fx * joints[..., 0] / z + camera.cx, np.nan)
+        v = np.where(z > 0, camera.fy * joints[..., 1] / z + camera.cy, np.nan)
+    return work_factor * np.stack([u, v], axis=-1)
+
+
+#: Names of the 2D keypoint columns of ``poses.csv`` (input-video pixels).
+PIXEL_COLUMNS = tuple(f"{j}_{a}" for j in JOINT_NAMES for a in "uv")
+
+
+#: Mean brightness (0-255) below which a frame counts as very dark (column ``dark`` of ``poses.csv``).
+DARK_MEAN = 20.0
+
+
+def _frame_row(r: FrameResult, camera=None, work_factor: int = 1, dark: bool | None = None) -> PoseTable:
     t = r.timings_ms
-    extra = {"region_residual": [r.region_residual], "edge_residual": [r.edge_residual],
+    extra = {}
+    if camera is not None:
+        uv = joint_pixels(r.joints, camera, work_factor).reshape(-1)
+        extra.update({name: [value] for name, value in zip(PIXEL_COLUMNS, uv)})
+    extra |= {"region_residual": [r.region_residual], "edge_residual": [r.edge_residual],
              "edge_residual_after_region": [r.edge_residual_after_region],
              "failed": np.array([int(r.failed)]), "empty": np.array([int(r.empty)]),
              "hypothesis": np.array([r.hypothesis]), "score": [r.score],
@@ -60,12 +101,15 @@ def _frame_row(r: FrameResult) -> PoseTable:
              "edge_iterations": np.array([r.edge_iterations]), "ms_prepare": [t.get("prepare", 0.0)],
              "ms_region": [t.get("region", 0.0)], "ms_edge": [t.get("edge", 0.0)],
              "ms_recovery": [t.get("recovery", 0.0)], "ms_total": [t.get("total", 0.0)]}
+    if dark is not None:
+        extra["dark"] = np.array([int(dark)])
     return PoseTable([r.frame], r.pose[None], r.joints[None], {k: np.asarray(v) for k, v in extra.items()})
 
 
-def _settings(source: Path, background: Path | None, calibration: Calibration, config: TrackerConfig,
+def _settings(source: str, background: Path | None, calibration: Calibration, config: TrackerConfig,
               imaging: ImagingConfig, colour: str, resolution: int) -> dict:
-    return {"source": str(source.resolve()), "background": str(background.resolve()) if background else None,
+    source = str(Path(source).resolve()) if Path(source).exists() else source
+    return {"source": source, "background": str(background.resolve()) if background else None,
             "calibration": calibration.to_dict(), "tracker": config.to_dict(), "imaging": imaging.to_dict(),
             "colour_model_from": colour, "mesh_resolution": resolution}
 
@@ -85,17 +129,21 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
                 config: TrackerConfig | None = None, *, imaging: ImagingConfig | None = None,
                 colour: str = "calibration", ground_truth: str | Path | None = None, fps: float = 25.0,
                 max_frames: int | None = None, overwrite: bool = False, progress: bool = True,
-                write_overlay: bool = True, allow_damaged: bool = False, start_frame: int = 0) -> RunSummary:
+                write_overlay: bool = True, allow_damaged: bool = False, start_frame: int = 0,
+                work_factor: int = 1, colour_model: ColourModel | None = None, scene=None,
+                setup_record: dict | None = None, show: bool = False) -> RunSummary:
     """Track every frame of a video or image folder and write the outputs.
 
     Parameters
     ----------
-    source : path
-        Video file or folder of images.
-    background : path or None
-        Image of the empty scene (same size as the frames).
+    source : path or frame source
+        Video file or folder of images, or a :mod:`mocap.io.frames` source (a camera).
+    background : path, ndarray of uint8 (H, W, 3), or None
+        Image of the empty scene: a file the size of the input frames, or an array the size
+        of the working frames.
     calibration : Calibration
-        Actor dimensions, initial pose, camera (its size must match the frames).
+        Actor dimensions, initial pose, camera (its size must match the working frames:
+        the input frames reduced by ``work_factor``).
     out_dir : path
         Output folder (created), locked for the run. If it holds an unfinished run with the
         same settings, the run resumes exactly where it stopped.
@@ -125,6 +173,18 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
         (``damaged_frames``) and the summary.
     start_frame : int
         First frame to track (0-based); the calibration's initial pose is the pose there.
+    work_factor : int
+        The input frames are reduced by this factor (:func:`mocap.imaging.resample.downscale`)
+        before anything else; ``poses.csv``'s ``<joint>_u``, ``<joint>_v`` columns are in
+        input pixels all the same.
+    colour_model : ColourModel, optional
+        Colour classes to use as they are (``colour`` is then ignored).
+    scene : mocap.imaging.scene.SceneColours, optional
+        The scene's colours, for a foreground without background (:func:`mocap.imaging.prepare_frame`).
+    setup_record : dict, optional
+        How background and calibration were found (own-video path), kept in ``run.json``.
+    show : bool
+        Show the overlay live in a window (needs a display).
 
     Returns
     -------
@@ -149,42 +209,65 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     imaging = ImagingConfig() if imaging is None else imaging
     if colour not in COLOUR_SOURCES:
         raise ValueError(f"colour must be one of {COLOUR_SOURCES}, got {colour!r}")
-    source, out_dir = Path(source), Path(out_dir)
+    from mocap.imaging.resample import downscale
+
+    frames_in = source if hasattr(source, "frames") else VideoSource(source)
+    out_dir = Path(out_dir)
     camera = calibration.camera
-    total, damaged = _frames_to_track(source, allow_damaged)
     if isinstance(start_frame, bool) or not isinstance(start_frame, int) or start_frame < 0:
         raise ValueError(f"the start frame must be a non-negative integer, got {start_frame!r}")
-    if total == 0:
-        raise ValueError(f"{source} has no frames")
-    if start_frame >= total:
-        raise ValueError(f"start frame {start_frame} is past the end of {source} ({total} frames)")
+    if frames_in.live:
+        total, damaged = frames_in.count, []
+    else:
+        total, damaged = _frames_to_track(frames_in.path, allow_damaged)
+        if total == 0:
+            raise ValueError(f"{frames_in.name} has no frames")
+        if start_frame >= total:
+            raise ValueError(f"start frame {start_frame} is past the end of {frames_in.name} ({total} frames)")
     if max_frames is not None:
         if max_frames < 1:
             raise ValueError(f"max_frames must be at least 1, got {max_frames}")
-        total = min(total, start_frame + max_frames)
-    first = next(iter_frames(source, start_frame, start_frame + 1))
-    if first.shape[:2] != camera.shape:
-        raise ValueError(f"frames are {first.shape[1]}x{first.shape[0]} but the calibration's camera is "
-                         f"{camera.width}x{camera.height}: calibrate for this video (python -m mocap calibrate)")
+        total = start_frame + max_frames if total is None else min(total, start_frame + max_frames)
+    work_shape = (frames_in.height // work_factor, frames_in.width // work_factor)
+    if work_shape != camera.shape:
+        raise ValueError(f"frames are {frames_in.width}x{frames_in.height} (working size {work_shape[1]}x"
+                         f"{work_shape[0]}) but the calibration's camera is {camera.width}x{camera.height}: "
+                         "calibrate for this video (python -m mocap calibrate)")
     bg_image = None
-    if background is not None:
+    if isinstance(background, np.ndarray):
+        bg_image = background
+        if bg_image.shape != (*work_shape, 3):
+            raise ValueError(f"background is {bg_image.shape[1]}x{bg_image.shape[0]}, working frames are "
+                             f"{work_shape[1]}x{work_shape[0]}")
+        background = None
+    elif background is not None:
         background = Path(background)
         bg_image = read_image(background)
-        if bg_image.shape != first.shape:
+        if bg_image.shape[:2] != (frames_in.height, frames_in.width):
             raise ValueError(f"background {background} is {bg_image.shape[1]}x{bg_image.shape[0]}, frames are "
-                             f"{first.shape[1]}x{first.shape[0]}")
+                             f"{frames_in.width}x{frames_in.height}")
+        bg_image = downscale(bg_image, work_factor)
     gt = PoseTable.read(ground_truth) if ground_truth is not None else None
 
     resolution = config.mesh_resolution or resolution_for_image(camera.width, camera.height)
     model = calibration.body_model(resolution)
-    settings = _settings(source, background, calibration, config, imaging, colour, resolution)
+    settings = _settings(frames_in.name, background, calibration, config, imaging, colour, resolution)
+    settings["working_resolution"] = {"factor": work_factor, "width": camera.width, "height": camera.height,
+                                      "input_width": frames_in.width, "input_height": frames_in.height}
+    if setup_record is not None:
+        settings["own_video"] = setup_record
     settings["start_frame"] = start_frame
     out_dir.mkdir(parents=True, exist_ok=True)
     journal, run_json = out_dir / "poses.csv", out_dir / "run.json"
     checkpoint = _previous_run(journal, run_json, settings, overwrite)
 
-    colour_model, colour_frame = _learn_colours(source, start_frame, total, bg_image, model, camera,
-                                                calibration.initial_pose, imaging, colour)
+    colour_frame = None
+    if colour_model is None:
+        if frames_in.live:
+            raise ValueError("a live source needs its colour model given")
+        colour_model, colour_frame = _learn_colours(
+            ((i, downscale(f, work_factor)) for i, f in enumerate(frames_in.frames(start_frame, total), start=start_frame)),
+            frames_in.name, bg_image, model, camera, calibration.initial_pose, imaging, colour)
     colour_model.to_json(out_dir / "colour_model.json")
     model = model.with_class_names(colour_model.names)        # classes the first frame supports
 
@@ -192,32 +275,67 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
     state_path = out_dir / STATE_FILE
     start = start_frame
     if checkpoint is not None:
+        if frames_in.live:
+            raise ValueError(f"{out_dir} holds a run; a live source cannot resume it: use --overwrite or another --out")
         start = checkpoint.next_index
-        tracker.restore(checkpoint.state)
+        state = dict(checkpoint.state)
+        pending_dark = state.pop(PENDING_DARK, np.zeros((0, 2), np.int64))
+        tracker.restore(state)
     else:
         write_text_atomic(run_json, json.dumps({"status": "running", "settings": settings}, indent=2))
     started = time.perf_counter()
     results_ms: collections.deque[float] = collections.deque(maxlen=25)   # for the frame rate shown
-    bar = tqdm(total=total, initial=start, desc="tracking", unit="frame", disable=not progress)
+    # the overlay is drawn as frames come (no second decoding pass) unless an earlier session's
+    # frames must be in it too (a resumed file run redraws it whole at the end)
+    overlay_now = frames_in.live or (write_overlay and start == start_frame)
+    live = _LiveView(out_dir, fps, model, camera, show, overlay_now) if (overlay_now or show) else None
+    pending: dict[int, np.ndarray] = {}
+    # dark flags of the frames pushed but not decided yet (kept in the checkpoint with the tracker)
+    dark: dict[int, bool] = {} if checkpoint is None else {int(f): bool(v) for f, v in pending_dark}
+    bar = tqdm(total=None if total is None else total - start_frame, initial=start - start_frame, desc="tracking",
+               unit="frame", disable=not progress)
+    interrupted = False
+
+    def emit(results: list[FrameResult]) -> None:
+        for result in results:
+            _frame_row(result, camera, work_factor, dark.pop(result.frame, None)).append_to(journal)
+            results_ms.append(result.timings_ms["total"])
+            frame = pending.pop(result.frame, None)
+            if live is not None and frame is not None:
+                live.update(frame, result)
+            bar.set_postfix(fps=f"{1e3 / np.mean(results_ms):.0f}", F=f"{result.region_residual:.2f}",
+                            D=f"{result.edge_residual:.1f}")
+
     try:
-        for index, frame in enumerate(iter_frames(source, start, total), start=start):
-            prepared = prepare_frame(frame, bg_image, colour_model, imaging)
-            for result in tracker.push(index, prepared):
-                _frame_row(result).append_to(journal)
-                results_ms.append(result.timings_ms["total"])
-                bar.set_postfix(fps=f"{1e3 / np.mean(results_ms):.0f}", F=f"{result.region_residual:.2f}",
-                                D=f"{result.edge_residual:.1f}")
-            write_checkpoint(state_path, tracker.state(), index + 1, journal)
+        for index, frame in enumerate(frames_in.frames(start, total), start=start):
+            small = downscale(frame, work_factor)
+            dark[index] = bool(small.mean() < DARK_MEAN)
+            if live is not None:
+                pending[index] = small
+            prepared = prepare_frame(small, bg_image, colour_model, imaging, scene=scene)
+            emit(tracker.push(index, prepared))
+            write_checkpoint(state_path, {**tracker.state(), PENDING_DARK: np.array(sorted(dark.items()), np.int64)
+                                          .reshape(-1, 2)}, index + 1, journal)
             bar.update(1)
         # the held-back frames: not checkpointed, a resume continues from the last push instead
-        for result in tracker.finish():
-            _frame_row(result).append_to(journal)
+        emit(tracker.finish())
+    except KeyboardInterrupt:
+        if not frames_in.live:
+            raise
+        interrupted = True          # Ctrl-C ends a live run: what was tracked is kept
+        emit(tracker.finish())
     finally:
         bar.close()
+        if live is not None:
+            live.close()
+    if interrupted:
+        print("stopped by Ctrl-C: writing what was tracked")
+    if not journal.exists():
+        raise ValueError(f"no frame was tracked from {frames_in.name}")
     table = PoseTable.read(journal)     # (not rewritten: the checkpoint records its length)
-    return _finish(out_dir, table, settings, source, model, calibration, camera, gt, fps, start,
-                   time.perf_counter() - started, write_overlay, bg_image, damaged=damaged,
-                   colour_frame=colour_frame)
+    return _finish(out_dir, table, settings, frames_in, model, calibration, camera, gt, fps, start,
+                   time.perf_counter() - started, write_overlay and not overlay_now, work_factor,
+                   damaged=damaged, colour_frame=colour_frame)
 
 
 #: Fraction of the calibrated model's silhouette (pixels) the foreground must cover for a frame to
@@ -225,16 +343,16 @@ def track_video(source: str | Path, background: str | Path | None, calibration: 
 PLAUSIBLE_FOREGROUND = 0.5
 
 
-def _learn_colours(source: Path, first: int, stop: int, bg_image, model, camera, pose, imaging,
+def _learn_colours(frames, name: str, bg_image, model, camera, pose, imaging,
                    colour: str) -> tuple[ColourModel, int]:
-    """Colour model from the first frame in ``first``..``stop - 1`` that shows the person, and that
-    frame's number; ValueError (with the last frame's reason) when none does."""
+    """Colour model from the first of ``frames`` (``(index, working-size frame)`` pairs) that shows
+    the person, and that frame's number; ValueError (with the last frame's reason) when none does."""
     from mocap.imaging import subtract_background
     from mocap.render import render
 
     silhouette = np.count_nonzero(render(pose, model, camera).labels)
     reason = "no frame"
-    for index, frame in enumerate(iter_frames(source, first, stop), start=first):
+    for index, frame in frames:
         try:
             if colour == "face":
                 return learn_colour_model(frame, bg_image, config=imaging), index
@@ -247,7 +365,7 @@ def _learn_colours(source: Path, first: int, stop: int, bg_image, model, camera,
             return colour_model_from_pose(frame, bg_image, model, camera, pose, imaging), index
         except ValueError as exc:
             reason = f"frame {index}: {exc}"
-    raise ValueError(f"no frame of {source} from frame {first} shows the person to learn the colours from "
+    raise ValueError(f"no frame of {name} shows the person to learn the colours from "
                      f"({'a detected face' if colour == 'face' else 'a foreground the size of the model'}); "
                      f"last: {reason}")
 
@@ -263,6 +381,8 @@ def _frames_to_track(source: Path, allow_damaged: bool) -> tuple[int, list[int]]
     return check.readable, check.damaged_frames
 
 
+#: Checkpoint entry holding ``(frame, dark)`` of the frames the tracker still holds back.
+PENDING_DARK = "run_pending_dark"
 #: Checkpoint (:mod:`mocap.io.checkpoint`): the tracker's exact state after the last pushed
 #: frame and the length of ``poses.csv`` that goes with it, for bit-identical resumes.
 STATE_FILE = ".tracker_state.npz"
@@ -288,7 +408,7 @@ def _previous_run(journal: Path, run_json: Path, settings: dict, overwrite: bool
 
 
 def _finish(out_dir, table, settings, source, model, calibration, camera, gt, fps, start, wall_s,
-            write_overlay, bg_image, *, damaged: list[int], colour_frame: int) -> RunSummary:
+            write_overlay, work_factor, *, damaged: list[int], colour_frame: int | None) -> RunSummary:
     from mocap.io.bvh import write_bvh
 
     extra = table.extra
@@ -321,9 +441,12 @@ def _finish(out_dir, table, settings, source, model, calibration, camera, gt, fp
     write_bvh(out_dir / "poses.bvh", table.poses, calibration.dims, fps)
     _residual_plot(out_dir / "residuals.png", table, settings["tracker"])
     if write_overlay:
-        _overlay_video(out_dir / "overlay.mp4", source, table, model, camera, fps)
+        _overlay_video(out_dir / "overlay.mp4", source, table, model, camera, fps, work_factor)
+    if "dark" in extra:
+        run["dark_frames"] = int(extra["dark"].sum())
     write_text_atomic(out_dir / "run.json", json.dumps(run, indent=2))
-    return RunSummary(out_dir, tracked, start, run["fps"], metrics, failures, tuple(damaged))
+    return RunSummary(out_dir, tracked, start, run["fps"], metrics, failures, tuple(damaged), run["empty_frames"],
+                      run.get("dark_frames", 0))
 
 
 def _residual_plot(path: Path, table: PoseTable, tracker: dict) -> None:
@@ -352,7 +475,8 @@ def _residual_plot(path: Path, table: PoseTable, tracker: dict) -> None:
     write_bytes_atomic(path, buf.getvalue())
 
 
-def _overlay_video(path: Path, source: Path, table: PoseTable, model, camera, fps: float) -> None:
+def _overlay_video(path: Path, source, table: PoseTable, model, camera, fps: float, work_factor: int = 1) -> None:
+    from mocap.imaging.resample import downscale
     from mocap.io.overlay import draw_model
     from mocap.io.video import VideoWriter
     from mocap.render import render
@@ -360,9 +484,55 @@ def _overlay_video(path: Path, source: Path, table: PoseTable, model, camera, fp
     tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
     poses = {int(f): p for f, p in zip(table.frames, table.poses)}
     with VideoWriter(tmp, fps) as video:
-        for index, frame in enumerate(iter_frames(source, 0, int(table.frames.max()) + 1)):
+        for index, frame in enumerate(source.frames(0, int(table.frames.max()) + 1)):
+            frame = downscale(frame, work_factor)
             if index in poses:
                 r = render(poses[index], model, camera)
                 frame = draw_model(frame, r.labels, r.edges, model.n_classes, class_names=model.class_names)
             video.write(frame)
     os.replace(tmp, path)
+
+
+class _LiveView:
+    """The overlay as frames come: written to ``overlay.mp4`` (``write``), and shown in a
+    window when asked and a display exists."""
+
+    def __init__(self, out_dir: Path, fps: float, model, camera, show: bool, write: bool) -> None:
+        from mocap.io.video import VideoWriter
+
+        self.model, self.camera = model, camera
+        self.path, self.tmp = out_dir / "overlay.mp4", out_dir / ".overlay.tmp.mp4"
+        self.video = VideoWriter(self.tmp, fps) if write else None
+        self.figure = self.image = None
+        if show and (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") or platform.system() != "Linux"):
+            import matplotlib.pyplot as plt
+            plt.ion()
+            self.figure, ax = plt.subplots(num="mocap track")
+            ax.set_axis_off()
+            self.plt = plt
+        elif show:
+            print("no display: the live view is not shown (overlay.mp4 is written)")
+
+    def update(self, frame: np.ndarray, result: FrameResult) -> None:
+        from mocap.io.overlay import draw_model
+        from mocap.render import render
+
+        r = render(result.pose, self.model, self.camera)
+        picture = draw_model(frame, r.labels, r.edges, self.model.n_classes)
+        if self.video is not None:
+            self.video.write(picture)
+        if self.figure is not None:
+            if self.image is None:
+                self.image = self.figure.axes[0].imshow(picture)
+            else:
+                self.image.set_data(picture)
+            self.plt.pause(0.001)
+
+    def close(self) -> None:
+        if self.video is not None:
+            self.video.close()
+            if self.video.frames:
+                os.replace(self.tmp, self.path)
+            self.video = None
+        if self.figure is not None:
+            self.plt.close(self.figure)

@@ -91,8 +91,8 @@ def test_bad_input_gives_one_line_errors(sequence, tmp_path, capsys):
         assert err.startswith("error:") and "\n" not in err and match in err
 
     fails(["track", str(tmp_path / "missing.mp4")], "no such video")
-    fails(["track", str(sequence / "frames"), "--calibration", str(sequence / "calibration.json")], "background")
-    fails(["track", str(sequence / "frames"), "--background", str(sequence / "background.png")], "calibration")
+    fails(["track", str(sequence), "--camera", "0"], "not both")
+    fails(["track"], "VIDEO or --camera")
     small = tmp_path / "small.png"
     iio.imwrite(small, np.zeros((60, 80, 3), np.uint8))
     fails(["track", str(sequence), "--background", str(small), "--out", str(tmp_path / "o1")], "background")

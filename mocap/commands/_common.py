@@ -62,6 +62,9 @@ def print_summary(summary) -> None:
         from mocap.io.video_check import format_frames
         print(f"warning: the video is damaged: {format_frames(list(summary.damaged_frames))} did not decode "
               "cleanly (listed in run.json as damaged_frames)", file=sys.stderr)
+    if summary.empty_frames or summary.dark_frames:
+        print(f"{summary.empty_frames} frames with nobody in view (marked empty = 1 in poses.csv, pose kept), "
+              f"{summary.dark_frames} very dark frames (marked dark = 1); tracking went on through them")
     if summary.metrics:
         m = summary.metrics
         print(f"accuracy vs ground truth: MPJPE {m['mpjpe_mm']:.1f} mm, root-relative "

@@ -1,41 +1,82 @@
-"""``python -m mocap calibrate VIDEO --background IMG [--out JSON]``: automatic first-frame
-calibration of body proportions and initial pose (the actor should stand roughly neutral,
-facing the camera, arms away from the body)."""
+"""``python -m mocap calibrate VIDEO [--background IMG | --background-frames A:B | --no-background]
+[--hfov DEG] [--height M] [--out JSON]``: automatic calibration of body proportions and initial
+pose.
+
+With ``--background`` (or a sequence folder's ``background.png``) the paper's set-up: the actor
+stands roughly neutral on frame ``--frame`` (default 0) against the empty scene. Otherwise the
+own-video path of ``track`` (docs/own-video.md): background as given, estimated from the video
+or none, and the first usable frame of a real person (a face seeds colours, position and
+depth). The calibration is written at the video's input resolution.
+"""
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
+from mocap.commands.segment import _range
+
 
 def add_parser(subparsers) -> None:
-    p = subparsers.add_parser("calibrate", help="fit body dimensions and initial pose to the first frame",
-                              description=__doc__)
+    from mocap.render.camera import DEFAULT_HFOV_DEG
+
+    p = subparsers.add_parser("calibrate", help="fit body dimensions and initial pose to a frame",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("video", type=Path, help="video file, image folder or sequence folder")
-    p.add_argument("--background", type=Path, default=None, help="image of the empty scene")
+    bg = p.add_mutually_exclusive_group()
+    bg.add_argument("--background", type=Path, default=None, help="image of the empty scene")
+    bg.add_argument("--background-frames", type=_range, metavar="A:B",
+                    help="use the per-pixel median of frames A..B-1 of VIDEO (empty frames)")
+    bg.add_argument("--no-background", action="store_true",
+                    help="no empty view: the foreground is what the colour classes explain")
     p.add_argument("--out", type=Path, default=Path("calibration.json"), help="output JSON (default ./calibration.json)")
-    p.add_argument("--frame", type=int, default=0, help="frame to calibrate on (default 0)")
-    p.add_argument("--hfov", type=float, default=60.0, help="camera horizontal field of view, degrees (default 60)")
+    p.add_argument("--frame", type=int, default=None,
+                   help="frame to calibrate on against --background (default 0); without a background image the "
+                        "first usable frame is found")
+    p.add_argument("--hfov", type=float, default=DEFAULT_HFOV_DEG,
+                   help=f"camera horizontal field of view, degrees (default {DEFAULT_HFOV_DEG:g}, a webcam)")
+    p.add_argument("--height", type=float, default=None, metavar="M",
+                   help="the person's height in metres: fixes the absolute scale")
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from mocap.calibrate import auto_calibrate
+    from mocap.calibrate import Calibration, auto_calibrate
+    from mocap.io.frames import VideoSource
     from mocap.io.sequence import find_sequence
     from mocap.io.video import iter_frames, read_image
+    from mocap.own_video import setup_own_video
     from mocap.render import Camera
 
     seq = find_sequence(args.video)
-    background = args.background or seq.background
-    if background is None:
-        raise ValueError("no background image: pass --background IMG (an image of the empty scene)")
-    frame = next(iter_frames(seq.frames, args.frame, args.frame + 1), None)
-    if frame is None:
-        raise ValueError(f"{seq.frames} has no frame {args.frame}")
-    camera = Camera.default(frame.shape[1], frame.shape[0], hfov_deg=args.hfov)
-    calibration = auto_calibrate(frame, read_image(background), camera)
+    background = args.background or (seq.background if not args.no_background and args.background_frames is None
+                                     else None)
+    if background is not None and args.height is None:
+        index = args.frame or 0
+        frame = next(iter_frames(seq.frames, index, index + 1), None)
+        if frame is None:
+            raise ValueError(f"{seq.frames} has no frame {index}")
+        camera = Camera.default(frame.shape[1], frame.shape[0], hfov_deg=args.hfov)
+        calibration = auto_calibrate(frame, read_image(background), camera)
+        how = f"frame {index} against the background image"
+    else:
+        if args.frame is not None:
+            raise ValueError("--frame needs --background IMG (without one the first usable frame is found)")
+        source = VideoSource(seq.frames)
+        mode = "image" if background is not None else ("frames" if args.background_frames else
+                                                       ("none" if args.no_background else "auto"))
+        setup, _ = setup_own_video(source, background_mode=mode,
+                                   background_image=read_image(background) if background is not None else None,
+                                   background_frames=args.background_frames, hfov_deg=args.hfov,
+                                   height_m=args.height)
+        k, small = setup.factor, setup.calibration.camera
+        camera = Camera(source.width, source.height, small.fx * k, small.fy * k, small.cx * k, small.cy * k)
+        calibration = Calibration(setup.calibration.dims, setup.calibration.initial_pose, camera)
+        note = setup.record
+        how = (f"frame {note['calibration']['frame']}, background {note['background']['mode']} "
+               f"({note['background']['reason']})")
     calibration.to_json(args.out)
     q = calibration.initial_pose
-    print(f"calibration written to {args.out}: actor at {q[2]:.2f} m, torso "
+    print(f"calibration written to {args.out} ({how}): actor at {q[2]:.2f} m, torso "
           f"{calibration.dims['torso'].length:.2f} x {calibration.dims['torso'].width:.2f} m, colour classes "
           f"{', '.join(calibration.class_names)}, hairline "
           + ("none" if calibration.dims.hairline is None else f"{calibration.dims.hairline:+.2f} (half head lengths)"))

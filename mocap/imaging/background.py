@@ -21,7 +21,8 @@ from mocap._numba import jit
 from mocap.imaging._validate import check_rgb, check_same_size, foreground_bbox
 from mocap.imaging.config import ImagingConfig
 
-__all__ = ["subtract_background", "median_background", "clean_mask"]
+__all__ = ["subtract_background", "median_background", "clean_mask", "estimate_background",
+           "person_against_background", "PERSON_MIN_SHARE"]
 
 _DEFAULT_CONFIG = ImagingConfig()  # frozen: sharing it is safe
 
@@ -205,3 +206,115 @@ def median_background(frames: Iterable[np.ndarray]) -> np.ndarray:
     if not stack:
         raise ValueError("median_background needs at least one frame")
     return np.median(np.stack(stack), axis=0).round().astype(np.uint8)
+
+
+def estimate_background(frames: Iterable[np.ndarray], config: ImagingConfig | None = None, *,
+                        motion_dilation: int = 3, min_free_share: float = 0.2) -> tuple[np.ndarray, np.ndarray]:
+    """Background of a clip with nobody standing still: temporal median with a motion mask.
+
+    A first rough background takes at every pixel the colour seen most often: the sample with
+    the most other samples within ``config.change_threshold`` of it (a mode; people who come and
+    go differ from one another, the empty scene does not, so it wins even when someone covers
+    the pixel in more than half of the frames). In every frame the
+    pixels that differ from it (:func:`subtract_background`, dilated by ``motion_dilation``
+    pixels) are taken for the moving actor and left out, and the median of what is left is
+    the estimate. A pixel the actor covers in fewer than half of the frames is recovered
+    exactly; one covered by the same still actor in most frames keeps the actor (see
+    :func:`person_against_background` to tell).
+
+    Parameters
+    ----------
+    frames : iterable of ndarray, each shape (H, W, 3)
+        RGB frames of the same size, ``uint8`` or float in [0, 1] (a sample of the clip).
+    config : ImagingConfig, optional
+        Thresholds of the change test.
+    motion_dilation : int, pixels
+        Margin added around the changed pixels (mixed colours at the actor's border).
+    min_free_share : float in (0, 1]
+        Fewest share of frames a pixel must be free of motion in to take the masked median.
+
+    Returns
+    -------
+    background : ndarray of uint8, shape (H, W, 3)
+        The estimate (0-255).
+    free_share : ndarray of float64, shape (H, W)
+        Share of the frames in which each pixel was free of motion.
+    """
+    if not 0.0 < min_free_share <= 1.0:
+        raise ValueError(f"min_free_share must be in (0, 1], got {min_free_share}")
+    if isinstance(motion_dilation, bool) or not isinstance(motion_dilation, int) or motion_dilation < 0:
+        raise ValueError(f"motion_dilation must be a non-negative integer, got {motion_dilation!r}")
+    config = config or _DEFAULT_CONFIG
+    stack = []
+    for i, frame in enumerate(frames):
+        frame, scale = check_rgb(frame, f"frame {i}")
+        if stack:
+            check_same_size(stack[0], frame, f"frame {i}")
+        stack.append(np.round(frame * 255.0).astype(np.uint8) if scale != 1.0 else frame)
+    if len(stack) < 3:
+        raise ValueError(f"estimating a background needs at least 3 frames, got {len(stack)}")
+    video = np.stack(stack)
+    rough = _densest_sample(video, config.change_threshold)
+    moving = np.empty(video.shape[:3], dtype=np.bool_)
+    for t, frame in enumerate(video):
+        raw = change_mask_unchecked(frame, 1.0, rough, 1.0, config)
+        moving[t] = ndi.binary_dilation(raw, iterations=motion_dilation) if motion_dilation else raw
+    free_share = 1.0 - moving.mean(axis=0)
+    masked = np.ma.masked_array(video, mask=np.repeat(moving[..., None], 3, axis=3))
+    estimate = np.ma.median(masked, axis=0).filled(0).round().astype(np.uint8)
+    reliable = free_share >= min_free_share
+    background = np.where(reliable[..., None], estimate, rough)
+    return background, free_share
+
+
+def _densest_sample(video: np.ndarray, radius: float) -> np.ndarray:
+    """Per pixel, the sample (of ``video`` (N, H, W, 3) uint8) with the most samples within
+    ``radius`` (0-255 units) of it; ties go to the earlier sample."""
+    data = video.astype(np.float32)
+    counts = np.empty(video.shape[:3], np.int32)
+    for i in range(len(data)):
+        counts[i] = (np.sum((data - data[i]) ** 2, axis=3) <= radius * radius).sum(axis=0)
+    best = np.argmax(counts, axis=0)
+    return np.take_along_axis(video, best[None, ..., None], axis=0)[0]
+
+
+def person_against_background(frames: Iterable[np.ndarray], background: np.ndarray,
+                              config: ImagingConfig | None = None, *, face=None,
+                              face_frame: np.ndarray | None = None) -> dict[str, float]:
+    """How well an estimated background separates the actor: the evidence for using it.
+
+    Parameters
+    ----------
+    frames : iterable of ndarray, each shape (H, W, 3)
+        Sample frames (RGB, ``uint8`` or float in [0, 1]).
+    background : ndarray, shape (H, W, 3)
+        The background to judge (:func:`estimate_background`).
+    config : ImagingConfig, optional
+    face : Box, optional
+        A face found in ``face_frame`` (pixels of the same size).
+    face_frame : ndarray, shape (H, W, 3), optional
+
+    Returns
+    -------
+    dict
+        ``foreground_share`` (median over the frames of the cleaned foreground's share of the
+        image), ``frames_with_person`` (share of frames whose foreground covers at least 2 %
+        of the image) and, with a face, ``face_foreground`` (share of the face box that is
+        foreground in ``face_frame``: near 1 when the background is free of the actor, near
+        0 when the actor sat still and was taken into it).
+    """
+    shares = [float(subtract_background(f, background, config).mean()) for f in frames]
+    if not shares:
+        raise ValueError("person_against_background needs at least one frame")
+    out = {"foreground_share": float(np.median(shares)),
+           "frames_with_person": float(np.mean(np.asarray(shares) >= PERSON_MIN_SHARE))}
+    if face is not None:
+        if face_frame is None:
+            raise ValueError("face needs face_frame")
+        mask = subtract_background(face_frame, background, config)
+        out["face_foreground"] = float(mask[face.row:face.row + face.height, face.col:face.col + face.width].mean())
+    return out
+
+
+#: Share of the image a person covers at the least (foreground share that counts as someone in view).
+PERSON_MIN_SHARE = 0.02

@@ -50,7 +50,7 @@ class PreparedFrame:
 
 
 def prepare_frame(frame: np.ndarray, background: np.ndarray | None, colour_model: ColourModel,
-                  config: ImagingConfig | None = None) -> PreparedFrame:
+                  config: ImagingConfig | None = None, *, scene=None) -> PreparedFrame:
     """Segment a frame into colour classes and compute its edges and edge distance map.
 
     Stages (each timed): background subtraction with morphological clean-up
@@ -71,6 +71,8 @@ def prepare_frame(frame: np.ndarray, background: np.ndarray | None, colour_model
         The m colour classes.
     config : ImagingConfig, optional
         All parameters; defaults to ``ImagingConfig()``.
+    scene : mocap.imaging.scene.SceneColours, optional
+        Without a background: the scene's colours, left out of the foreground (uint8 frames).
 
     Returns
     -------
@@ -107,7 +109,10 @@ def prepare_frame(frame: np.ndarray, background: np.ndarray | None, colour_model
         everything = np.ones(frame.shape[:2], dtype=np.bool_)
         labels = colour_model._classify(frame, scale, everything, config.colour_threshold)
         t1 = clock()
-        foreground = clean_mask_unchecked((labels != UNKNOWN) & (labels != BACKGROUND), config)
+        explained = (labels != UNKNOWN) & (labels != BACKGROUND)
+        if scene is not None:
+            explained &= scene.foreground(frame)
+        foreground = clean_mask_unchecked(explained, config)
         labels[~foreground] = BACKGROUND
         t2 = clock()
         colour_time, background_time = t1 - t0, t2 - t1

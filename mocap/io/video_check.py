@@ -127,6 +127,12 @@ def ffmpeg_failure(path: str | Path, log: str) -> str:
     return f"{path} could not be decoded as a video"
 
 
+#: Frames the decoded video may end short of the container's announced duration times rate
+#: without being reported: the duration is rounded (to 10 ms in ffmpeg's report) and may include
+#: the last frame's display time (seen: an 87-frame clip at 30 fps announcing 2.93 s, 88 frames).
+END_TOLERANCE_FRAMES = 1
+
+
 def check_video(path: str | Path) -> VideoCheck:
     """Decode a video file once and compare it with what its container announces.
 
@@ -189,6 +195,11 @@ def check_video(path: str | Path) -> VideoCheck:
     else:
         numbers = list(range(len(times)))
     corrupt = sorted({numbers[i] for i in corrupt})
-    grid = max(numbers) + 1 if announced is None else max(announced, max(numbers) + 1)
+    decoded_end = max(numbers) + 1
+    if announced is not None and announced - decoded_end <= END_TOLERANCE_FRAMES:
+        announced_end = decoded_end         # a container's duration rounds up by up to a frame (its clock
+    else:                                   # in 10 ms steps, the last frame's display time): not a lost frame
+        announced_end = announced
+    grid = decoded_end if announced_end is None else max(announced_end, decoded_end)
     missing = sorted(set(range(grid)) - set(numbers))
     return VideoCheck(announced, fps, len(set(numbers)), max(numbers) + 1, missing, corrupt, messages)

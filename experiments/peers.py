@@ -1,0 +1,258 @@
+"""``python -m experiments.peers``: this tracker and MediaPipe Pose side by side.
+
+MediaPipe is what a user with their own video would otherwise pick. It is an optional extra
+(``pip install -e .[peers]``: ``mediapipe==0.10.14``, the last release whose wheel bundles
+the BlazePose models, so it runs offline); install it in a separate virtual environment so
+that the project's numpy/numba stay as they are::
+
+    python -m venv ../venv-peers && ../venv-peers/bin/pip install -e .[peers]
+    ../venv-peers/bin/python -m experiments.peers --out experiments/peers
+
+Two comparisons, on the same frames:
+
+* **synthetic** (ground truth): PA-MPJPE of shoulders, elbows and wrists (millimetres, every
+  frame aligned by the best similarity transform, so MediaPipe's hip-centred world landmarks
+  and our camera-frame joints compare) on the 160x120 benchmark clips, MediaPipe fed the
+  frames upscaled 4x (it does not find people at 160x120); our tracker with the clip's true
+  calibration and background.
+* **real** (no ground truth; MediaPipe as reference): ``python -m mocap track CLIP`` with no
+  other option on the clips of ``../shared/data/video/``, and the share of our projected
+  shoulders, elbows and wrists (``poses.csv``'s ``_u``/``_v``) within half of MediaPipe's
+  shoulder width of its 2D landmarks (:func:`mocap.metrics.pck_2d`).
+
+Speed: our ``ms_total`` per frame (image side and registration, as ``run.json``) and
+MediaPipe's ``process`` time per frame, both wall-clock on this machine as loaded.
+Writes ``results.json``, ``peers.md`` (the table) and overlay stills ``still_<clip>.png``.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from mocap.metrics import pa_mpjpe, pck_2d
+
+#: Joints compared (ours), in order.
+ARM_JOINTS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
+#: MediaPipe Pose landmark index of each of :data:`ARM_JOINTS` (its left/right are the person's).
+MEDIAPIPE_INDEX = {"r_shoulder": 12, "r_elbow": 14, "r_wrist": 16, "l_shoulder": 11, "l_elbow": 13, "l_wrist": 15}
+#: Synthetic clips compared (the issue's four) and their length.
+SYNTHETIC = ("turning", "arms-crossing", "not-facing", "gestures-2")
+SYNTHETIC_FRAMES = 60
+#: Real clips (in the shared data's video folder).
+REAL = ("intel_asl_no.mkv", "intel_asl_sister.mkv", "intel_asl_book.mkv")
+
+
+def arm_indices() -> np.ndarray:
+    """Indices of :data:`ARM_JOINTS` in :data:`mocap.body.skeleton.JOINT_NAMES`."""
+    from mocap.body.skeleton import JOINT_NAMES
+    return np.array([JOINT_NAMES.index(j) for j in ARM_JOINTS])
+
+
+def arm_pa_mpjpe(pred: np.ndarray, true: np.ndarray) -> float:
+    """PA-MPJPE (mm) over the six arm joints, frames where ``pred`` is NaN left out.
+
+    Parameters
+    ----------
+    pred, true : ndarray, shape (N, 6, 3), metres
+        Joints in :data:`ARM_JOINTS` order.
+    """
+    keep = np.isfinite(pred).all(axis=(1, 2))
+    if not keep.any():
+        return float("nan")
+    return pa_mpjpe(pred[keep], true[keep])
+
+
+def shoulder_width(uv: np.ndarray) -> np.ndarray:
+    """Per-frame distance between the two shoulders of ``uv`` (N, 6, 2) in ARM_JOINTS order."""
+    return np.linalg.norm(uv[:, 0] - uv[:, 3], axis=1)
+
+
+def run_mediapipe(frames, upscale: int = 1) -> dict:
+    """MediaPipe Pose (video mode, model complexity 1) on frames.
+
+    Returns ``uv`` (N, 6, 2) pixels of the given frames, ``world`` (N, 6, 3) metres, both
+    NaN where no person was found, and ``ms`` (N,) per frame.
+    """
+    import mediapipe as mp
+    from skimage.transform import rescale
+
+    uv, world, ms = [], [], []
+    order = [MEDIAPIPE_INDEX[j] for j in ARM_JOINTS]
+    with mp.solutions.pose.Pose(static_image_mode=False, model_complexity=1) as pose:
+        for frame in frames:
+            h, w = frame.shape[:2]
+            image = frame if upscale == 1 else \
+                (rescale(frame, upscale, order=1, channel_axis=-1) * 255).round().astype(np.uint8)
+            t0 = time.perf_counter()
+            result = pose.process(np.ascontiguousarray(image))
+            ms.append(1e3 * (time.perf_counter() - t0))
+            if result.pose_landmarks is None:
+                uv.append(np.full((6, 2), np.nan))
+                world.append(np.full((6, 3), np.nan))
+                continue
+            lm, wl = result.pose_landmarks.landmark, result.pose_world_landmarks.landmark
+            uv.append([(lm[i].x * w, lm[i].y * h) for i in order])
+            world.append([(wl[i].x, wl[i].y, wl[i].z) for i in order])
+    return {"uv": np.asarray(uv, float), "world": np.asarray(world, float), "ms": np.asarray(ms)}
+
+
+def _track(video: Path, out: Path, extra: list[str]) -> "PoseTable":  # noqa: F821
+    from mocap.cli import main
+    from mocap.io.pose_table import PoseTable
+
+    code = main(["track", str(video), "--out", str(out), "--overwrite", *extra])
+    if code != 0:
+        raise RuntimeError(f"python -m mocap track {video} failed")
+    return PoseTable.read(out / "poses.csv")
+
+
+def ours_uv(table) -> np.ndarray:
+    """Our projected arm joints (N, 6, 2) from a ``poses.csv`` table (input pixels)."""
+    return np.stack([np.stack([table.extra[f"{j}_u"], table.extra[f"{j}_v"]], axis=1) for j in ARM_JOINTS], axis=1)
+
+
+def synthetic_row(name: str, work: Path, seed: int) -> dict:
+    from mocap.io.pose_table import PoseTable
+    from mocap.io.video import iter_frames
+    from mocap.synth import generate_sequence
+
+    seq = generate_sequence(name, work / name, frames=SYNTHETIC_FRAMES, seed=seed, size=(160, 120), progress=False)
+    table = _track(seq, work / f"{name}-run", ["--no-overlay"])
+    truth = PoseTable.read(seq / "ground_truth.csv").joints[:, arm_indices()]
+    mp = run_mediapipe(list(iter_frames(seq / "frames")), upscale=4)
+    return {"clip": name, "frames": len(table),
+            "ours_pa_mpjpe_mm": arm_pa_mpjpe(table.joints[:, arm_indices()], truth),
+            "mediapipe_pa_mpjpe_mm": arm_pa_mpjpe(mp["world"], truth),
+            "mediapipe_found": float(np.isfinite(mp["world"]).all(axis=(1, 2)).mean()),
+            "ours_ms": float(np.median(table.extra["ms_total"][1:])), "mediapipe_ms": float(np.median(mp["ms"][1:]))}
+
+
+def real_row(video: Path, work: Path, out: Path) -> dict:
+    from mocap.io.video import iter_frames
+
+    table = _track(video, work / f"{video.stem}-run", [])
+    frames = list(iter_frames(video))
+    cache = work / f"{video.stem}-mediapipe.npz"       # MediaPipe's landmarks do not change between our runs
+    if cache.exists():
+        with np.load(cache) as stored:
+            mp = {k: stored[k] for k in ("uv", "world", "ms")}
+    else:
+        mp = run_mediapipe(frames)
+        np.savez(cache, **mp)
+    ours = ours_uv(table)
+    n = min(len(ours), len(mp["uv"]))
+    ours, ref = ours[:n], mp["uv"][:n]
+    width = shoulder_width(ref)
+    per_joint = {j: pck_2d(ours[:, [k]], ref[:, [k]], width) for k, j in enumerate(ARM_JOINTS)}
+    run = json.loads((work / f"{video.stem}-run" / "run.json").read_text())
+    _still(frames[n // 2], ours[n // 2], ref[n // 2], out / f"still_{video.stem}.png")
+    return {"clip": video.name, "frames": n, "pck": pck_2d(ours, ref, width), "pck_per_joint": per_joint,
+            "mediapipe_found": float(np.isfinite(ref).all(axis=(1, 2)).mean()),
+            "background": run["settings"]["own_video"]["background"]["mode"],
+            "ours_ms": float(np.median(table.extra["ms_total"][1:])), "ours_fps_run": run["fps"],
+            "mediapipe_ms": float(np.median(mp["ms"][1:]))}
+
+
+def _still(frame: np.ndarray, ours: np.ndarray, ref: np.ndarray, path: Path) -> None:
+    """Both skeletons' arms over one frame (small PNG): ours orange, MediaPipe's cyan."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(3.2, 2.4), dpi=100)
+    ax.imshow(frame)
+    for uv, colour, label in ((ref, "tab:cyan", "MediaPipe"), (ours, "tab:orange", "ours")):
+        for chain in ((0, 1, 2), (3, 4, 5), (0, 3)):
+            ax.plot(uv[list(chain), 0], uv[list(chain), 1], "-o", color=colour, lw=1.5, ms=2.5,
+                    label=label if chain == (0, 1, 2) else None)
+    ax.legend(loc="upper right", fontsize=6, framealpha=0.6)
+    ax.set_axis_off()
+    fig.subplots_adjust(0, 0, 1, 1)
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def markdown(results: dict) -> str:
+    lines = ["| synthetic clip (60 frames, 160x120) | ours PA-MPJPE arms (mm) | MediaPipe PA-MPJPE arms (mm) "
+             "| MediaPipe found | ours ms/frame | MediaPipe ms/frame |", "|---|---|---|---|---|---|"]
+    for r in results["synthetic"]:
+        lines.append(f"| {r['clip']} | {r['ours_pa_mpjpe_mm']:.0f} | {r['mediapipe_pa_mpjpe_mm']:.0f} | "
+                     f"{100 * r['mediapipe_found']:.0f} % | {r['ours_ms']:.1f} | {r['mediapipe_ms']:.1f} |")
+    lines += ["", "| real clip (640x480) | frames | background chosen | PCK@0.5 shoulder width vs MediaPipe | "
+              "per joint (r/l shoulder, elbow, wrist) | ours ms/frame | MediaPipe ms/frame |",
+              "|---|---|---|---|---|---|---|"]
+    for r in results["real"]:
+        pj = r["pck_per_joint"]
+        joints = " / ".join(f"{100 * pj[a]:.0f}-{100 * pj[b]:.0f}" for a, b in
+                            (("r_shoulder", "l_shoulder"), ("r_elbow", "l_elbow"), ("r_wrist", "l_wrist")))
+        lines.append(f"| {r['clip']} | {r['frames']} | {r['background']} | **{100 * r['pck']:.1f} %** | {joints} | "
+                     f"{r['ours_ms']:.1f} | {r['mediapipe_ms']:.1f} |")
+    return "\n".join(lines) + "\n"
+
+
+def report_section(folder: Path, rel: str = "peers") -> list[str]:
+    """The REPORT.md section from ``folder/results.json`` and its stills (links relative to
+    the report: ``rel``); empty when the comparison has not been run."""
+    stored = folder / "results.json"
+    if not stored.exists():
+        return []
+    results = json.loads(stored.read_text())
+    real = results.get("real", [])
+    L = ["## MediaPipe side by side (`python -m experiments.peers`)", "",
+         "What a user with their own video would otherwise pick: MediaPipe Pose 0.10.14 (BlazePose, model "
+         "complexity 1, video mode), on the same frames. Synthetic: PA-MPJPE of shoulders, elbows and wrists "
+         "against the ground truth, our tracker with the clip's true calibration and background, MediaPipe's "
+         "world landmarks from the frames enlarged 4x. Real: `python -m mocap track CLIP` with no other option "
+         "(no background plate, automatic calibration, working resolution chosen by the tracker); the share of "
+         "our projected shoulders, elbows and wrists (`poses.csv` `_u`/`_v`) within half of MediaPipe's "
+         "shoulder width of its 2D landmarks, MediaPipe taken as the reference. One view cannot tell size from "
+         "distance, so the 3D comparison is after Procrustes alignment. Times are wall-clock milliseconds per "
+         "frame on the development machine while other jobs shared its two cores (load average 8-10): they "
+         "compare the two tools on the same machine at the same time, not either's speed on an idle core "
+         "(`python -m mocap bench --groups video` for ours).", "",
+         markdown(results).rstrip("\n"), ""]
+    if real:
+        L.append(" ".join(f"![{r['clip']}]({rel}/still_{Path(r['clip']).stem}.png)" for r in real))
+        L += ["", "Middle frame of each clip: our arms orange, MediaPipe's cyan.", ""]
+    return L
+
+
+def main(argv: list[str] | None = None) -> int:
+    from experiments import EXPERIMENTS_DIR
+
+    p = argparse.ArgumentParser(prog="python -m experiments.peers", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--data", type=Path, default=EXPERIMENTS_DIR.parent.parent / "shared" / "data",
+                   help="the shared data folder (its video/ clips)")
+    p.add_argument("--out", type=Path, default=EXPERIMENTS_DIR / "peers", help="results folder")
+    p.add_argument("--work", type=Path, default=None, help="scratch folder for clips and runs (default OUT/work)")
+    p.add_argument("--seed", type=int, default=0, help="synthetic clips' seed")
+    p.add_argument("--only", choices=("synthetic", "real"), default=None,
+                   help="run one part; the other part's stored results in OUT are kept")
+    args = p.parse_args(argv)
+    try:
+        import mediapipe  # noqa: F401
+    except ImportError:
+        print("error: mediapipe is not installed: pip install -e .[peers] (in a separate venv)")
+        return 2
+    work = args.work or args.out / "work"
+    work.mkdir(parents=True, exist_ok=True)
+    stored = args.out / "results.json"
+    results = json.loads(stored.read_text()) if stored.exists() and args.only else {"synthetic": [], "real": []}
+    if args.only in (None, "synthetic"):
+        results["synthetic"] = [synthetic_row(name, work, args.seed) for name in SYNTHETIC]
+    if args.only in (None, "real"):
+        results["real"] = [real_row(args.data / "video" / clip, work, args.out) for clip in REAL]
+    (args.out / "results.json").write_text(json.dumps(results, indent=2))
+    table = markdown(results)
+    (args.out / "peers.md").write_text(table)
+    print(table)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

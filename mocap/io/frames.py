@@ -1,0 +1,184 @@
+"""Frame sources: where the tracker's frames come from, files and cameras alike.
+
+A frame source has an input size, a frame rate, a frame count (``None`` for a live camera)
+and :meth:`~VideoSource.frames`, an iterator of uint8 RGB frames at the input size. The
+tracking run reduces them to its working resolution itself (:mod:`mocap.imaging.resample`),
+so a camera and a file go through the same code.
+
+* :class:`VideoSource` — a video file or a folder of images (:func:`mocap.io.video.iter_frames`).
+* :class:`CameraSource` — frames streamed by ffmpeg from a capture device
+  (``/dev/video0`` through ``v4l2`` on Linux); :meth:`CameraSource.replaying` makes a fake
+  camera that streams a video file the same way (for tests and for rehearsing a live run).
+"""
+from __future__ import annotations
+
+import platform
+from collections.abc import Iterator
+from pathlib import Path
+
+import imageio_ffmpeg
+import numpy as np
+
+from mocap.io.video import count_frames, frame_rate, iter_frames
+
+__all__ = ["VideoSource", "CameraSource", "camera_device"]
+
+
+class VideoSource:
+    """Frames of a video file or image folder.
+
+    Parameters
+    ----------
+    path : str or Path
+        Video file (anything ffmpeg decodes) or folder of images.
+
+    Attributes
+    ----------
+    path : Path
+    width, height : int, pixels
+        Input frame size (of the first frame).
+    fps : float or None
+        Frame rate of a video file (None for an image folder or an unknown rate).
+    count : int
+        Number of frames.
+    live : bool
+        False: the frames can be read again (the run re-reads them for the overlay video).
+    """
+
+    live = False
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.count = count_frames(self.path)
+        if self.count == 0:
+            raise ValueError(f"{self.path} has no frames")
+        first = next(iter_frames(self.path, 0, 1), None)
+        if first is None:
+            raise ValueError(f"{self.path} has no decodable frame")
+        self.height, self.width = first.shape[:2]
+        self.fps = frame_rate(self.path)
+
+    @property
+    def name(self) -> str:
+        return str(self.path)
+
+    def frames(self, start: int = 0, stop: int | None = None) -> Iterator[np.ndarray]:
+        """Frames ``start`` to ``stop`` (exclusive), uint8 RGB, shape (height, width, 3)."""
+        return iter_frames(self.path, start, stop)
+
+
+def camera_device(index: int) -> tuple[str, list[str]]:
+    """ffmpeg input (device name, input options) of capture device ``index`` on this system."""
+    if isinstance(index, bool) or not isinstance(index, int) or index < 0:
+        raise ValueError(f"camera index must be a non-negative integer, got {index!r}")
+    system = platform.system()
+    if system == "Linux":
+        return f"/dev/video{index}", ["-f", "v4l2"]
+    if system == "Darwin":
+        return f"{index}:none", ["-f", "avfoundation", "-framerate", "30"]
+    if system == "Windows":
+        return f"video={index}", ["-f", "dshow"]
+    raise ValueError(f"no known camera input for {system}")
+
+
+class CameraSource:
+    """Frames streamed live by ffmpeg from a capture device (or a file standing in for one).
+
+    Frames are read once, as they come; there is no frame count and no going back.
+
+    Parameters
+    ----------
+    device : str
+        ffmpeg input name (``/dev/video0``, or a video file for :meth:`replaying`).
+    input_params : list of str
+        ffmpeg options placed before ``-i`` (``["-f", "v4l2"]``).
+    name : str, optional
+        What to call the source in messages and ``run.json``.
+
+    Attributes
+    ----------
+    width, height : int, pixels
+    fps : float or None
+    count : None
+    live : bool
+        True.
+
+    Raises
+    ------
+    ValueError
+        If ffmpeg cannot open the device (one line with ffmpeg's reason).
+    """
+
+    live = True
+    count = None
+
+    def __init__(self, device: str, input_params: list[str] | None = None, *, name: str | None = None) -> None:
+        self.device = device
+        self.input_params = list(input_params or [])
+        self._name = name or device
+        self._reader = imageio_ffmpeg.read_frames(device, input_params=self.input_params, pix_fmt="rgb24")
+        try:
+            meta = next(self._reader)
+        except (RuntimeError, OSError, StopIteration) as exc:
+            reason = str(exc).strip().splitlines()[-1] if str(exc).strip() else type(exc).__name__
+            raise ValueError(f"cannot open {self._name}: {reason}") from None
+        self.width, self.height = (int(v) for v in meta["size"])
+        fps = meta.get("fps")
+        self.fps = float(fps) if fps and np.isfinite(fps) and fps > 0 else None
+        self._held: list[np.ndarray] = []
+
+    def hold(self, frames: list[np.ndarray]) -> None:
+        """Frames already read (by calibration) that :meth:`frames` gives again first."""
+        self._held = list(frames)
+
+    @classmethod
+    def open(cls, index: int) -> "CameraSource":
+        """Capture device ``index`` (0 = the first webcam)."""
+        device, params = camera_device(index)
+        return cls(device, params, name=f"webcam {index} ({device})")
+
+    @classmethod
+    def from_device(cls, device: str) -> "CameraSource":
+        """A capture device by its ffmpeg name (``/dev/video2``; ``video=NAME`` on Windows), or a
+        video file streamed as a fake camera."""
+        if Path(device).is_file():
+            return cls.replaying(device)
+        system = platform.system()
+        params = {"Linux": ["-f", "v4l2"], "Darwin": ["-f", "avfoundation"], "Windows": ["-f", "dshow"]}.get(system, [])
+        return cls(device, params, name=f"camera device {device}")
+
+    @classmethod
+    def replaying(cls, path: str | Path) -> "CameraSource":
+        """A fake camera that streams the frames of a video file, as a live camera would."""
+        path = Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"no such video file: {path}")
+        return cls(str(path), [], name=f"fake camera replaying {path}")
+
+    @property
+    def name(self) -> str:
+        return self._name
+
+    def frames(self, start: int = 0, stop: int | None = None) -> Iterator[np.ndarray]:
+        """The frames as they arrive (uint8 RGB, shape (height, width, 3)), read once: the
+        first ``start`` are skipped and the stream ends after frame ``stop - 1`` or when the
+        device closes."""
+        shape = (self.height, self.width, 3)
+        index = 0
+        held, self._held = self._held, []
+        for frame in held:
+            if stop is not None and index >= stop:
+                return
+            if index >= start:
+                yield frame
+            index += 1
+        for data in self._reader:
+            if stop is not None and index >= stop:
+                break
+            if index >= start:
+                yield np.frombuffer(data, np.uint8).reshape(shape).copy()
+            index += 1
+
+    def close(self) -> None:
+        """Stop ffmpeg (safe to call twice)."""
+        self._reader.close()

@@ -1,0 +1,356 @@
+"""Your own video: no background plate, no calibration file, no known camera.
+
+:func:`setup_own_video` finds what ``python -m mocap track VIDEO`` needs before frame 0 from
+the video itself, at the tracker's working resolution (:mod:`mocap.imaging.resample`):
+
+1. **Background** — given (an image, or the median of empty frames ``A:B``), none
+   (colour-only foreground) or, by default, chosen: a background estimated from up to
+   ``sample_frames`` frames of the clip (:func:`mocap.imaging.background.estimate_background`,
+   temporal median with a motion mask) is used when the person moves enough to be seen
+   against it (:func:`mocap.imaging.background.person_against_background`: the detected face
+   at least half foreground, and someone in view in at least :data:`MIN_FRAMES_WITH_PERSON` of
+   the frames); otherwise the foreground is colour-only (the colour classes, less the scene's
+   colours: :mod:`mocap.imaging.scene`). A live camera has no clip to look at: colour-only
+   unless a background is given.
+2. **Calibration** — on the first usable frame among the first ``search_frames``: the first
+   with a face (:func:`mocap.imaging.detect_face`, at input resolution), or without a face
+   but with a background, the first with a person-sized foreground
+   (:func:`mocap.calibrate.calibrate_person`). The camera is a pinhole of horizontal field of
+   view ``hfov_deg`` (default a typical webcam's); ``height_m`` fixes the absolute scale.
+
+What was chosen and why goes into ``run.json`` (``settings.own_video``).
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from mocap.calibrate import AutoCalibrationConfig, Calibration, calibrate_person
+from mocap.imaging import Box, ColourModel, ImagingConfig, detect_face, median_background, rgb_to_hsv
+from mocap.imaging.background import PERSON_MIN_SHARE, estimate_background, person_against_background, \
+    subtract_background
+from mocap.imaging.resample import downscale, working_factor
+from mocap.render.camera import DEFAULT_HFOV_DEG, Camera
+
+__all__ = ["BACKGROUND_MODES", "OwnVideoSetup", "choose_background", "setup_own_video", "working_camera"]
+
+#: How the background is found: ``auto`` (estimate, use if the person moves enough), ``image``
+#: (a file), ``frames`` (median of frames A:B), ``none`` (colour-only foreground).
+BACKGROUND_MODES = ("auto", "image", "frames", "none")
+#: Share of the sample frames with someone in view (against the estimate) needed to use it.
+MIN_FRAMES_WITH_PERSON = 0.3
+#: Smallest part of the foreground (share of the image) kept when the background is estimated
+#: or absent: smaller specks (a misjudged background pixel, a colour patch) are not a person,
+#: and a frame with nothing larger has nobody in view.
+MIN_PERSON_FRACTION = 0.01
+#: Face width in working pixels the automatic working resolution aims at (at most): the
+#: synthetic benchmark's actors at 160x120 have faces of 12-15 pixels.
+FACE_WORKING_PX = 14
+#: Smallest face looked for, in working pixels (its skin sample must hold enough pixels).
+MIN_FACE_WORKING_PX = 9
+#: Share of skin-toned pixels a face's centre must hold to be calibrated on.
+MIN_FACE_SKIN = 0.3
+#: Share of the face box that must be foreground against the estimate to use it.
+MIN_FACE_FOREGROUND = 0.5
+
+
+def working_camera(width: int, height: int, factor: int, hfov_deg: float = DEFAULT_HFOV_DEG) -> Camera:
+    """Pinhole camera of an input ``width`` x ``height`` with field of view ``hfov_deg``, at
+    the working resolution ``(width // factor, height // factor)`` (intrinsics divided by
+    ``factor``, so that working pixel coordinates times ``factor`` are input pixels)."""
+    full = Camera.default(width, height, hfov_deg)
+    return Camera(width // factor, height // factor, full.fx / factor, full.fy / factor, full.cx / factor,
+                  full.cy / factor)
+
+
+@dataclass(frozen=True, eq=False)
+class OwnVideoSetup:
+    """What :func:`setup_own_video` found (everything at the working resolution).
+
+    Attributes
+    ----------
+    factor : int
+        Input pixels per working pixel.
+    background : ndarray of uint8, shape (h, w, 3), or None
+    calibration : Calibration
+    colour_model : ColourModel
+    scene : SceneColours or None
+    imaging : ImagingConfig
+        The image side's settings for the run: with a found (not given) background, parts
+        smaller than :data:`MIN_PERSON_FRACTION` of the image are not a person.
+    record : dict
+        JSON-ready account of the choices (background mode and evidence, calibration frame,
+        face, field of view, height).
+    """
+
+    factor: int
+    background: np.ndarray | None
+    calibration: Calibration
+    colour_model: ColourModel
+    scene: object
+    imaging: ImagingConfig
+    record: dict
+
+
+def _sample(frames, count: int, limit: int) -> list[tuple[int, np.ndarray]]:
+    """Up to ``count`` frames spread evenly over the first ``limit`` (index, frame) pairs."""
+    frames = list(frames)[:limit]
+    if len(frames) <= count:
+        return frames
+    picks = np.unique(np.linspace(0, len(frames) - 1, count).round().astype(int))
+    return [frames[i] for i in picks]
+
+
+def _scene_around_model(frame: np.ndarray, model, calibration: Calibration):
+    """Scene colours learnt outside the calibrated model's silhouette grown by a fifth of its
+    size each way, and the foreground they leave inside the silhouette."""
+    from mocap.calibrate import SCENE_RATIO
+    from mocap.imaging.scene import SceneColours
+    from mocap.render import render
+
+    silhouette = render(calibration.initial_pose, model, calibration.camera).labels > 0
+    rows, cols = np.nonzero(silhouette)
+    if rows.size == 0:
+        raise ValueError("the calibration's initial pose is outside the image")
+    h, w = silhouette.shape
+    dr, dc = (rows.max() - rows.min()) // 5 + 1, (cols.max() - cols.min()) // 5 + 1
+    top, left = max(rows.min() - dr, 0), max(cols.min() - dc, 0)
+    box = (top, left, min(rows.max() + dr, h - 1) - top + 1, min(cols.max() + dc, w - 1) - left + 1)
+    scene = SceneColours.learn(frame, box, ratio=SCENE_RATIO)
+    return scene, scene.foreground(frame) & silhouette
+
+
+def _whole_person(foreground: np.ndarray) -> bool:
+    """Someone to calibrate on without a face: a foreground covering :data:`PERSON_MIN_SHARE` of
+    the image whose largest part stays a pixel clear of the image's borders."""
+    from scipy import ndimage
+
+    if foreground.mean() < PERSON_MIN_SHARE:
+        return False
+    parts, n = ndimage.label(foreground)
+    largest = 1 + int(np.argmax(ndimage.sum(foreground, parts, range(1, n + 1))))
+    rows, cols = np.nonzero(parts == largest)
+    h, w = foreground.shape
+    return bool(rows.min() > 0 and cols.min() > 0 and rows.max() < h - 1 and cols.max() < w - 1)
+
+
+def _plausible_face(frame: np.ndarray, face: Box) -> bool:
+    """A detection to calibrate on: skin-toned (at least :data:`MIN_FACE_SKIN` of its centre
+    under the broad skin prior) and with room for the clothes box under it."""
+    from mocap.imaging.colour import _skin_prior, clothes_box_of_face, skin_box_of_face
+
+    h, w = frame.shape[:2]
+    clothes = clothes_box_of_face(face)
+    if clothes.row + clothes.height > h or clothes.col < 0 or clothes.col + clothes.width > w:
+        return False
+    centre = frame[skin_box_of_face(face).slices]
+    return float(_skin_prior(rgb_to_hsv(centre)).mean()) >= MIN_FACE_SKIN
+
+
+def choose_background(frames: list[np.ndarray], imaging: ImagingConfig | None = None, *, face: Box | None = None,
+                      face_frame: np.ndarray | None = None) -> tuple[np.ndarray | None, dict]:
+    """Estimate a background from sample frames and decide whether to use it.
+
+    Parameters
+    ----------
+    frames : list of ndarray of uint8, shape (H, W, 3)
+        Frames spread over the clip (working resolution), at least 3.
+    imaging : ImagingConfig, optional
+    face : Box, optional
+        The person's face in ``face_frame``.
+    face_frame : ndarray of uint8, shape (H, W, 3), optional
+
+    Returns
+    -------
+    background : ndarray of uint8, shape (H, W, 3), or None
+        The estimate when the person moves enough (someone in view against it in at least
+        :data:`MIN_FRAMES_WITH_PERSON` of the frames and, with a face, the face box at least
+        :data:`MIN_FACE_FOREGROUND` foreground), else None (colour-only foreground).
+    record : dict
+        ``mode`` ("estimated" or "none"), ``reason``, ``evidence``, ``sample_frames``.
+    """
+    estimate, _ = estimate_background(frames, imaging)
+    evidence = person_against_background(frames, estimate, imaging, face=face, face_frame=face_frame)
+    moves = evidence["frames_with_person"] >= MIN_FRAMES_WITH_PERSON and \
+        evidence.get("face_foreground", 1.0) >= MIN_FACE_FOREGROUND
+    record = {"mode": "estimated" if moves else "none", "sample_frames": len(frames),
+              "evidence": {k: round(v, 4) for k, v in evidence.items()},
+              "reason": ("the person moves enough: background estimated from the video (temporal median with a "
+                         "motion mask)") if moves else
+                        ("the person hardly moves: an estimated background would hold them; colour-only foreground")}
+    return (estimate if moves else None), record
+
+
+def setup_own_video(source, factor: int | None = None, *, background_mode: str = "auto", background_image=None,
+                    background_frames: tuple[int, int] | None = None, calibration: Calibration | None = None,
+                    hfov_deg: float = DEFAULT_HFOV_DEG, height_m: float | None = None,
+                    imaging: ImagingConfig | None = None, auto: AutoCalibrationConfig | None = None,
+                    sample_frames: int = 60, sample_limit: int = 1500, search_frames: int = 90,
+                    progress: bool = True) -> tuple[OwnVideoSetup, list[np.ndarray]]:
+    """Background and calibration of a video of a person, found from the video itself.
+
+    Parameters
+    ----------
+    source : VideoSource or CameraSource
+        :mod:`mocap.io.frames`.
+    factor : int, optional
+        Working-resolution factor. By default the tracker chooses: the factor that brings the
+        width nearest to 160 pixels (:func:`mocap.imaging.resample.working_factor`), or a
+        larger one when the face found is bigger than :data:`FACE_WORKING_PX` working pixels
+        (a person close to the camera fills the frame: fewer pixels describe them as well,
+        and every cost evaluation is cheaper).
+    background_mode : {"auto", "image", "frames", "none"}
+    background_image : ndarray of uint8, shape (H, W, 3), optional
+        Input-size image of the empty scene (mode ``image``).
+    background_frames : (int, int), optional
+        Frames ``A:B`` of empty scene (mode ``frames``).
+    calibration : Calibration, optional
+        A calibration to use (its camera at the working resolution); its colours are learnt
+        inside its initial pose on the first frame.
+    hfov_deg : float, degrees
+        Horizontal field of view of the camera.
+    height_m : float, optional
+        The person's stature, metres.
+    imaging : ImagingConfig, optional
+    auto : AutoCalibrationConfig, optional
+    sample_frames, sample_limit : int
+        Background estimation uses ``sample_frames`` frames spread over the first
+        ``sample_limit``.
+    search_frames : int
+        Calibration looks at most this many frames into the video for a usable frame.
+
+    Returns
+    -------
+    setup : OwnVideoSetup
+    consumed : list of ndarray
+        For a live source, the input frames read so far (the run tracks them first); empty
+        for a file.
+
+    Raises
+    ------
+    ValueError
+        An unknown mode, a background of another size, no usable frame.
+    """
+    from tqdm import tqdm
+
+    from mocap.calibrate import colour_model_from_pose
+
+    if background_mode not in BACKGROUND_MODES:
+        raise ValueError(f"background mode must be one of {BACKGROUND_MODES}, got {background_mode!r}")
+    auto_factor = factor is None
+    if auto_factor:
+        factor = working_factor(source.width, source.height)
+    imaging = ImagingConfig() if imaging is None else imaging
+    if background_mode in ("auto", "none"):
+        imaging = dataclasses.replace(imaging, min_object_fraction=max(imaging.min_object_fraction,
+                                                                       MIN_PERSON_FRACTION))
+    record: dict = {"hfov_deg": hfov_deg, "height_m": height_m}
+    consumed: list[np.ndarray] = []
+    # frames the setup may look at: a file is read again later, a camera is not
+    if source.live:
+        def early(limit):
+            while len(consumed) < limit:
+                frame = next(stream, None)
+                if frame is None:
+                    break
+                consumed.append(frame)
+            return list(enumerate(consumed[:limit]))
+        stream = iter(source.frames())
+    else:
+        def early(limit):
+            return list(enumerate(source.frames(0, limit)))
+
+    # 1. the first usable frame: a face (or, with a background, a person-sized foreground)
+    face = None
+    calib_index = None
+    candidates = early(search_frames)
+    if not candidates:
+        raise ValueError(f"{source.name} has no frames")
+    if calibration is None:
+        for index, frame in tqdm(candidates[::3], desc="looking for a face", unit="frame", disable=not progress):
+            found = detect_face(frame, min_size=max(24, MIN_FACE_WORKING_PX * factor))
+            if found is not None and _plausible_face(frame, found):
+                face_full, calib_index = found, index
+                if auto_factor:
+                    factor = max(factor, int(found.width // FACE_WORKING_PX))
+                face = Box(*(int(round(v / factor)) for v in found))
+                break
+
+    # 2. background (at the working resolution now settled)
+    camera = working_camera(source.width, source.height, factor, hfov_deg)
+    background = None
+    if background_mode == "image":
+        if background_image.shape[:2] != (source.height, source.width):
+            raise ValueError(f"background is {background_image.shape[1]}x{background_image.shape[0]}, frames are "
+                             f"{source.width}x{source.height}")
+        background = downscale(background_image, factor)
+        record["background"] = {"mode": "image", "reason": "given"}
+    elif background_mode == "frames":
+        a, b = background_frames
+        empty = [f for i, f in early(b) if i >= a]
+        if not empty:
+            raise ValueError(f"background frames {a}:{b}: the video has no such frames")
+        background = downscale(median_background(empty), factor)
+        record["background"] = {"mode": "frames", "frames": [a, b], "reason": "median of the given empty frames"}
+    elif background_mode == "none":
+        record["background"] = {"mode": "none", "reason": "asked for: colour-only foreground"}
+    elif source.live:
+        record["background"] = {"mode": "none", "reason": "live camera without --background: colour-only foreground"}
+
+    if background_mode == "auto" and not source.live:
+        sample = _sample(enumerate(source.frames(0, sample_limit)), sample_frames, sample_limit)
+        face_frame = downscale(candidates[calib_index][1], factor) if face is not None else None
+        background, record["background"] = choose_background([downscale(f, factor) for _, f in sample], imaging,
+                                                             face=face, face_frame=face_frame)
+
+    if calibration is not None:
+        first = downscale(candidates[0][1], factor)
+        if calibration.camera.shape != first.shape[:2]:
+            raise ValueError(f"the calibration's camera is {calibration.camera.width}x{calibration.camera.height}, "
+                             f"the working frames {first.shape[1]}x{first.shape[0]}")
+        from mocap.body.mesh import resolution_for_image
+        model = calibration.body_model(resolution_for_image(calibration.camera.width, calibration.camera.height))
+        scene = colour = foreground = None   # a file with a background: the run learns the colours on the
+        if background is None:               # first frame that shows the person; colour-only: the scene's
+            scene, foreground = _scene_around_model(first, model, calibration)   # colours around the model
+        if background is None or source.live:
+            colour = colour_model_from_pose(first, background, model, calibration.camera, calibration.initial_pose,
+                                            imaging, foreground=foreground)
+        record["working_factor"] = factor
+        record["calibration"] = {"from": "given"}
+        return OwnVideoSetup(factor, background, calibration, colour, scene, imaging, record), consumed
+
+    if face is not None:
+        frame = downscale(candidates[calib_index][1], factor)
+        person = calibrate_person(frame, camera, background=background, face=face, height_m=height_m,
+                                  imaging=imaging, config=auto)
+    else:
+        if background is None:
+            raise ValueError(f"no face found in the first {len(candidates)} frames and no background to find the "
+                             "person by: pass --background IMG or --background-frames A:B, or --calibration JSON")
+        person = None
+        stream = candidates if source.live else enumerate(source.frames(0, sample_limit))
+        for index, full in stream:
+            if index % 3:
+                continue
+            frame = downscale(full, factor)
+            if not _whole_person(subtract_background(frame, background, imaging)):
+                continue
+            try:
+                person = calibrate_person(frame, camera, background=background, height_m=height_m,
+                                          imaging=imaging, config=auto)
+            except ValueError:
+                continue            # a person too small or cut off for every colour class: the next frame
+            calib_index = index
+            break
+        if person is None:
+            raise ValueError("nobody wholly in view (a person covering 2 % of the image, clear of its borders) "
+                             f"in the first {sample_limit} frames: cannot calibrate")
+    record["working_factor"] = factor
+    record["calibration"] = {"from": "automatic", "frame": int(calib_index),
+                             "face_input_px": [int(v) for v in face_full] if face is not None else None,
+                             "depth_m": round(float(person.calibration.initial_pose[2]), 3)}
+    return OwnVideoSetup(factor, background, person.calibration, person.colour_model, person.scene, imaging,
+                         record), consumed
