@@ -211,9 +211,12 @@ def report_section(folder: Path, rel: str = "peers") -> list[str]:
          "our projected shoulders, elbows and wrists (`poses.csv` `_u`/`_v`) within half of MediaPipe's "
          "shoulder width of its 2D landmarks, MediaPipe taken as the reference. One view cannot tell size from "
          "distance, so the 3D comparison is after Procrustes alignment. Times are wall-clock milliseconds per "
-         "frame on the development machine while other jobs shared its two cores (load average 8-10): they "
-         "compare the two tools on the same machine at the same time, not either's speed on an idle core "
-         "(`python -m mocap bench --groups video` for ours).", "",
+         "frame on the development machine while other jobs shared its two cores (load average 4-10; "
+         "MediaPipe's landmarks and times on the real clips are cached from its first run, "
+         "`OUT/work/<clip>-mediapipe.npz`): they compare the two tools under a similar load, not either's "
+         "speed on an idle core (`python -m mocap bench --groups video` for ours); ours include hand "
+         "re-acquisition, which on these clips runs a second registration on most frames (about 1,000 cost "
+         "evaluations a frame).", "",
          markdown(results).rstrip("\n"), ""]
     if real:
         L.append(" ".join(f"![{r['clip']}]({rel}/still_{Path(r['clip']).stem}.png)" for r in real))

@@ -235,7 +235,7 @@ def video_rows(*, frames: int) -> list[BenchRow]:
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        seq = generate_sequence("gestures-1", tmp / "seq", frames=frames + 1, seed=0, progress=False)
+        seq = generate_sequence("gestures-1", tmp / "seq", frames=frames, seed=0, progress=False)
         video = tmp / "clip.mp4"
         with VideoWriter(video, 25) as writer:
             for frame in iter_frames(seq / "frames"):

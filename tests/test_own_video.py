@@ -172,3 +172,14 @@ def test_dark_and_empty_frames_are_marked_and_tracking_goes_on(sequence, tmp_pat
     assert table.extra["empty"][3] == 1
     printed = capsys.readouterr().out
     assert "1 frames with nobody in view" in printed and "1 very dark frames" in printed
+
+
+@pytest.mark.slow
+def test_bench_video_stage_runs_the_whole_path_on_a_640x480_clip():
+    from mocap.bench import video_rows
+
+    rows = video_rows(frames=3)
+    assert [r.stage for r in rows] == ["video_640x480", "video_640x480_cpu"]
+    for r in rows:
+        assert (r.width, r.height, r.runs) == (640, 480, 3)
+        assert r.median_us > 0 and r.triangles > 0
