@@ -12,7 +12,7 @@ from mocap.body.skeleton import MESH_PART_NAMES
 from mocap.calibrate import Calibration, colour_model_from_pose
 from mocap.cost import RegionCost
 from mocap.imaging import prepare_frame, rgb_to_hsv
-from mocap.labels import PAPER_CLASS_NAMES, UNKNOWN
+from mocap.labels import PAPER_CLASS_NAMES
 from mocap.render import Camera, render
 from mocap.synth.actor import Actor
 from mocap.synth.sensor import linear_to_srgb

@@ -209,3 +209,52 @@ def test_classify_rejects_bad_input():
         model.classify(np.zeros((5, 5, 3), np.uint8), np.zeros((5, 6), bool))
     with pytest.raises(ValueError, match="threshold"):
         model.classify(np.zeros((5, 5, 3), np.uint8), threshold=-1.0)
+
+
+# -- optional classes: merged when the image does not tell them apart
+
+def _pixels(rng, h_deg, s, v, n=200, spread=(3.0, 0.03, 0.03)):
+    return hsv_to_rgb_pixels(rng.normal(h_deg, spread[0], n) % 360, np.clip(rng.normal(s, spread[1], n), 0, 1),
+                             np.clip(rng.normal(v, spread[2], n), 0, 1))
+
+
+def test_optional_classes_merge_when_the_image_lacks_them():
+    from mocap.labels import CLASS_MERGES_INTO
+    rng = np.random.default_rng(3)
+    skin, clothes = _pixels(rng, 25, 0.45, 0.8), _pixels(rng, 220, 0.6, 0.5)
+    hair, trousers = _pixels(rng, 25, 0.6, 0.3), _pixels(rng, 100, 0.5, 0.3)
+    kept = ColourModel.from_samples({"skin": skin, "clothes": clothes, "hair": hair, "lower_body": trousers},
+                                    CLASS_MERGES_INTO)
+    assert kept.names == ("skin", "clothes", "hair", "lower_body")
+    assert abs(kept.means[2, 2] - 0.3) < 0.02                  # the hair's own value, not the face's
+    # a bald head (its "hair" is skin), trousers like the shirt, and a sample too small to learn
+    bald = ColourModel.from_samples({"skin": skin, "clothes": clothes, "hair": _pixels(rng, 25, 0.45, 0.8),
+                                     "lower_body": _pixels(rng, 220, 0.6, 0.5)}, CLASS_MERGES_INTO)
+    assert bald.names == ("skin", "clothes")
+    small = ColourModel.from_samples({"skin": skin, "clothes": clothes, "hair": hair[:5]}, CLASS_MERGES_INTO)
+    assert small.names == ("skin", "clothes")
+    # without merges every class is learnt, and a class that merges into nothing must be given
+    assert ColourModel.from_samples({"skin": skin, "hair": _pixels(rng, 25, 0.45, 0.8)}).names == ("skin", "hair")
+    with pytest.raises(ValueError, match="merges into no other"):
+        ColourModel.from_samples({"hair": hair}, CLASS_MERGES_INTO)
+
+
+def test_learn_colour_model_takes_hair_and_lower_body_boxes():
+    scene = synthetic_scene_with_labels(160, 120, 0)
+    frame = scene.frame.copy()
+    face = skin_box_of_face(scene.face_box)
+    hair_box = Box(max(face.row - 6, 0), face.col, 4, face.width)
+    frame[hair_box.slices] = (40, 25, 15)                     # dark-brown hair painted above the face
+    lower = Box(frame.shape[0] - 6, scene.clothes_box.col, 6, scene.clothes_box.width)
+    frame[lower.slices] = (20, 60, 30)                        # dark-green trousers at the bottom
+    model = learn_colour_model(frame, skin_box=face, clothes_box=scene.clothes_box, hair_box=hair_box,
+                               lower_body_box=lower)
+    assert model.names == ("skin", "clothes", "hair", "lower_body")
+    labels = model.classify(frame)
+    assert np.mean(labels[hair_box.slices] == 3) > 0.9 and np.mean(labels[lower.slices] == 4) > 0.9
+    # the same boxes painted in the face's and the clothes' colours merge away
+    same = scene.frame.copy()
+    same[hair_box.slices] = same[face.slices].reshape(-1, 3)[: hair_box.height * hair_box.width].reshape(
+        hair_box.height, hair_box.width, 3)
+    merged = learn_colour_model(same, skin_box=face, clothes_box=scene.clothes_box, hair_box=hair_box)
+    assert merged.names == ("skin", "clothes")
