@@ -2,13 +2,13 @@
 
     python data/make_benchmark.py [--seed S] [--size WxH] [--frames N] [--only NAME ...] [--out DIR]
 
-The same as ``python -m mocap.synth.benchmark`` with this folder's ``cache`` as default output;
+The same as ``python -m mocap.synth.datasets`` with this folder's ``cache`` as default output;
 ``--default`` rewrites the bundled ``data/default`` sequence. See ``data/README.md``.
 """
 import sys
 from pathlib import Path
 
-from mocap.synth.benchmark import main
+from mocap.synth.datasets import main
 
 if __name__ == "__main__":
     sys.exit(main(default_out=Path(__file__).resolve().parent / "cache"))

@@ -18,7 +18,7 @@ from mocap.io.overlay import draw_model
 from mocap.io.sequence import find_sequence
 from mocap.io.video import iter_frames, read_image
 from mocap.render import render
-from mocap.synth.benchmark import default_sequence
+from mocap.synth.datasets import default_sequence
 from mocap.track import Tracker, TrackerConfig, track_prepared
 
 #: Frames shown (indices into the default sequence).

@@ -57,7 +57,7 @@ def _git_commit(root: Path) -> str:
 
 def _track(seq, calibration, out: Path, evaluations: int | None, frames: int | None) -> dict:
     """Track one sequence folder; the ``run.json`` metrics (resumes a finished or partial run)."""
-    from mocap.run import track_video
+    from mocap.pipeline import track_video
     from mocap.track import TrackerConfig
 
     config = TrackerConfig() if evaluations is None else TrackerConfig(evaluations=evaluations)
@@ -93,7 +93,7 @@ def measure(work: str | Path, *, evaluations=DEFAULT_EVALUATIONS, names=None, fr
     from mocap.io.sequence import find_sequence
     from mocap.io.video import iter_frames, read_image
     from mocap.synth import SEQUENCE_NAMES
-    from mocap.synth.benchmark import default_sequence, make_benchmark
+    from mocap.synth.datasets import default_sequence, make_benchmark
 
     work = Path(work)
     names = tuple(SEQUENCE_NAMES if names is None else names)

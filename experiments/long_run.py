@@ -1,6 +1,6 @@
 """``python -m experiments.long_run``: a run's memory does not grow with its length.
 
-Tracks a long clip at 160x120 through the whole pipeline (:func:`mocap.run.track_video`:
+Tracks a long clip at 160x120 through the whole pipeline (:func:`mocap.pipeline.track_video`:
 image side, tracker, ``poses.csv`` journal and checkpoint after every frame) and samples the
 process's resident set size (Linux ``/proc/self/status``) against the number of frames written.
 The clip is a short synthetic sequence repeated (a folder of symbolic links), so a 10,000-frame
@@ -68,7 +68,7 @@ def main(argv=None) -> int:
         p.error("need 1 <= --from < --frames and --iterations >= 1")
 
     from mocap.calibrate import Calibration
-    from mocap.run import track_video
+    from mocap.pipeline import track_video
     from mocap.synth import generate_sequence
     from mocap.track import TrackerConfig
 

@@ -229,7 +229,7 @@ def video_rows(*, frames: int) -> list[BenchRow]:
     from mocap.io.pose_table import PoseTable
     from mocap.io.video import VideoWriter, iter_frames, read_image
     from mocap.own_video import setup_own_video
-    from mocap.run import track_video
+    from mocap.pipeline import track_video
     from mocap.synth import generate_sequence
     from mocap.track import TrackerConfig
 

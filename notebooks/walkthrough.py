@@ -47,7 +47,7 @@ from mocap.io.sequence import find_sequence
 from mocap.io.video import iter_frames, read_image
 from mocap.metrics import mpjpe
 from mocap.render import render
-from mocap.synth.benchmark import default_sequence
+from mocap.synth.datasets import default_sequence
 from mocap.track import Tracker, TrackerConfig, register, track_prepared
 
 root = default_sequence(frames=N_FRAMES)

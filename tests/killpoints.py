@@ -2,7 +2,7 @@
 
 Test helper for crash-exact resume and the output-folder lock. It wraps the two writes of a
 tracking run — a ``poses.csv`` row (:meth:`mocap.io.pose_table.PoseTable.append_to`) and the
-checkpoint (:func:`mocap.run.write_checkpoint`) — and at the ``N``-th one (1-based, counted in
+checkpoint (:func:`mocap.pipeline.write_checkpoint`) — and at the ``N``-th one (1-based, counted in
 this process) does what ``MODE`` says:
 
 ``after-row``    SIGKILL itself right after the row is on disk, before the checkpoint
@@ -28,7 +28,7 @@ def main(argv: list[str]) -> int:
         raise SystemExit(f"usage: MODE N -- CLI ARGS (got {argv})")
     n = int(n)
 
-    import mocap.run as run
+    import mocap.pipeline as run
     from mocap.cli import main as cli_main
     from mocap.io.pose_table import PoseTable
 

@@ -129,9 +129,8 @@ def test_relative_links_resolve():
     assert broken == []
 
 
-#: Files allowed to still name the old design file: run.py becomes pipeline.py at integration,
-#: where its docstring must point at docs/design.md (this list must not gain pipeline.py).
-_OLD_DESIGN_ALLOWED = {"mocap/run.py"}
+#: Files allowed to still name the old design file (none: the code points at docs/design.md).
+_OLD_DESIGN_ALLOWED: set[str] = set()
 
 
 def test_nothing_cites_the_old_design_file():

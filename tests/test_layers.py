@@ -44,7 +44,7 @@ def test_a_clean_tree_passes(tmp_path):
 
 @pytest.mark.parametrize("name, text, expect", [
     ("mocap/body/kinematics.py", "from mocap.render.rasterize import render\n", "(body) imports mocap.render.rasterize (render)"),
-    ("mocap/synth/benchmark.py", "def f():\n    from mocap.commands.synth import parse_size\n", "imports mocap.commands.synth (face)"),
+    ("mocap/synth/datasets.py", "def f():\n    from mocap.commands.synth import parse_size\n", "imports mocap.commands.synth (face)"),
     ("mocap/optimize.py", "import mocap.track\n", "(fit) imports mocap.track (track)"),
     ("mocap/cost.py", "from mocap.render import _raster\n", "private name of mocap.render"),
     ("mocap/track.py", "from mocap.cost import _region_cost\n", "private name of mocap.cost"),

@@ -86,7 +86,7 @@ def test_fake_camera_gives_the_same_poses_as_the_file(sequence, tmp_path):
     from mocap.io.frames import CameraSource, VideoSource
     from mocap.io.video import VideoWriter, iter_frames, read_image
     from mocap.own_video import setup_own_video
-    from mocap.run import track_video
+    from mocap.pipeline import track_video
     from mocap.track import TrackerConfig
 
     video = tmp_path / "clip.mp4"

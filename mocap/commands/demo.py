@@ -22,8 +22,8 @@ def run(args: argparse.Namespace) -> int:
     from mocap.calibrate import Calibration, auto_calibrate
     from mocap.io.sequence import find_sequence
     from mocap.io.video import iter_frames, read_image
-    from mocap.run import track_video
-    from mocap.synth.benchmark import default_sequence
+    from mocap.pipeline import track_video
+    from mocap.synth.datasets import default_sequence
 
     root = default_sequence(args.out / "sequence")
     seq = find_sequence(root)

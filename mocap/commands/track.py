@@ -75,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
     from mocap.io.sequence import find_sequence
     from mocap.io.video import read_image
     from mocap.own_video import setup_own_video
-    from mocap.run import track_video
+    from mocap.pipeline import track_video
 
     live = args.camera is not None or args.camera_device is not None
     if (args.video is None) == (not live):

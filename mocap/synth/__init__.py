@@ -8,7 +8,7 @@
   :mod:`mocap.synth.actor` — the actor's proportions, mesh and appearance;
   :mod:`mocap.synth.shading` — smooth-shaded, textured rendering; :mod:`mocap.synth.scene` —
   the background; :mod:`mocap.synth.sensor` — camera effects;
-  :mod:`mocap.synth.benchmark` — the whole benchmark set and the bundled default sequence.
+  :mod:`mocap.synth.datasets` — the whole benchmark set and the bundled default sequence.
 """
 from mocap.synth.sequence import (FPS, SEQUENCE_NAMES, SEQUENCES, SequenceSetup, SequenceSpec, generate_sequence,
                                   sequence_poses, setup_sequence)

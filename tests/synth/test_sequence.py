@@ -14,7 +14,7 @@ from mocap.render import render
 from mocap.synth import SEQUENCE_NAMES, generate_sequence, sequence_poses, setup_sequence
 from mocap.synth.actor import ACTOR_PART_NAMES
 from mocap.body.skeleton import MESH_PART_NAMES
-from mocap.synth.benchmark import DEFAULT_SEQUENCE, bundled_default_sequence, make_default_sequence
+from mocap.synth.datasets import DEFAULT_SEQUENCE, bundled_default_sequence, make_default_sequence
 from mocap.synth.shading import _surface_samples
 from tests.naive import naive_surface_samples
 
@@ -229,7 +229,7 @@ def test_bundled_default_is_small_and_up_to_date(tmp_path):
     fresh = make_default_sequence(tmp_path / "default", progress=False)
     for name in ("ground_truth.csv", "calibration.json", "meta.json"):
         assert (fresh / name).read_bytes() == (folder / name).read_bytes(), \
-            f"data/default/{name} is stale: run 'python -m mocap.synth.benchmark --default'"
+            f"data/default/{name} is stale: run 'python -m mocap.synth.datasets --default'"
     frames = sorted((folder / "frames").iterdir())
     assert len(frames) == DEFAULT_SEQUENCE["frames"]
     for path in frames[::20] + [folder / "background.png"]:

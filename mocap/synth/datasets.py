@@ -1,6 +1,6 @@
 """The benchmark set: the six named sequences, and the small default sequence bundled in ``data/``.
 
-``python -m mocap.synth.benchmark [--out DIR] [--seed S] [--size WxH] [--frames N] [--only NAME ...]``
+``python -m mocap.synth.datasets [--out DIR] [--seed S] [--size WxH] [--frames N] [--only NAME ...]``
 regenerates every named sequence into ``DIR/<name>`` (default ``data/cache``, which git
 ignores); ``--default`` rewrites the bundled default sequence instead (``data/default``, the
 settings of :data:`DEFAULT_SEQUENCE`). ``data/make_benchmark.py`` runs the former from anywhere.
@@ -41,12 +41,12 @@ def bundled_default_sequence() -> Path:
     ------
     FileNotFoundError
         If this installation has no ``data/default`` (e.g. installed from a wheel); regenerate it
-        with ``python -m mocap.synth.benchmark --default --out DIR``.
+        with ``python -m mocap.synth.datasets --default --out DIR``.
     """
     folder = data_folder() / "default"
     if not (folder / "meta.json").is_file():
         raise FileNotFoundError(f"no bundled default sequence at {folder}; write one with "
-                                "'python -m mocap.synth.benchmark --default --out DIR'")
+                                "'python -m mocap.synth.datasets --default --out DIR'")
     return folder
 
 
@@ -116,7 +116,7 @@ def make_benchmark(out: str | Path, *, seed: int = 0, size=(160, 120), frames: i
 
 def main(argv: list[str] | None = None, *, default_out: Path | None = None) -> int:
     """Command line; see the module docstring. Returns the exit status."""
-    parser = argparse.ArgumentParser(prog="python -m mocap.synth.benchmark",
+    parser = argparse.ArgumentParser(prog="python -m mocap.synth.datasets",
                                      description="Regenerate the synthetic benchmark sequences.")
     parser.add_argument("--out", metavar="DIR", default=None,
                         help="output folder (default data/cache, or data/default with --default)")

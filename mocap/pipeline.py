@@ -1,5 +1,5 @@
 """Track a whole video: frames in; ``poses.csv``, ``poses.bvh``, ``overlay.mp4``,
-``residuals.png`` and ``run.json`` out (DESIGN.md sections 3–4).
+``residuals.png`` and ``run.json`` out (docs/design.md sections 3–4).
 
 ``poses.csv`` is a journal: every finished frame is appended and flushed at once, and after
 every frame the tracker's exact state is saved with the journal length it belongs to
