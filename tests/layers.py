@@ -8,7 +8,7 @@ Layers, low to high; a module may import its own layer and below:
 3 image   ``mocap/imaging``, ``mocap/cost.py``, ``mocap/metrics.py``
 4 fit     ``mocap/optimize.py``
 5 track   ``mocap/track*``, ``mocap/calibrat*``, ``mocap/synth``, the rest of ``mocap/io``, ``mocap/pipeline.py``,
-          ``mocap/pipeline.py``, ``mocap/bench.py`` (every other module of the package)
+          ``mocap/bench.py`` (every other module of the package)
 6 face    ``mocap/commands``, ``mocap/cli.py``, ``mocap/__main__.py``, ``experiments``, ``notebooks``, ``docs``
 
 (The layers of ``../shared/tools/check_layers.py``.) A second rule: no module imports another
