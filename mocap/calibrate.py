@@ -360,7 +360,7 @@ def calibrate_person(frame: np.ndarray, camera: Camera, *, background: np.ndarra
     from scipy import ndimage
 
     from mocap.imaging import ImagingConfig, learn_colour_model, prepare_frame, subtract_background
-    from mocap.imaging._validate import check_box
+    from mocap.imaging import check_box
     from mocap.imaging.colour import clothes_box_of_face, skin_box_of_face
     from mocap.imaging.scene import SceneColours, person_box_of_face
 

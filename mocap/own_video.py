@@ -139,14 +139,14 @@ def _whole_person(foreground: np.ndarray) -> bool:
 def _plausible_face(frame: np.ndarray, face: Box) -> bool:
     """A detection to calibrate on: skin-toned (at least :data:`MIN_FACE_SKIN` of its centre
     under the broad skin prior) and with room for the clothes box under it."""
-    from mocap.imaging.colour import _skin_prior, clothes_box_of_face, skin_box_of_face
+    from mocap.imaging.colour import clothes_box_of_face, skin_box_of_face, skin_prior
 
     h, w = frame.shape[:2]
     clothes = clothes_box_of_face(face)
     if clothes.row + clothes.height > h or clothes.col < 0 or clothes.col + clothes.width > w:
         return False
     centre = frame[skin_box_of_face(face).slices]
-    return float(_skin_prior(rgb_to_hsv(centre)).mean()) >= MIN_FACE_SKIN
+    return float(skin_prior(rgb_to_hsv(centre)).mean()) >= MIN_FACE_SKIN
 
 
 def choose_background(frames: list[np.ndarray], imaging: ImagingConfig | None = None, *, face: Box | None = None,

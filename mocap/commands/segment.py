@@ -39,7 +39,7 @@ def _box(text: str) -> tuple[int, int, int, int]:
     return values  # type: ignore[return-value]
 
 
-def _range(text: str) -> tuple[int, int]:
+def frame_range(text: str) -> tuple[int, int]:
     try:
         a, b = (int(v) for v in text.split(":"))
     except ValueError:
@@ -56,7 +56,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("video", type=Path, metavar="VIDEO", help="video file or folder of images")
     bg = p.add_mutually_exclusive_group()
     bg.add_argument("--background", type=Path, metavar="IMG", help="image of the empty scene")
-    bg.add_argument("--background-frames", type=_range, metavar="A:B",
+    bg.add_argument("--background-frames", type=frame_range, metavar="A:B",
                     help="use the per-pixel median of frames A..B-1 of VIDEO (empty frames)")
     bg.add_argument("--no-background", action="store_true",
                     help="no empty view exists: the foreground is what the colour classes explain")

@@ -17,7 +17,7 @@ import argparse
 from pathlib import Path
 
 from mocap.commands._common import add_tracker_options, print_summary, tracker_config
-from mocap.commands.segment import _range
+from mocap.commands.segment import frame_range
 
 
 def add_parser(subparsers) -> None:
@@ -34,7 +34,7 @@ def add_parser(subparsers) -> None:
                           "video file streamed as a live camera (a rehearsal)")
     bg = p.add_mutually_exclusive_group()
     bg.add_argument("--background", type=Path, default=None, help="image of the empty scene")
-    bg.add_argument("--background-frames", type=_range, metavar="A:B",
+    bg.add_argument("--background-frames", type=frame_range, metavar="A:B",
                     help="use the per-pixel median of frames A..B-1 of VIDEO (empty frames)")
     bg.add_argument("--no-background", action="store_true",
                     help="no empty view: the foreground is what the colour classes explain")

@@ -11,7 +11,7 @@
 
 Label images follow :mod:`mocap.labels`. :mod:`mocap.imaging.testing` makes synthetic scenes.
 """
-from mocap.imaging._validate import Box
+from mocap.imaging._validate import Box, check_box
 from mocap.imaging.background import clean_mask, median_background, subtract_background
 from mocap.imaging.colour import ColourModel, detect_face, learn_colour_model, rgb_to_hsv
 from mocap.imaging.config import ImagingConfig
@@ -19,6 +19,7 @@ from mocap.imaging.edges import detect_edges, distance_map
 from mocap.imaging.prepare import PreparedFrame, prepare_frame
 
 __all__ = [
+    "check_box",
     "Box", "ColourModel", "ImagingConfig", "PreparedFrame", "clean_mask", "detect_edges",
     "detect_face", "distance_map", "learn_colour_model", "median_background", "prepare_frame",
     "rgb_to_hsv", "subtract_background",

@@ -437,7 +437,7 @@ class ColourModel:
 
 # --------------------------------------------------------------------------- face & learning
 
-def _skin_prior(hsv: np.ndarray) -> np.ndarray:
+def skin_prior(hsv: np.ndarray) -> np.ndarray:
     """Broad prior of skin tones (any complexion, most lighting), only to rank detections."""
     hue = hsv[..., 0]
     return (((hue <= 50.0) | (hue >= 340.0)) & (hsv[..., 1] >= 0.08) & (hsv[..., 1] <= 0.8)
@@ -509,7 +509,7 @@ def detect_face(frame: np.ndarray, *, min_size: int = 24, max_side: int = 640) -
     best, best_key = None, None
     for det in found:
         box = Box(int(det["r"]), int(det["c"]), int(det["height"]), int(det["width"]))
-        skin = _skin_prior(hsv[skin_box_of_face(box).slices]).mean()
+        skin = skin_prior(hsv[skin_box_of_face(box).slices]).mean()
         key = (round(float(skin), 1), box.height * box.width)
         if best_key is None or key > best_key:
             best, best_key = box, key
