@@ -18,8 +18,9 @@ CAMERA = Camera.default(80, 60)
 N_FRAMES, WARM_UP = 1000, 200
 #: Allowed change of traced Python memory over the last frames, bytes (the unbounded history of
 #: accepted poses grew by about 300 bytes a frame: 240 kB here; the beam tracker's window and its
-#: per-frame objects moved it by 5 kB, 6 bytes a frame, without a trend).
-FLAT_BYTES = 16_000
+#: per-frame objects moved it by 5 kB alone and 34 kB inside the whole suite, where other tests'
+#: leftover threads allocate meanwhile: tracemalloc counts every thread).
+FLAT_BYTES = 80_000
 
 
 def frames(n: int) -> list[PreparedFrame]:
