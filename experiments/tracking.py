@@ -166,7 +166,11 @@ def write_report_section(rows: dict[str, list[dict]], summaries: dict[str, dict]
         "Medians over the sequences; frames over 100 mm pooled over all frames; the beam oracle is the "
         "share of frames on which no kept hypothesis is within 100 mm (what the search leaves); the last "
         "columns are the failing frames that both costs rate no worse than the truth, and the tracking "
-        "time per frame on one core (image side included).",
+        "time per frame (image side included) as measured in the run, while other jobs shared the machine's "
+        "two cores: for speed see `python -m mocap bench` (`frame_beam`, `frame_500`). `default` is the beam "
+        "tracker (K=3, L=8, jumps, prior, four colour classes), `paper` the paper's method on its two-class "
+        "model, `single` one hypothesis with recovery and hand re-acquisition, `two-class` the default tracker "
+        "on the two-class model.",
         "",
         table(summaries),
         "",
