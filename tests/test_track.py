@@ -172,3 +172,11 @@ def test_hand_reacquisition_refinds_a_lost_arm():
         assert ("hand re-acquired" in result.recovery) == on
         np.testing.assert_array_equal(tracker.hypotheses[0], result.pose)
     assert errors[False] > 0.1 and errors[True] < SINGLE_FRAME_BOUND_M
+
+
+def test_unexplained_hands_of_a_body_reaching_behind_the_camera_is_nothing():
+    from mocap.track import unexplained_hands
+    truth, lost, frame = lost_arm_frame()
+    joints = MODEL.joint_positions(lost)
+    joints[:, 2] -= joints[:, 2].min()            # the nearest joint on the camera plane
+    assert unexplained_hands(frame.labels, joints, MODEL, CAMERA, TrackerConfig()).shape == (0, 2)

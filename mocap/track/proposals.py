@@ -56,8 +56,8 @@ def unexplained_hands(labels: np.ndarray, joints: np.ndarray, model: BodyModel, 
         whose centroid is farther than ``reacquisition_distance_px`` from both projected hand
         centres.
     """
-    if "skin" not in model.class_names:
-        return np.zeros((0, 2))
+    if "skin" not in model.class_names or np.any(joints[:, 2] <= 0.0):
+        return np.zeros((0, 2))         # (a joint at or behind the camera plane projects nowhere)
     blobs = label_blobs(labels, class_label("skin", model.class_names), min_pixels=config.reacquisition_min_pixels)
     if len(blobs) == 0:
         return np.zeros((0, 2))
