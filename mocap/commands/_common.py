@@ -71,3 +71,24 @@ def print_summary(summary) -> None:
               f"{m['root_relative_mpjpe_mm']:.1f} mm, PA-MPJPE {m['pa_mpjpe_mm']:.1f} mm, "
               f"joint angles {m['angle_error_deg']:.1f} deg, reprojection {m['reprojection_px']:.2f} px, "
               f"failure rate {100 * m['failure_rate']:.1f}% (MPJPE > 100 mm)")
+
+
+def frame_range(text: str) -> tuple[int, int]:
+    """``A:B`` on the command line: frames ``A`` to ``B - 1`` (argparse type)."""
+    try:
+        a, b = (int(v) for v in text.split(":"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected A:B frame numbers, got {text!r}")
+    if a < 0 or b <= a:
+        raise argparse.ArgumentTypeError(f"expected 0 <= A < B, got {text!r}")
+    return a, b
+
+
+def add_background_options(p: argparse.ArgumentParser) -> None:
+    """``--background IMG`` | ``--background-frames A:B`` | ``--no-background`` (one of them at most)."""
+    bg = p.add_mutually_exclusive_group()
+    bg.add_argument("--background", type=Path, default=None, metavar="IMG", help="image of the empty scene")
+    bg.add_argument("--background-frames", type=frame_range, metavar="A:B",
+                    help="use the per-pixel median of frames A..B-1 of VIDEO (empty frames)")
+    bg.add_argument("--no-background", action="store_true",
+                    help="no empty view: the foreground is what the colour classes explain")

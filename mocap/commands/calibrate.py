@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mocap.commands.segment import frame_range
+from mocap.commands._common import add_background_options
 
 
 def add_parser(subparsers) -> None:
@@ -22,12 +22,7 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser("calibrate", help="fit body dimensions and initial pose to a frame",
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("video", type=Path, help="video file, image folder or sequence folder")
-    bg = p.add_mutually_exclusive_group()
-    bg.add_argument("--background", type=Path, default=None, help="image of the empty scene")
-    bg.add_argument("--background-frames", type=frame_range, metavar="A:B",
-                    help="use the per-pixel median of frames A..B-1 of VIDEO (empty frames)")
-    bg.add_argument("--no-background", action="store_true",
-                    help="no empty view: the foreground is what the colour classes explain")
+    add_background_options(p)
     p.add_argument("--out", type=Path, default=Path("calibration.json"), help="output JSON (default ./calibration.json)")
     p.add_argument("--frame", type=int, default=None,
                    help="frame to calibrate on against --background (default 0); without a background image the "

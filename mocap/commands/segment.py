@@ -21,6 +21,7 @@ import imageio.v3 as iio
 import numpy as np
 from tqdm import tqdm
 
+from mocap.commands._common import add_background_options
 from mocap.imaging import ColourModel, ImagingConfig, learn_colour_model, median_background, \
     prepare_frame
 from mocap.imaging.visual import colour_distance, colour_labels, label_palette, overlay_edges, tile
@@ -39,27 +40,12 @@ def _box(text: str) -> tuple[int, int, int, int]:
     return values  # type: ignore[return-value]
 
 
-def frame_range(text: str) -> tuple[int, int]:
-    try:
-        a, b = (int(v) for v in text.split(":"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected A:B frame numbers, got {text!r}")
-    if a < 0 or b <= a:
-        raise argparse.ArgumentTypeError(f"expected 0 <= A < B, got {text!r}")
-    return a, b
-
-
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "segment", help="write label images, edges and distance maps of a video to inspect",
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("video", type=Path, metavar="VIDEO", help="video file or folder of images")
-    bg = p.add_mutually_exclusive_group()
-    bg.add_argument("--background", type=Path, metavar="IMG", help="image of the empty scene")
-    bg.add_argument("--background-frames", type=frame_range, metavar="A:B",
-                    help="use the per-pixel median of frames A..B-1 of VIDEO (empty frames)")
-    bg.add_argument("--no-background", action="store_true",
-                    help="no empty view exists: the foreground is what the colour classes explain")
+    add_background_options(p)
     p.add_argument("--out", type=Path, metavar="DIR",
                    help="output folder (default: <VIDEO name>_segment)")
     p.add_argument("--colour-model", type=Path, metavar="JSON",

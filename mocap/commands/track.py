@@ -17,7 +17,7 @@ import argparse
 from pathlib import Path
 
 from mocap.commands._common import add_tracker_options, print_summary, tracker_config
-from mocap.commands.segment import frame_range
+from mocap.commands._common import add_background_options
 
 
 def add_parser(subparsers) -> None:
@@ -32,12 +32,7 @@ def add_parser(subparsers) -> None:
     cam.add_argument("--camera-device", default=None, metavar="NAME",
                      help="track a capture device by its ffmpeg name (/dev/video2, video=NAME on Windows), or a "
                           "video file streamed as a live camera (a rehearsal)")
-    bg = p.add_mutually_exclusive_group()
-    bg.add_argument("--background", type=Path, default=None, help="image of the empty scene")
-    bg.add_argument("--background-frames", type=frame_range, metavar="A:B",
-                    help="use the per-pixel median of frames A..B-1 of VIDEO (empty frames)")
-    bg.add_argument("--no-background", action="store_true",
-                    help="no empty view: the foreground is what the colour classes explain")
+    add_background_options(p)
     p.add_argument("--calibration", type=Path, default=None, help="calibration.json (python -m mocap calibrate)")
     p.add_argument("--hfov", type=float, default=DEFAULT_HFOV_DEG, metavar="DEG",
                    help=f"camera horizontal field of view without a calibration (default {DEFAULT_HFOV_DEG:g}, a webcam)")
