@@ -153,18 +153,6 @@ class Tracker:
             out.append(self._decide_oldest())
         return out
 
-    def step(self, frame_index: int, prepared) -> FrameResult:
-        """Track one frame and return the best hypothesis of that frame now (no decoding lag).
-
-        For single frames and notebooks; :meth:`push` is the tracker's stream, and the two are
-        not to be mixed on one tracker.
-        """
-        frame = self._track(int(frame_index), prepared)
-        self._beam, self._cost = frame.hypotheses, frame.cost
-        if not frame.empty and not frame.hypotheses[0].failed:
-            self.last_good = frame.hypotheses[0].pose
-        return _result(frame, 0)
-
     def _decide_oldest(self) -> FrameResult:
         frames = self._window
         path = backtrack([f.back for f in list(frames)[1:]], int(np.argmin(frames[-1].cost)))
