@@ -17,6 +17,7 @@ keeps the section when it rewrites the rest).
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 from types import MappingProxyType
@@ -47,6 +48,9 @@ CONFIGS = MappingProxyType({
     "no-prior": {"prior_weight": 0.0},
     "no-jumps": {"jumps": False},
     "two-class": {},
+    "blobs": {"blob_arms": True},
+    "exemplars": {"exemplars": True},
+    "both": {"blob_arms": True, "exemplars": True},
 })
 #: Configurations tracked with the paper's two-class model (skin and clothes: no hair region, no
 #: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.
@@ -91,6 +95,9 @@ def summarise(rows: list[dict]) -> dict:
                                                          weights=[r["frames"] for r in rows])),
             "cost_equivalent_both_rate": float(np.average([r["cost_equivalent_both_rate"] for r in rows],
                                                           weights=[r["frames"] for r in rows])),
+            **{key: float(np.average([math.nan if r.get(key) is None else r[key] for r in rows],
+                                     weights=[r["frames"] for r in rows]))
+               for key in ("proposal_oracle_failure_rate", "proposal_catches_rate", "others_miss_rate")},
             "ms_per_frame": float(np.average([r["tracking_ms_per_frame"] + r["prepare_ms_per_frame"] for r in rows],
                                              weights=[r["frames"] for r in rows]))}
 
@@ -98,16 +105,22 @@ def summarise(rows: list[dict]) -> dict:
 def table(summaries: dict[str, dict]) -> str:
     """Markdown table of :func:`summarise` results by configuration name."""
     head = ("configuration", "median MPJPE mm", "median root-rel. mm", "median PA-MPJPE mm",
-            f"frames > {DEFAULT_FAILURE_MM:g} mm", "worst sequence mm", "beam oracle > 100 mm", "failing, costs <= truth's",
-            "ms / frame (fps)")
+            f"frames > {DEFAULT_FAILURE_MM:g} mm", "worst sequence mm", "beam oracle > 100 mm",
+            "proposal oracle > 100 mm", "caught by a proposal alone", "failing, costs <= truth's", "ms / frame (fps)")
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for name, s in summaries.items():
         lines.append(f"| {name} | {s['median_mpjpe_mm']:.0f} | {s['median_root_relative_mm']:.0f} | "
                      f"{s['median_pa_mpjpe_mm']:.0f} | {100 * s['failure_rate']:.1f} % | {s['worst_mpjpe_mm']:.0f} | "
-                     f"{100 * s['beam_oracle_failure_rate']:.1f} % | {100 * s['cost_equivalent_both_rate']:.1f} % | "
+                     f"{100 * s['beam_oracle_failure_rate']:.1f} % | {_percent(s['proposal_oracle_failure_rate'])} | "
+                     f"{_percent(s['proposal_catches_rate'])} | {100 * s['cost_equivalent_both_rate']:.1f} % | "
                      f"{s['ms_per_frame']:.1f} "
                      f"({1e3 / s['ms_per_frame']:.0f}) |")
     return "\n".join(lines)
+
+
+def _percent(rate: float) -> str:
+    """A rate as a percentage, or a dash where it was not measured (no proposal stage)."""
+    return "-" if not math.isfinite(rate) else f"{100 * rate:.1f} %"
 
 
 def main(argv=None) -> int:

@@ -97,6 +97,16 @@ class TrackerConfig(JsonConfig):
         re-acquired arm costs a fixed price that a clearly better fit pays.
     merge_distance_m : float, metres
         Hypotheses whose joints are on average closer than this are merged (the better kept).
+    blob_arms : bool
+        Proposal stage: both depth branches of the arm that reaches each hand blob
+        (:class:`mocap.track.proposals.BlobArmSource`).
+    exemplars : bool
+        Proposal stage: the nearest exemplars of the shipped set rendered from motion capture
+        (:mod:`mocap.track.exemplars`), and their half turns.
+    proposals_refined : int
+        Proposals of each source refined per frame: the lowest-F ones (0: the stage is off).
+    proposal_evaluations : int
+        Evaluations of each proposal's refinement.
     """
 
     evaluations: int = 500
@@ -128,20 +138,25 @@ class TrackerConfig(JsonConfig):
     motion_sigma_m: float = 0.05
     motion_cap: float = 8.0
     merge_distance_m: float = 0.02
+    blob_arms: bool = False
+    exemplars: bool = False
+    proposals_refined: int = 2
+    proposal_evaluations: int = 100
 
     def __post_init__(self) -> None:
         for name in ("beam",):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise ValueError(f"{name} must be an integer of at least 1, got {v!r}")
-        for name in ("evaluations", "hypothesis_evaluations", "jump_evaluations", "jumps_refined", "lag", "mesh_resolution"):
+        for name in ("evaluations", "hypothesis_evaluations", "jump_evaluations", "jumps_refined", "lag", "mesh_resolution",
+                     "proposals_refined", "proposal_evaluations"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                 raise ValueError(f"{name} must be a non-negative integer, got {v!r}")
         if (isinstance(self.reacquisition_min_pixels, bool) or not isinstance(self.reacquisition_min_pixels, int)
                 or self.reacquisition_min_pixels < 1):
             raise ValueError(f"reacquisition_min_pixels must be a positive integer, got {self.reacquisition_min_pixels!r}")
-        for name in ("recovery", "hand_reacquisition", "jumps", "offline"):
+        for name in ("recovery", "hand_reacquisition", "jumps", "offline", "blob_arms", "exemplars"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         split_budget(self.evaluations, self.split)          # validates the split
@@ -160,7 +175,7 @@ class TrackerConfig(JsonConfig):
 
     @classmethod
     def paper(cls, **changes) -> "TrackerConfig":
-        """The paper's method: one hypothesis, no recovery, re-acquisition, jumps or prior.
+        """The paper's method: one hypothesis, no recovery, re-acquisition, jumps, proposals or prior.
 
         Parameters
         ----------
@@ -169,7 +184,7 @@ class TrackerConfig(JsonConfig):
             unknown names raise TypeError.
         """
         return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
-                           prior_weight=0.0), **changes)
+                           prior_weight=0.0, blob_arms=False, exemplars=False), **changes)
 
     def steps(self) -> np.ndarray:
         """Initial simplex steps, shape (23,): metres for the root, radians for the angles."""

@@ -23,8 +23,17 @@ def test_summary_pools_frames_and_takes_medians_over_sequences():
     assert s["worst_mpjpe_mm"] == pytest.approx(110.0)
     assert s["ms_per_frame"] == pytest.approx(25.0)
     text = table({"default": s})
-    assert "| default | 60 | 30 | 20 | 22.2 % | 110 | 0.0 % | 0.0 % | 25.0 (40) |" in text
+    assert "| default | 60 | 30 | 20 | 22.2 % | 110 | 0.0 % | - | - | 0.0 % | 25.0 (40) |" in text
     assert all(line.count("|") == text.splitlines()[0].count("|") for line in text.splitlines())
+
+
+def test_summary_of_the_proposal_stage_weights_rates_by_frames():
+    rows = [row("a", [10, 20, 30]) | {"proposal_oracle_failure_rate": 1 / 3, "proposal_catches_rate": 0.0},
+            row("b", [200, 50, 50, 50, 50, 50]) | {"proposal_oracle_failure_rate": 0.5, "proposal_catches_rate": 0.5}]
+    s = summarise(rows)
+    assert s["proposal_oracle_failure_rate"] == pytest.approx(4 / 9)  # (1 + 3) of nine frames
+    assert s["proposal_catches_rate"] == pytest.approx(3 / 9)
+    assert "| 44.4 % | 33.3 % |" in table({"both": s})
 
 
 def test_named_configurations():
