@@ -14,7 +14,7 @@ a ragged outline, unclassified pixels, no hair class). Its descriptor
 ``--loso`` prints the leave-one-subject-out table that chose the settings: each subject is held
 out in turn, the proposer is built from the other five and queried with the held-out
 exemplars; a query counts as covered when one of its k nearest exemplars is within 100 mm
-(mean joint distance about the neck, :func:`posture_distance_mm`).
+(mean joint distance about the neck, :func:`nearest_within`).
 
 Writes ``mocap/track/exemplars.npz`` (:mod:`mocap.track.exemplars`: float16 arrays, the data's
 attribution, the checksum) and prints its checksum. Deterministic: fixed seeds, one thread.
@@ -38,6 +38,7 @@ from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX
 from mocap.body.skeleton import JOINT_NAMES
 from mocap.imaging.descriptor import DESCRIPTOR_GRID, descriptor_size, silhouette_descriptor
 from mocap.labels import DEFAULT_CLASS_NAMES, UNKNOWN
+from mocap.metrics import root_relative_mpjpe
 from mocap.render import Camera, render
 from mocap.track.exemplars import EXEMPLAR_FILE, ExemplarSource
 
@@ -111,8 +112,8 @@ def label_noise(labels: np.ndarray, class_names: tuple[str, ...], rng: np.random
     return out
 
 
-def posture_joints(poses: np.ndarray, model: BodyModel) -> np.ndarray:
-    """Joints of poses about the neck (the posture, wherever the root is).
+def joints_of(poses: np.ndarray, model: BodyModel) -> np.ndarray:
+    """Joint positions of many poses (the compiled kinematics without per-pose checks).
 
     Parameters
     ----------
@@ -122,21 +123,32 @@ def posture_joints(poses: np.ndarray, model: BodyModel) -> np.ndarray:
     Returns
     -------
     ndarray, shape (n, 10, 3), float64, metres
-        Joint positions minus the neck's.
     """
-    neck = JOINT_NAMES.index("neck")
     transforms = np.empty((8, 3, 4))
     out = np.empty((len(poses), len(JOINT_NAMES), 3))
     sk = model.skeleton
     for i, q in enumerate(np.ascontiguousarray(poses, dtype=np.float64)):
         segment_transforms_into(q, sk.offsets, transforms)
         apply_transforms_into(transforms, sk.joint_segment, sk.joint_local, out[i])
-    return out - out[:, neck:neck + 1]
+    return out
 
 
-def posture_distance_mm(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Mean joint distance (mm) between posture joints ``a`` (..., 10, 3) and ``b`` (..., 10, 3)."""
-    return 1e3 * np.linalg.norm(a - b, axis=-1).mean(axis=-1)
+def nearest_within(neighbour_joints: np.ndarray, true_joints: np.ndarray) -> np.ndarray:
+    """Root-relative MPJPE (mm, about the neck) of each of k candidates against the truth.
+
+    Parameters
+    ----------
+    neighbour_joints : ndarray, shape (n, k, 10, 3), metres
+    true_joints : ndarray, shape (n, 10, 3), metres
+
+    Returns
+    -------
+    ndarray, shape (n, k), millimetres
+    """
+    n, k = neighbour_joints.shape[:2]
+    truth = np.repeat(true_joints[:, None], k, axis=1).reshape(n * k, *true_joints.shape[1:])
+    return root_relative_mpjpe(neighbour_joints.reshape(n * k, *true_joints.shape[1:]), truth,
+                               per_frame=True).reshape(n, k)
 
 
 def random_views(poses: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -271,7 +283,7 @@ def leave_one_subject_out(poses, subjects, descriptors, queries, ks=(1, 10, 20, 
     from sklearn.neighbors import NearestNeighbors
 
     model = BodyModel.build()
-    joints = posture_joints(poses, model)
+    joints = joints_of(poses, model)
     out, pooled = {}, {k: [] for k in ks}
     for s in np.unique(subjects):
         train, held = subjects != s, subjects == s
@@ -279,7 +291,7 @@ def leave_one_subject_out(poses, subjects, descriptors, queries, ks=(1, 10, 20, 
         nn = NearestNeighbors(n_neighbors=max(ks)).fit(pca.transform(descriptors[train]))
         _, idx = nn.kneighbors(pca.transform(queries[held]))
         train_joints = joints[train]
-        dist = posture_distance_mm(train_joints[idx], joints[held][:, None])
+        dist = nearest_within(train_joints[idx], joints[held])
         out[str(s)] = {}
         for k in ks:
             covered = dist[:, :k].min(axis=1) <= COVERED_MM

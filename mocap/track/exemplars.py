@@ -6,7 +6,7 @@ a random heading, rendered as a class-label image and described by
 :func:`mocap.imaging.descriptor.silhouette_descriptor`, reduced by a PCA. A frame's label
 image is described the same way; the exemplars nearest to it (scikit-learn's
 :class:`~sklearn.neighbors.NearestNeighbors`, built at load) and each one's 180-degree turn
-(:func:`mocap.body.jumps.torso_flip`: the silhouette hardly tells front from back) are the
+(:func:`mocap.body.jumps.turned_mirror`: the silhouette hardly tells front from back) are the
 proposals, at the leading hypothesis's depth and moved sideways and up or down so that their
 silhouette sits on the frame's foreground
 (:func:`mocap.track.proposals.place_by_silhouette`).
@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap.body.jumps import torso_flip
+from mocap.body.jumps import turned_mirror
 from mocap.body.pose import JOINT_LIMITS, N_PARAMETERS, PARAMETER_INDEX
 from mocap.imaging.descriptor import DESCRIPTOR_GRID, descriptor_size, silhouette_descriptor
 from mocap.imaging.prepare import PreparedFrame
@@ -202,7 +202,7 @@ class ExemplarSource:
             pose[z] = leader[z]
             # the heading nearest the leader's (the tracker's chest yaw runs over several turns)
             pose[yaw] = leader[yaw] + (pose[yaw] - leader[yaw] + np.pi) % (2.0 * np.pi) - np.pi
-            for q in (pose, torso_flip(pose, context.model.skeleton)):
+            for q in (pose, turned_mirror(pose)):
                 q = np.clip(q, JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1])
                 out.append(Proposal(place_by_silhouette(q, prepared.foreground, context.model, context.camera),
                                     self.origin))
