@@ -170,8 +170,13 @@ class ExemplarSource:
         -------
         ndarray of int64, shape (k,)
         """
+        from threadpoolctl import threadpool_limits
+
         k = self.neighbours if k is None else int(k)
-        _, rows = self._index.kneighbors(self.describe(labels, class_names)[None], n_neighbors=k)
+        # one thread: scikit-learn's brute-force search runs on OpenMP threads, which spin-wait on a
+        # busy machine (a query took 0.4 s instead of milliseconds with the other core loaded)
+        with threadpool_limits(1, user_api="openmp"):
+            _, rows = self._index.kneighbors(self.describe(labels, class_names)[None], n_neighbors=k)
         return rows[0]
 
     def propose(self, prepared: PreparedFrame, context) -> list:
