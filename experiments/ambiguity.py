@@ -232,6 +232,7 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
             if proposal_origins else None,
             "others_miss_rate": float(np.mean(np.array(other_best) > DEFAULT_FAILURE_MM)),
             "tracking_ms_per_frame": 1e3 * seconds / len(joints),
+            "evaluations_per_frame": float(np.mean([r.evaluations for r in results])),
             "prepare_ms_per_frame": float(np.mean([r.timings_ms.get("prepare", 0.0) for r in results])),
             "reprojection_px": reprojection_error(joints, truth, camera),
             "flip_oracle_mpjpe_mm": mpjpe(oracle, truth), "flip_oracle_failure_rate": failure_rate(oracle, truth),

@@ -114,7 +114,9 @@ class ExemplarSource:
         object.__setattr__(self, "_axes", np.ascontiguousarray(arrays["components"].astype(np.float32).T))
         object.__setattr__(self, "_index", NearestNeighbors(algorithm="brute").fit(
             arrays["projected"].astype(np.float32)))
-        # one query is one small product: OpenMP threads only wait for each other (x10 on a busy machine)
+        # one thread: scikit-learn's brute-force search runs on OpenMP threads, which spin-wait on a
+        # busy machine (a query took 0.25-0.4 s instead of milliseconds with the other core loaded);
+        # the controller is made once (threadpool_limits() looks for the libraries at every call)
         object.__setattr__(self, "_threads", ThreadpoolController())
 
     @classmethod
@@ -175,7 +177,7 @@ class ExemplarSource:
         """
         k = self.neighbours if k is None else int(k)
         query = self.describe(labels, class_names)[None]
-        with self._threads.limit(limits=1, user_api="openmp"):
+        with self._threads.limit(limits=1, user_api="openmp"):     # the controller found at load
             _, rows = self._index.kneighbors(query, n_neighbors=k)
         return rows[0]
 

@@ -32,7 +32,7 @@ from mocap.imaging.blobs import label_blobs
 from mocap.labels import class_label
 from mocap.render.camera import Camera
 from mocap.render.rasterize import render_labels
-from mocap.track.config import TrackerConfig
+from mocap.track.config import MIN_SKIN_BLOB_PIXELS, TrackerConfig
 
 
 #: Hand distances from the shoulder tried when an arm is posed to reach an image point, as
@@ -194,7 +194,7 @@ class BlobArmSource:
         Regions used at most.
     """
 
-    min_pixels: int = 2
+    min_pixels: int = MIN_SKIN_BLOB_PIXELS
     max_blobs: int = 3
     origin: str = "blob"
 
@@ -228,7 +228,8 @@ def unexplained_hands(labels: np.ndarray, joints: np.ndarray, model: BodyModel, 
         Its ``skin`` colour class is the hands' (none: nothing is returned).
     camera : Camera
     config : TrackerConfig
-        ``reacquisition_min_pixels`` and ``reacquisition_distance_px``.
+        ``reacquisition_distance_px`` (skin regions of at least
+        :data:`~mocap.track.config.MIN_SKIN_BLOB_PIXELS`).
 
     Returns
     -------
@@ -237,7 +238,7 @@ def unexplained_hands(labels: np.ndarray, joints: np.ndarray, model: BodyModel, 
         whose centroid is farther than ``reacquisition_distance_px`` from both projected hand
         centres.
     """
-    blobs = skin_blobs_off_head(labels, joints, model, camera, config.reacquisition_min_pixels)
+    blobs = skin_blobs_off_head(labels, joints, model, camera, MIN_SKIN_BLOB_PIXELS)
     if len(blobs) == 0:
         return blobs
     hands = camera.project(joints)[[JOINT_INDEX["r_hand"], JOINT_INDEX["l_hand"]]]

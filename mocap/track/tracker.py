@@ -37,7 +37,8 @@ from mocap.body.pose import check_pose, clamp_to_limits
 from mocap.body.prior import PosePrior, default_prior
 from mocap.cost import EdgeCost, RegionCost
 from mocap.render.camera import Camera
-from mocap.track.config import TrackerConfig
+from mocap.track.config import (JUMPS_REFINED, MERGE_DISTANCE_M, MIN_SKIN_BLOB_PIXELS, RECOVERY_STEP_SCALE,
+                                TrackerConfig)
 from mocap.track.decode import backtrack, viterbi_step
 from mocap.track.proposals import (BlobArmSource, ProposalContext, ProposalSource, jump_proposals, reach_proposals,
                                    unexplained_hands)
@@ -183,7 +184,7 @@ class Tracker:
     def costs(self, prepared) -> tuple[RegionCost, EdgeCost]:
         """Region and edge costs of one prepared frame, for this tracker's model, camera and config."""
         return (RegionCost(prepared.labels, self.model, self.camera),
-                EdgeCost(prepared.distance, self.model, self.camera, edge_gap=self.config.edge_gap_m))
+                EdgeCost(prepared.distance, self.model, self.camera))
 
     def _track(self, index: int, prepared, keypoints=None) -> _Frame:
         cfg = self.config
@@ -214,12 +215,12 @@ class Tracker:
                 timings["edge"] = 1e3 * (t2 - t1) - timings["region"]
         leader = candidates[0][0]
         if cfg.recovery and leader.failed(cfg):
-            retry = register(region_cost, edge_cost, self.last_good, cfg, step_scale=cfg.recovery_step_scale)
+            retry = register(region_cost, edge_cost, self.last_good, cfg, step_scale=RECOVERY_STEP_SCALE)
             evaluations += retry.evaluations
             candidates.append((retry, "recovery"))
         if cfg.hand_reacquisition:
             evaluations += self._reacquire(prepared, region_cost, edge_cost, leader, candidates)
-        if cfg.jumps and cfg.jumps_refined > 0:
+        if cfg.jumps:
             evaluations += self._jump(region_cost, edge_cost, leader, candidates)
         t3 = time.perf_counter()
         if self.sources and cfg.proposals_refined > 0:
@@ -259,7 +260,7 @@ class Tracker:
         keep: list[int] = []
         for i in np.argsort(cost, kind="stable"):
             joints = hypotheses[i].joints
-            if any(np.linalg.norm(joints - hypotheses[k].joints, axis=1).mean() < self.config.merge_distance_m
+            if any(np.linalg.norm(joints - hypotheses[k].joints, axis=1).mean() < MERGE_DISTANCE_M
                    for k in keep):
                 continue
             keep.append(int(i))
@@ -287,7 +288,7 @@ class Tracker:
         jumps = jump_proposals(leader.pose, self.model)
         values = np.array([region_cost.evaluate_unchecked(q) for _, q in jumps])
         used = len(jumps)
-        for i in np.argsort(values, kind="stable")[: self.config.jumps_refined]:
+        for i in np.argsort(values, kind="stable")[:JUMPS_REFINED]:
             name, q = jumps[int(i)]
             reg = register(region_cost, edge_cost, q, self.config, evaluations=self.config.jump_evaluations)
             used += reg.evaluations
@@ -363,7 +364,7 @@ def proposal_sources(config: TrackerConfig) -> list[ProposalSource]:
     """The proposal stage's sources that ``config`` switches on (``blob_arms``, ``exemplars``)."""
     sources: list[ProposalSource] = []
     if config.blob_arms:
-        sources.append(BlobArmSource(min_pixels=config.reacquisition_min_pixels))
+        sources.append(BlobArmSource(min_pixels=MIN_SKIN_BLOB_PIXELS))
     if config.exemplars:
         from mocap.track.exemplars import ExemplarSource      # loads the shipped exemplar set
 

@@ -53,3 +53,12 @@ def test_report_sections_are_replaced_and_kept(tmp_path):
     assert text.index("## new") < text.index("## peers")
     kept = generated_sections(text)
     assert "## new" in kept and "## peers" in kept and "body" not in kept
+
+
+def test_budget_figure_draws_the_configurations_with_an_evaluation_count(tmp_path):
+    from experiments.figures import ext_proposal_budget
+    summaries = {"default": {"evaluations_per_frame": 900.0, "median_mpjpe_mm": 111.0, "failure_rate": 0.52},
+                 "both": {"evaluations_per_frame": 1400.0, "median_mpjpe_mm": 80.0, "failure_rate": 0.3},
+                 "old": {"median_mpjpe_mm": 120.0, "failure_rate": 0.6}}        # no count: left out
+    paths = ext_proposal_budget.main(summaries, tmp_path)
+    assert paths and all(p.is_file() and p.stat().st_size > 1000 for p in paths)
