@@ -474,7 +474,8 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
         seq, frames_in = None, source
     else:
         seq = find_sequence(source)
-        frames_in = VideoSource(seq.frames)
+        frames_in = VideoSource(seq.frames, fps=seq.fps() if seq.meta is not None else None)
+        frames_in.damaged_frames(options.allow_damaged)     # refused before anything is read
     seq_background = seq.background if seq is not None and not options.no_background and \
         options.background_frames is None else None
     background = options.background or seq_background

@@ -27,8 +27,7 @@ from mocap.io.frames import VideoSource
 from mocap.io.lock import one_writer
 from mocap.io.pose_table import PoseTable
 from mocap.io.run_outputs import OverlayWriter, RunSummary, finish_run, frame_row
-from mocap.io.video import count_frames, read_image
-from mocap.io.video_check import check_video
+from mocap.io.video import read_image
 from mocap.track import FrameResult, Tracker, TrackerConfig
 
 __all__ = ["RunSetup", "RunSummary", "track_video", "STATE_FILE"]
@@ -164,16 +163,14 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
     imaging, work_factor = setup.imaging, setup.factor
     if setup.colour_from not in COLOUR_SOURCES:
         raise ValueError(f"colour must be one of {COLOUR_SOURCES}, got {setup.colour_from!r}")
-    frames_in = source if hasattr(source, "frames") else VideoSource(source)
+    frames_in = source if hasattr(source, "frames") else VideoSource(source, fps=fps)
     out_dir = Path(out_dir)
     if isinstance(start_frame, bool) or not isinstance(start_frame, int) or start_frame < 0:
         raise ValueError(f"the start frame must be a non-negative integer, got {start_frame!r}")
     if frames_in.live:
         total, damaged = frames_in.count, []
     else:
-        total, damaged = _frames_to_track(frames_in.path, allow_damaged)
-        if total == 0:
-            raise ValueError(f"{frames_in.name} has no frames")
+        total, damaged = frames_in.count, frames_in.damaged_frames(allow_damaged)
         if start_frame >= total:
             raise ValueError(f"start frame {start_frame} is past the end of {frames_in.name} ({total} frames)")
     if max_frames is not None:
@@ -242,9 +239,13 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
                unit="frame", disable=not progress)
     interrupted = False
 
+    arrival: dict[int, float] = {}        # a live source's frame times: when they came
+    clock = time.perf_counter()
+
     def emit(results: list[FrameResult]) -> None:
         for result in results:
-            frame_row(result, camera, work_factor, dark.pop(result.frame, None)).append_to(journal)
+            when = arrival.pop(result.frame) if frames_in.live else frames_in.time_s(result.frame)
+            frame_row(result, camera, work_factor, dark.pop(result.frame, None), when).append_to(journal)
             results_ms.append(result.timings_ms["total"])
             frame = pending.pop(result.frame, None)
             if live is not None and frame is not None:
@@ -254,6 +255,8 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
 
     try:
         for index, frame in enumerate(frames_in.frames(start, total), start=start):
+            if frames_in.live:
+                arrival[index] = time.perf_counter() - clock
             small = downscale(frame, work_factor)
             dark[index] = bool(small.mean() < DARK_MEAN)
             if live is not None:
@@ -317,17 +320,6 @@ def _learn_colours(frames, name: str, bg_image, model, camera, pose, imaging,
     raise ValueError(f"no frame of {name} shows the person to learn the colours from "
                      f"({'a detected face' if colour == 'face' else 'a foreground the size of the model'}); "
                      f"last: {reason}")
-
-
-def _frames_to_track(source: Path, allow_damaged: bool) -> tuple[int, list[int]]:
-    """Frames a video or folder delivers, and the damaged frame numbers of a video (what
-    decodes checked against what its container announces); ValueError on damage unless allowed."""
-    if source.is_dir():
-        return count_frames(source), []
-    check = check_video(source)
-    if check.damaged and not allow_damaged:
-        raise ValueError(f"{check.describe(source)}; to track the frames that decode anyway, add --allow-damaged")
-    return check.readable, check.damaged_frames
 
 
 #: Checkpoint entry holding ``(frame, dark)`` of the frames the tracker still holds back.

@@ -78,11 +78,13 @@ def joint_pixels(joints: np.ndarray, camera, work_factor: int = 1) -> np.ndarray
     return work_factor * np.stack([u, v], axis=-1)
 
 
-def frame_row(result, camera=None, work_factor: int = 1, dark: bool | None = None) -> PoseTable:
-    """One ``poses.csv`` row of a decided frame (:class:`mocap.track.FrameResult`): pose,
-    joints, the joints' input pixels (with ``camera``), :data:`EXTRA_COLUMNS` and ``dark``."""
+def frame_row(result, camera=None, work_factor: int = 1, dark: bool | None = None,
+              time_s: float | None = None) -> PoseTable:
+    """One ``poses.csv`` row of a decided frame (:class:`mocap.track.FrameResult`): its
+    ``time_s`` (seconds from the first frame, the frame's own timestamp), pose, joints, the
+    joints' input pixels (with ``camera``), :data:`EXTRA_COLUMNS` and ``dark``."""
     t = result.timings_ms
-    extra = {}
+    extra = {} if time_s is None else {"time_s": [time_s]}
     if camera is not None:
         uv = joint_pixels(result.joints, camera, work_factor).reshape(-1)
         extra.update({name: [value] for name, value in zip(PIXEL_COLUMNS, uv)})
@@ -232,7 +234,8 @@ def finish_run(out_dir: Path, table: PoseTable, settings: dict, *, calibration, 
            "resumed_from_frame": start, "wall_seconds_this_session": wall_s,
            "fps": float(1e3 / np.mean(ms_total)), "timings_ms": timings,
            "failures": failures, "empty_frames": int(extra["empty"].sum()),
-           "units": {"positions": "metres", "angles_in_csv": "degrees", "residual_edge": "pixels"}}
+           "units": {"positions": "metres", "angles_in_csv": "degrees", "residual_edge": "pixels",
+                     "time_s": "seconds from the first frame (the frame's own timestamp)"}}
     if metrics is not None:
         run["metrics"] = metrics
     run["colour_model_frame"] = colour_frame
