@@ -147,6 +147,22 @@ END_TOLERANCE_FRAMES = 3
 _EARLY_END_WORDS = ("ended prematurely", "truncat", "partial file", "end of file")
 
 
+#: A gap between timestamps this many times the typical interval (the median) is where a frame
+#: was lost, when the demuxer or decoder reported damage (and only then: cameras leave gaps).
+LOST_FRAME_GAP = 1.5
+
+
+def _after_gaps(times: list[float]) -> list[int]:
+    """Frame numbers that follow a gap in ``times`` (seconds) longer than :data:`LOST_FRAME_GAP`
+    typical intervals."""
+    steps = [b - a for a, b in zip(times, times[1:])]
+    positive = sorted(d for d in steps if d > 0)
+    if not positive:
+        return []
+    typical = positive[len(positive) // 2]
+    return [k + 1 for k, d in enumerate(steps) if d > LOST_FRAME_GAP * typical]
+
+
 def check_video(path: str | Path) -> VideoCheck:
     """Decode a video file once: every frame's timestamp, and the damage.
 
@@ -192,7 +208,8 @@ def check_video(path: str | Path) -> VideoCheck:
                 corrupt.append(len(times) - 1)
                 pending_damage = False
         elif any(w in message.lower() for w in _DAMAGE_WORDS) and not message.startswith(_OUTPUT_SIDE):
-            messages.append(message.strip().splitlines()[0])
+            messages.append(next(line.strip() for line in message.splitlines()
+                                 if any(w in line.lower() for w in _DAMAGE_WORDS)))
             if any(w in message.lower() for w in _EARLY_END_WORDS):
                 ended_early = True
             else:
@@ -211,7 +228,12 @@ def check_video(path: str | Path) -> VideoCheck:
         end = max(times) + interval
         if seconds - end > max(END_TOLERANCE_S, END_TOLERANCE_FRAMES * interval):
             ended_early = True
-    if pending_damage:          # damage after the last frame: the end is lost
-        ended_early = True
+    if pending_damage and not ended_early:
+        corrupt.append(len(times) - 1)          # damage after the last frame put out
+    lost_before = _after_gaps(times) if (corrupt and len(times) > 2) else []
+    if lost_before:
+        # ffmpeg demuxes and decodes on threads of their own: its complaints come out of order
+        # with the frames; the frames that follow a gap in the timestamps are where data was lost
+        corrupt = lost_before
     missing = list(range(len(times), max(announced or 0, len(times) + 1))) if ended_early else []
     return VideoCheck(announced, fps, times, sorted(set(corrupt)), missing, messages)
