@@ -73,13 +73,11 @@ def working_camera(width: int, height: int, factor: int, hfov_deg: float = DEFAU
     return Camera.default(width, height, hfov_deg).working(width, height, factor)
 
 
-def _sample(frames, count: int, limit: int) -> list[tuple[int, np.ndarray]]:
-    """Up to ``count`` frames spread evenly over the first ``limit`` (index, frame) pairs."""
-    frames = list(frames)[:limit]
-    if len(frames) <= count:
-        return frames
-    picks = np.unique(np.linspace(0, len(frames) - 1, count).round().astype(int))
-    return [frames[i] for i in picks]
+def spread(start: int, stop: int, count: int) -> list[int]:
+    """Up to ``count`` frame numbers spread evenly over ``start`` to ``stop - 1`` (sorted, unique)."""
+    if stop <= start:
+        return []
+    return sorted({int(i) for i in np.linspace(start, stop - 1, min(count, stop - start)).round()})
 
 
 def _scene_around_model(frame: np.ndarray, model, calibration: Calibration):
@@ -196,7 +194,9 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
     auto : AutoCalibrationConfig, optional
     sample_frames, sample_limit : int
         Background estimation uses ``sample_frames`` frames spread over the first
-        ``sample_limit``.
+        ``sample_limit`` (chosen by number first, each reduced to the working resolution as it
+        is read: the set-up holds at most ``sample_frames`` working-size frames and one
+        input-size frame of a file); ``--background-frames A:B`` likewise.
     search_frames : int
         Calibration looks at most this many frames into the video for a usable frame.
 
@@ -231,38 +231,49 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
                                                                        MIN_PERSON_FRACTION))
     record: dict = {"hfov_deg": hfov_deg, "height_m": height_m}
     consumed: list[np.ndarray] = []
-    # frames the setup may look at: a file is read again later, a camera is not
+    # frames the setup looks at, by index: a file is read again later (only the chosen frames
+    # are converted, and only one input-size frame is held at a time); a camera is not, so
+    # what it delivered is kept to be tracked (at most ``search_frames`` frames)
     if source.live:
-        def early(limit):
-            while len(consumed) < limit:
-                frame = next(stream, None)
-                if frame is None:
-                    break
-                consumed.append(frame)
-            return list(enumerate(consumed[:limit]))
         stream = iter(source.frames())
+
+        def frames_at(indices):
+            for index in indices:
+                while len(consumed) <= index:
+                    frame = next(stream, None)
+                    if frame is None:
+                        return
+                    consumed.append(frame)
+                yield index, consumed[index]
+        count = search_frames
     else:
-        def early(limit):
-            return list(enumerate(source.frames(0, limit)))
+        def frames_at(indices):
+            indices = list(indices)
+            return zip(indices, source.frames(indices=indices))
+        count = source.count
 
     # 1. the first usable frame: a face (or, with a background, a person-sized foreground)
-    face = None
+    face = face_frame_full = None
     calib_index = None
-    candidates = early(search_frames)
-    if not candidates:
+    searched = range(0, min(search_frames, count), 3)
+    first = next(iter(frames_at([0])), (0, None))[1]
+    if first is None:
         raise ValueError(f"{source.name} has no frames")
     if calibration is None:
-        for index, frame in tqdm(candidates[::3], desc="looking for a face", unit="frame", disable=not progress):
+        for index, frame in tqdm(frames_at(searched), total=len(searched), desc="looking for a face", unit="frame",
+                                 disable=not progress):
             found = detect_face(frame, min_size=max(24, MIN_FACE_WORKING_PX * factor))
             if found is not None and _plausible_face(frame, found):
-                face_full, calib_index = found, index
+                face_full, calib_index, face_frame_full = found, index, frame
                 if auto_factor:
                     factor = max(factor, int(found.width // FACE_WORKING_PX))
                 face = Box(*(int(round(v / factor)) for v in found))
                 break
 
-    # 2. background (at the working resolution now settled)
+    # 2. background (at the working resolution now settled), from frames reduced as they are read
     camera = working_camera(source.width, source.height, factor, hfov_deg)
+    face_frame = downscale(face_frame_full, factor) if face is not None else None
+    del face_frame_full
     background = None
     if background_mode == "image":
         if background_image.shape[:2] != (source.height, source.width):
@@ -272,10 +283,10 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
         record["background"] = {"mode": "image", "reason": "given"}
     elif background_mode == "frames":
         a, b = background_frames
-        empty = [f for i, f in early(b) if i >= a]
+        empty = [downscale(f, factor) for _, f in frames_at(spread(a, min(b, count), sample_frames))]
         if not empty:
             raise ValueError(f"background frames {a}:{b}: the video has no such frames")
-        background = downscale(median_background(empty), factor)
+        background = median_background(empty)
         record["background"] = {"mode": "frames", "frames": [a, b], "reason": "median of the given empty frames"}
     elif background_mode == "none":
         record["background"] = {"mode": "none", "reason": "asked for: colour-only foreground"}
@@ -283,13 +294,12 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
         record["background"] = {"mode": "none", "reason": "live camera without --background: colour-only foreground"}
 
     if background_mode == "auto" and not source.live:
-        sample = _sample(enumerate(source.frames(0, sample_limit)), sample_frames, sample_limit)
-        face_frame = downscale(candidates[calib_index][1], factor) if face is not None else None
-        background, record["background"] = choose_background([downscale(f, factor) for _, f in sample], imaging,
-                                                             face=face, face_frame=face_frame)
+        sample = [downscale(f, factor) for _, f in frames_at(spread(0, min(sample_limit, count), sample_frames))]
+        background, record["background"] = choose_background(sample, imaging, face=face, face_frame=face_frame)
+        del sample
 
     if calibration is not None:
-        first = downscale(candidates[0][1], factor)
+        first = downscale(first, factor)
         if calibration.camera.shape != first.shape[:2]:
             raise ValueError(f"the calibration's camera is {calibration.camera.width}x{calibration.camera.height}, "
                              f"the working frames {first.shape[1]}x{first.shape[0]}")
@@ -306,18 +316,14 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
         return RunSetup(calibration, background, factor, imaging, colour, scene=scene, record=record), consumed
 
     if face is not None:
-        frame = downscale(candidates[calib_index][1], factor)
-        person = calibrate_person(frame, camera, background=background, face=face, height_m=height_m,
+        person = calibrate_person(face_frame, camera, background=background, face=face, height_m=height_m,
                                   imaging=imaging, config=auto)
     else:
         if background is None:
-            raise ValueError(f"no face found in the first {len(candidates)} frames and no background to find the "
+            raise ValueError(f"no face found in the first {searched.stop} frames and no background to find the "
                              "person by: pass --background IMG or --background-frames A:B, or --calibration JSON")
         person = None
-        stream = candidates if source.live else enumerate(source.frames(0, sample_limit))
-        for index, full in stream:
-            if index % 3:
-                continue
+        for index, full in frames_at(range(0, min(sample_limit, count), 3)):
             frame = downscale(full, factor)
             if not _whole_person(subtract_background(frame, background, imaging)):
                 continue
