@@ -72,7 +72,7 @@ TRACK_PEAK_MB = 450
 
 
 def test_track_peak_memory_does_not_grow_with_the_clip(tmp_path):
-    """``python -m mocap track`` with a calibration on a 640x480, 500-frame clip (a synthetic actor
+    """``python -m mocap track`` with a calibration on a 640x480, 520-frame clip (a synthetic actor
     enlarged 4x, looped): peak RSS measured by the OS (``getrusage`` of a wrapper's children)."""
     import subprocess
     import sys
@@ -82,7 +82,7 @@ def test_track_peak_memory_does_not_grow_with_the_clip(tmp_path):
     from mocap.synth import generate_sequence
 
     seq = generate_sequence("gestures-1", tmp_path / "seq", frames=12, seed=0, progress=False)
-    clip, frames, size = tmp_path / "clip.mp4", 500, (640, 480)
+    clip, frames, size = tmp_path / "clip.mp4", 520, (640, 480)
     subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-y", "-stream_loop", "-1", "-framerate", "25",
                     "-i", str(seq / "frames" / "%06d.png"), "-frames:v", str(frames), "-vf",
                     f"scale={size[0]}:{size[1]}:flags=neighbor", "-c:v", "libx264", "-preset", "ultrafast",
