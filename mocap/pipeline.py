@@ -2,11 +2,14 @@
 ``residuals.png`` and ``run.json`` out (docs/design.md sections 3–4): the run loop; the
 outputs are :mod:`mocap.io.run_outputs`'s.
 
-``poses.csv`` is a journal: every finished frame is appended and flushed at once, and after
-every frame the tracker's exact state is saved with the journal length it belongs to
-(:mod:`mocap.io.checkpoint`), so an interrupted run — even killed at any instant — loses
-nothing and the same command resumes bit for bit where it stopped (the settings must be the
-same; they are kept in ``run.json``). One run at a time may write to an output folder
+Frames are decoded, reduced to the working resolution and prepared on a reader thread
+(:mod:`mocap.io.prefetch`) :data:`READ_AHEAD` frames ahead of the tracker. ``poses.csv`` is a
+journal: every finished frame is appended at once, and every :data:`CHECKPOINT_EVERY` frames
+(and after the last) the tracker's exact state is saved with the journal length it belongs to,
+the journal synced to disk first (:mod:`mocap.io.checkpoint`), so an interrupted run — even
+killed at any instant — resumes with the same command from the last checkpoint (the rows after
+it are cut off and done again) and gives bit for bit the poses of an uninterrupted run (the
+settings must be the same; they are kept in ``run.json``). One run at a time may write to an output folder
 (:mod:`mocap.io.lock`). The other outputs are written atomically at the end.
 """
 from __future__ import annotations
@@ -26,6 +29,7 @@ from mocap.io.checkpoint import Checkpoint, read_checkpoint, truncate_journal, w
 from mocap.io.frames import VideoSource
 from mocap.io.lock import one_writer
 from mocap.io.pose_table import PoseTable
+from mocap.io.prefetch import prefetch
 from mocap.io.run_outputs import OverlayWriter, RunSummary, finish_run, frame_row
 from mocap.io.video import read_image
 from mocap.track import FrameResult, Tracker, TrackerConfig
@@ -239,13 +243,24 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
                unit="frame", disable=not progress)
     interrupted = False
 
-    arrival: dict[int, float] = {}        # a live source's frame times: when they came
     clock = time.perf_counter()
+    every = CHECKPOINT_EVERY
+
+    def read():
+        """Decoded, reduced and prepared frames (on the reader thread, ahead of the tracker)."""
+        for index, frame in enumerate(frames_in.frames(start, total), start=start):
+            # a live source's frame time is when it came; a file's its own timestamp
+            when = time.perf_counter() - clock if frames_in.live else frames_in.time_s(index)
+            small = downscale(frame, work_factor)
+            yield index, when, bool(small.mean() < DARK_MEAN), small, \
+                prepare_frame(small, bg_image, colour_model, imaging, scene=setup.scene)
+
+    times: dict[int, float] = {}         # a live source's frame times, until the frames are decided
 
     def emit(results: list[FrameResult]) -> None:
         for result in results:
-            when = arrival.pop(result.frame) if frames_in.live else frames_in.time_s(result.frame)
-            frame_row(result, camera, work_factor, dark.pop(result.frame, None), when).append_to(journal)
+            when = times.pop(result.frame) if frames_in.live else frames_in.time_s(result.frame)
+            frame_row(result, camera, work_factor, dark.pop(result.frame, None), when).append_to(journal, sync=False)
             results_ms.append(result.timings_ms["total"])
             frame = pending.pop(result.frame, None)
             if live is not None and frame is not None:
@@ -254,19 +269,19 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
                             D=f"{result.edge_residual:.1f}")
 
     try:
-        for index, frame in enumerate(frames_in.frames(start, total), start=start):
+        for index, when, is_dark, small, prepared in prefetch(read, READ_AHEAD, name="mocap-reader"):
+            dark[index] = is_dark
             if frames_in.live:
-                arrival[index] = time.perf_counter() - clock
-            small = downscale(frame, work_factor)
-            dark[index] = bool(small.mean() < DARK_MEAN)
+                times[index] = when
             if live is not None:
                 pending[index] = small
-            prepared = prepare_frame(small, bg_image, colour_model, imaging, scene=setup.scene)
             emit(tracker.push(index, prepared))
-            write_checkpoint(state_path, {**tracker.state(), PENDING_DARK: np.array(sorted(dark.items()), np.int64)
-                                          .reshape(-1, 2)}, index + 1, journal)
+            if (index + 1) % every == 0 or index + 1 == total:
+                write_checkpoint(state_path, {**tracker.state(), PENDING_DARK: np.array(sorted(dark.items()),
+                                                                                         np.int64).reshape(-1, 2)},
+                                 index + 1, journal)
             bar.update(1)
-        # the held-back frames: not checkpointed, a resume continues from the last push instead
+        # the held-back frames: not checkpointed, a resume continues from the last checkpoint instead
         emit(tracker.finish())
     except KeyboardInterrupt:
         if not frames_in.live:
@@ -322,6 +337,11 @@ def _learn_colours(frames, name: str, bg_image, model, camera, pose, imaging,
                      f"last: {reason}")
 
 
+#: Frames between two checkpoints (and after the last frame of a file): a resumed run redoes at
+#: most this many frames (the journal is cut back to the checkpoint), bit for bit the same.
+CHECKPOINT_EVERY = 25
+#: Frames decoded, reduced and prepared ahead of the tracker on the reader thread.
+READ_AHEAD = 4
 #: Checkpoint entry holding ``(frame, dark)`` of the frames the tracker still holds back.
 PENDING_DARK = "run_pending_dark"
 #: Checkpoint (:mod:`mocap.io.checkpoint`): the tracker's exact state after the last pushed

@@ -176,9 +176,11 @@ def iter_frames(source: str | Path, start: int = 0, stop: int | None = None, *,
         return
     output = ["-map", "0:v:0", "-fps_mode", "passthrough"]
     if wanted is not None:
-        output += ["-vf", "select='" + "+".join(f"eq(n,{i})" for i in wanted) + "'"]
+        output += ["-vf", "select='" + "+".join(f"eq(n,{i})" for i in wanted) + "'", "-frames:v", str(len(wanted))]
     elif start > 0 or stop is not None:
         output += ["-vf", f"select='between(n,{start},{(stop if stop is not None else 2 ** 62) - 1})'"]
+        if stop is not None:
+            output += ["-frames:v", str(stop - start)]      # ffmpeg stops there instead of decoding on
     numbers = iter(wanted if wanted is not None else range(start, stop if stop is not None else 2 ** 62))
     reader = None
     try:

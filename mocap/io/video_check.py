@@ -188,7 +188,7 @@ def check_video(path: str | Path) -> VideoCheck:
         raise FileNotFoundError(f"no such file: {path}")
     if path.is_file() and path.stat().st_size == 0:
         raise ValueError(ffmpeg_failure(path, ""))
-    cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-nostats", "-nostdin", "-v", "info", "-threads", "1",
+    cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-nostats", "-nostdin", "-v", "info",
            "-i", str(path), "-map", "0:v:0", "-vf", "showinfo", "-fps_mode", "passthrough", "-f", "null", "-"]
     proc = subprocess.run(cmd, capture_output=True, text=True, errors="replace")
     log = proc.stderr
