@@ -160,6 +160,67 @@ def choose_background(frames: list[np.ndarray], imaging: ImagingConfig | None = 
     return (estimate if moves else None), record
 
 
+def find_person(frame: np.ndarray, factor: int, camera: Camera, background: np.ndarray | None,
+                imaging: ImagingConfig, *, height_m: float | None = None, auto: AutoCalibrationConfig | None = None,
+                whole_person: bool = True):
+    """Calibrate the person in one input-size frame, or None when there is nobody to calibrate.
+
+    The face first (:func:`mocap.imaging.detect_face` at input resolution, :func:`_plausible_face`);
+    without one and with a background, a person-sized foreground clear of the borders.
+
+    Parameters
+    ----------
+    frame : ndarray of uint8, shape (H, W, 3)
+        Input-size frame.
+    factor : int
+        Working-resolution factor; ``camera`` is the working camera.
+    background : ndarray of uint8, shape (H // factor, W // factor, 3), or None
+    whole_person : bool
+        Also try without a face (with a background).
+
+    Returns
+    -------
+    (PersonCalibration, face box in input pixels or None) or None
+    """
+    small = downscale(frame, factor)
+    found = detect_face(frame, min_size=max(24, MIN_FACE_WORKING_PX * factor))
+    if found is not None and _plausible_face(frame, found):
+        face = Box(*(int(round(v / factor)) for v in found))
+        try:
+            return calibrate_person(small, camera, background=background, face=face, height_m=height_m,
+                                    imaging=imaging, config=auto), found
+        except ValueError:
+            pass
+    if not whole_person or background is None or not _whole_person(subtract_background(small, background, imaging)):
+        return None
+    try:
+        return calibrate_person(small, camera, background=background, height_m=height_m, imaging=imaging,
+                                config=auto), None
+    except ValueError:
+        return None             # a person too small or cut off for every colour class
+
+
+def newcomer_finder(setup: RunSetup, width: int, height: int, *, hfov_deg: float = DEFAULT_HFOV_DEG,
+                    height_m: float | None = None, auto: AutoCalibrationConfig | None = None):
+    """The run's way to calibrate a new person (:func:`mocap.pipeline.track_video` ``newcomer``):
+    a function of ``(frame index, input-size frame)`` giving the new person's
+    :class:`mocap.pipeline.RunSetup` (same working resolution and background, a fresh
+    calibration, colours and scene) or None (:func:`find_person`)."""
+    camera = Camera.default(width, height, hfov_deg).working(width, height, setup.factor)
+
+    def newcomer(index: int, frame: np.ndarray):
+        found = find_person(frame, setup.factor, camera, setup.background, setup.imaging, height_m=height_m,
+                            auto=auto)
+        if found is None:
+            return None
+        person, face = found
+        record = {"frame": int(index), "face_input_px": None if face is None else [int(v) for v in face],
+                  "depth_m": round(float(person.calibration.initial_pose[2]), 3)}
+        return dataclasses.replace(setup, calibration=person.calibration, colour_model=person.colour_model,
+                                   scene=person.scene, record=record)
+    return newcomer
+
+
 def setup_own_video(source, factor: int | None = None, *, background_mode: str = "auto", background_image=None,
                     background_frames: tuple[int, int] | None = None, calibration: Calibration | None = None,
                     hfov_deg: float = DEFAULT_HFOV_DEG, height_m: float | None = None,
@@ -511,9 +572,10 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
         on_setup(account)
     fps = (seq.fps(frames_in.fps or 25.0) if seq is not None and seq.meta is not None else frames_in.fps) or 25.0
     ground_truth = options.ground_truth or (seq.ground_truth if seq is not None else None)
+    newcomer = newcomer_finder(setup, width, height, hfov_deg=options.hfov_deg, height_m=options.height_m)
     summary = track_video(frames_in, setup, out_dir, options.tracker, ground_truth=ground_truth, fps=fps,
                           max_frames=options.max_frames, overwrite=options.overwrite, progress=progress,
                           write_overlay=options.overlay, allow_damaged=options.allow_damaged,
-                          start_frame=options.start, show=options.show)
+                          start_frame=options.start, show=options.show, newcomer=newcomer)
     summary.setup = account
     return summary

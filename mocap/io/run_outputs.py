@@ -79,10 +79,11 @@ def joint_pixels(joints: np.ndarray, camera, work_factor: int = 1) -> np.ndarray
 
 
 def frame_row(result, camera=None, work_factor: int = 1, dark: bool | None = None,
-              time_s: float | None = None) -> PoseTable:
+              time_s: float | None = None, segment: int | None = None) -> PoseTable:
     """One ``poses.csv`` row of a decided frame (:class:`mocap.track.FrameResult`): its
     ``time_s`` (seconds from the first frame, the frame's own timestamp), pose, joints, the
-    joints' input pixels (with ``camera``), :data:`EXTRA_COLUMNS` and ``dark``."""
+    joints' input pixels (with ``camera``), :data:`EXTRA_COLUMNS`, ``dark`` and ``segment``
+    (the person: ``run.json`` ``segments``)."""
     t = result.timings_ms
     extra = {} if time_s is None else {"time_s": [time_s]}
     if camera is not None:
@@ -99,6 +100,8 @@ def frame_row(result, camera=None, work_factor: int = 1, dark: bool | None = Non
               "ms_recovery": [t.get("recovery", 0.0)], "ms_total": [t.get("total", 0.0)]}
     if dark is not None:
         extra["dark"] = np.array([int(dark)])
+    if segment is not None:
+        extra["segment"] = np.array([int(segment)])
     return PoseTable([result.frame], result.pose[None], result.joints[None],
                      {k: np.asarray(v) for k, v in extra.items()})
 
@@ -171,14 +174,17 @@ class OverlayWriter:
             self.plt.close(self.figure)
 
 
-def redraw_overlay(out_dir: Path, frames, table: PoseTable, model, camera, fps: float) -> None:
+def redraw_overlay(out_dir: Path, frames, table: PoseTable, models: list, camera, fps: float) -> None:
     """``overlay.mp4`` drawn afresh from ``poses.csv``: ``frames`` are ``(index, working-size
-    frame)`` pairs from frame 0 (frames without a row are shown as they are)."""
-    poses = {int(f): p for f, p in zip(table.frames, table.poses)}
-    writer = OverlayWriter(out_dir, fps, model, camera)
+    frame)`` pairs from frame 0 (frames without a row are shown as they are); ``models`` are
+    the body models of the segments (column ``segment``, 0 without it)."""
+    segment = table.extra.get("segment", np.zeros(len(table)))
+    rows = {int(f): (p, int(s)) for f, p, s in zip(table.frames, table.poses, segment)}
+    writer = OverlayWriter(out_dir, fps, models[0], camera)
     try:
         for index, frame in frames:
-            writer.update(frame, poses.get(index))
+            pose, person = rows.get(index, (None, 0))
+            writer.update(frame, pose, models[person])
     finally:
         writer.close()
 
@@ -208,7 +214,7 @@ def residual_plot(path: Path, table: PoseTable, tracker: dict) -> None:
 
 def finish_run(out_dir: Path, table: PoseTable, settings: dict, *, calibration, camera, ground_truth: PoseTable | None,
                fps: float, start: int, wall_s: float, damaged: list[int], colour_frame: int | None,
-               overlay_frames=None, model=None, extra_run: dict | None = None) -> RunSummary:
+               overlay_frames=None, models: list | None = None, extra_run: dict | None = None) -> RunSummary:
     """Write ``poses.bvh``, ``residuals.png``, ``run.json`` (and ``overlay.mp4`` redrawn from
     ``overlay_frames`` when given, see :func:`redraw_overlay`) of a run whose journal is
     ``table``; its summary."""
@@ -246,7 +252,7 @@ def finish_run(out_dir: Path, table: PoseTable, settings: dict, *, calibration, 
     write_bvh(out_dir / "poses.bvh", table.poses, calibration.dims, fps)
     residual_plot(out_dir / "residuals.png", table, settings["tracker"])
     if overlay_frames is not None:
-        redraw_overlay(out_dir, overlay_frames, table, model, camera, fps)
+        redraw_overlay(out_dir, overlay_frames, table, models, camera, fps)
     if "dark" in extra:
         run["dark_frames"] = int(extra["dark"].sum())
     write_text_atomic(out_dir / "run.json", json.dumps(run, indent=2))
