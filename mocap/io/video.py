@@ -175,13 +175,19 @@ def iter_frames(source: str | Path, start: int = 0, stop: int | None = None, *,
             yield frame
         return
     output = ["-map", "0:v:0", "-fps_mode", "passthrough"]
+    chosen = None           # frames ffmpeg delivers (it selects them: the others are never converted)
     if wanted is not None:
-        output += ["-vf", "select='" + "+".join(f"eq(n,{i})" for i in wanted) + "'", "-frames:v", str(len(wanted))]
+        expression = _select_expression(wanted)
+        if expression is None:           # too irregular for one expression: a range, the rest skipped here
+            expression = f"between(n,{wanted[0]},{wanted[-1]})"
+            chosen = range(wanted[0], wanted[-1] + 1)
+        output += ["-vf", f"select='{expression}'", "-frames:v", str(len(chosen or wanted))]
     elif start > 0 or stop is not None:
         output += ["-vf", f"select='between(n,{start},{(stop if stop is not None else 2 ** 62) - 1})'"]
         if stop is not None:
             output += ["-frames:v", str(stop - start)]      # ffmpeg stops there instead of decoding on
-    numbers = iter(wanted if wanted is not None else range(start, stop if stop is not None else 2 ** 62))
+    numbers = iter(chosen or wanted or range(start, stop if stop is not None else 2 ** 62))
+    keep = None if chosen is None else set(wanted)
     reader = None
     try:
         reader = imageio_ffmpeg.read_frames(str(source), output_params=output)
@@ -191,7 +197,8 @@ def iter_frames(source: str | Path, start: int = 0, stop: int | None = None, *,
             frame = np.frombuffer(data, np.uint8)
             if frame.size != width * height * 3:
                 raise ValueError(f"frame {index} has {frame.size} bytes, not {width}x{height}x3")
-            yield frame.reshape(height, width, 3)
+            if keep is None or index in keep:
+                yield frame.reshape(height, width, 3)
             if stop is not None and index >= stop - 1:
                 break
     except _DECODE_ERRORS as exc:
@@ -199,6 +206,31 @@ def iter_frames(source: str | Path, start: int = 0, stop: int | None = None, *,
     finally:
         if reader is not None:
             reader.close()
+
+
+#: Most terms of an ffmpeg ``select`` expression (ffmpeg refuses expressions much longer).
+MAX_SELECT_TERMS = 100
+
+
+def _select_expression(numbers: list[int]) -> str | None:
+    """An ffmpeg ``select`` expression true for the sorted frame ``numbers`` (runs of equal steps
+    as one term each), or None when it would take more than :data:`MAX_SELECT_TERMS` terms."""
+    terms, i = [], 0
+    while i < len(numbers):
+        j = i + 1
+        if j < len(numbers):
+            step = numbers[j] - numbers[i]
+            while j + 1 < len(numbers) and numbers[j + 1] - numbers[j] == step:
+                j += 1
+            if j - i >= 2:       # three or more at one step
+                terms.append(f"between(n,{numbers[i]},{numbers[j]})*not(mod(n-{numbers[i]},{step}))")
+                i = j + 1
+                continue
+        terms.append(f"eq(n,{numbers[i]})")
+        i += 1
+        if len(terms) > MAX_SELECT_TERMS:
+            return None
+    return "+".join(terms) if len(terms) <= MAX_SELECT_TERMS else None
 
 
 def count_frames(source: str | Path) -> int:

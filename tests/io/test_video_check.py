@@ -130,3 +130,16 @@ def test_frame_lists_read_like_text():
     assert format_frames([4]) == "frame 4"
     assert format_frames([3, 7, 8, 9, 12]) == "frames 3, 7-9 and 12"
     assert format_frames(list(range(0, 40, 2)), limit=3) == "frames 0, 2, 4 and 17 more ranges"
+
+
+def test_frames_chosen_by_number_are_those_of_a_full_read(tmp_path):
+    """Regular steps (one ``select`` term), a few frames, and an irregular set too long for one
+    ffmpeg expression (read as a range, the rest skipped) all give the full read's frames."""
+    path = _clip(tmp_path, "long.mkv", frames=260)
+    every = list(iter_frames(path))
+    rng = np.random.default_rng(1)
+    for wanted in (list(range(1, 260, 3)), [5, 6, 7, 200], sorted(set(rng.integers(0, 260, 150).tolist()))):
+        got = list(iter_frames(path, indices=wanted))
+        assert len(got) == len(wanted)
+        for index, frame in zip(wanted, got):
+            np.testing.assert_array_equal(frame, every[index])
