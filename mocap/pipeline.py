@@ -146,8 +146,8 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
         Show the overlay live in a window (needs a display).
     newcomer : callable, optional
         People change: once nobody has been in view for :data:`PERSON_GONE_FRAMES` frames, it is
-        called with ``(index, input-size frame)`` of every third frame that shows someone, and
-        a set-up it returns (a new person's calibration, colours and scene:
+        called with ``(index, input-size frame)`` of every third frame that shows someone until
+        it returns a set-up: that set-up (a new person's calibration, colours and scene:
         :func:`mocap.own_video.newcomer_finder`) ends the segment and starts a new one with a
         fresh tracker. Segments go to ``run.json`` (``segments``) and the ``segment`` column
         of ``poses.csv``. It must give the same answer for the same frame (a resumed run asks
@@ -229,7 +229,7 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
 
     # people: the segments (one per person), frames in a row with nobody in view, the last with someone
     people = {"segments": [_segment_record(start_frame, calibration, colour_model, None)], "absent": 0,
-              "last_seen": start_frame - 1}
+              "last_seen": start_frame - 1, "vacant": False}
     person = (model, colour_model, setup.scene, calibration)
     state_path = out_dir / STATE_FILE
     start = start_frame
@@ -307,12 +307,11 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
                 pending[index] = small
             if segment != len(people["segments"]) - 1:           # prepared with the last person's colours
                 prepared = prepare_frame(small, bg_image, colours[0][1], imaging, scene=colours[0][2])
-            if newcomer is not None and people["absent"] >= PERSON_GONE_FRAMES and not prepared.is_empty \
-                    and index % 3 == 0:
+            if newcomer is not None and people["vacant"] and not prepared.is_empty and index % 3 == 0:
                 found = newcomer(index, frame)
                 if found is not None:                           # someone new: a segment of their own
                     emit(tracker.finish())
-                    people["segments"][-1]["last_frame"] = people["last_seen"]
+                    people["vacant"] = False
                     person = _person(found, config, resolution)
                     people["segments"].append(_segment_record(index, person[3], person[1], found.record))
                     colours[0] = (len(people["segments"]) - 1, person[1], person[2])
@@ -324,6 +323,10 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
             emit(tracker.push(index, prepared))
             if prepared.is_empty:
                 people["absent"] += 1
+                seen = people["last_seen"] >= people["segments"][-1]["first_frame"]
+                if people["absent"] == PERSON_GONE_FRAMES and seen and not people["vacant"]:   # the person left
+                    people["vacant"] = True
+                    people["segments"][-1]["last_frame"] = people["last_seen"]
             else:
                 people["absent"], people["last_seen"] = 0, index
             if (index + 1) % every == 0 or index + 1 == total:
@@ -350,7 +353,8 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
     redraw = write_overlay and not overlay_now
     overlay_frames = ((i, downscale(f, work_factor)) for i, f in
                       enumerate(frames_in.frames(0, int(table.frames.max()) + 1))) if redraw else None
-    people["segments"][-1]["last_frame"] = people["last_seen"]
+    if not people["vacant"]:
+        people["segments"][-1]["last_frame"] = people["last_seen"]
     models = [Calibration.from_dict(seg["calibration"]).body_model(resolution)
               .with_class_names(tuple(seg["colour_classes"])) for seg in people["segments"]]
     return finish_run(out_dir, table, settings, calibration=calibration, camera=camera, ground_truth=gt, fps=fps,

@@ -39,12 +39,20 @@ def two_people(tmp_path_factory):
     return folder, background
 
 
-@pytest.mark.slow
-def test_two_people_one_after_the_other_make_two_segments(two_people, tmp_path):
+ARGS = ["--iterations", "40", "--beam", "1", "--lag", "0", "--no-overlay"]
+
+
+@pytest.fixture(scope="module")
+def whole_run(two_people, tmp_path_factory):
     folder, background = two_people
-    out = tmp_path / "run"
-    assert main(["track", str(folder), "--background", str(background), "--out", str(out), "--iterations", "40",
-                 "--beam", "1", "--lag", "0", "--no-overlay"]) == 0
+    out = tmp_path_factory.mktemp("whole") / "run"
+    assert main(["track", str(folder), "--background", str(background), "--out", str(out), *ARGS]) == 0
+    return out
+
+
+@pytest.mark.slow
+def test_two_people_one_after_the_other_make_two_segments(whole_run):
+    out = whole_run
     run = json.loads((out / "run.json").read_text())
     segments = run["segments"]
     newcomer = PERSON_FRAMES + EMPTY_FRAMES
@@ -59,3 +67,19 @@ def test_two_people_one_after_the_other_make_two_segments(two_people, tmp_path):
     assert list(table.frames) == list(range(newcomer + PERSON_FRAMES))
     assert list(table.extra["segment"]) == [0] * segments[1]["first_frame"] + \
         [1] * (newcomer + PERSON_FRAMES - segments[1]["first_frame"])
+
+
+@pytest.mark.slow
+def test_a_run_stopped_in_the_second_segment_resumes_to_the_same_poses(two_people, whole_run, tmp_path):
+    folder, background = two_people
+    out = tmp_path / "run"
+    stop = PERSON_FRAMES + EMPTY_FRAMES + 4                 # inside the newcomer's segment
+    given = ["--background", str(background), "--out", str(out), *ARGS]
+    assert main(["track", str(folder), *given, "--max-frames", str(stop)]) == 0
+    assert main(["track", str(folder), *given]) == 0          # resumes: the newcomer is found again
+    run = json.loads((out / "run.json").read_text())
+    assert run["resumed_from_frame"] == stop
+    assert run["segments"] == json.loads((whole_run / "run.json").read_text())["segments"]
+    a, b = PoseTable.read(whole_run / "poses.csv"), PoseTable.read(out / "poses.csv")
+    np.testing.assert_array_equal(b.poses, a.poses)
+    np.testing.assert_array_equal(b.extra["segment"], a.extra["segment"])
