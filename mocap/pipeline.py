@@ -242,7 +242,7 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
         people = json.loads(str(state.pop(PEOPLE, np.array(json.dumps(people)))))
         if len(people["segments"]) > 1:      # the person of the last segment, found again as before
             first = people["segments"][-1]["first_frame"]
-            found = newcomer(first, next(frames_in.frames(indices=[first])))
+            found = None if newcomer is None else newcomer(first, next(frames_in.frames(indices=[first])))
             if found is None:
                 raise ValueError(f"{out_dir}: the person found on frame {first} is not found again; start afresh "
                                  "with --overwrite")
