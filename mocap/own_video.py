@@ -36,7 +36,7 @@ import numpy as np
 
 from mocap.calibrate import AutoCalibrationConfig, Calibration, calibrate_person
 from mocap.config import JsonConfig
-from mocap.imaging import Box, ColourModel, ImagingConfig, detect_face, median_background, rgb_to_hsv
+from mocap.imaging import Box, ImagingConfig, detect_face, median_background, rgb_to_hsv
 from mocap.imaging.background import PERSON_MIN_SHARE, estimate_background, person_against_background, \
     subtract_background
 from mocap.imaging.resample import downscale, working_factor
