@@ -31,8 +31,8 @@ __all__ = ["EXTRA_COLUMNS", "PIXEL_COLUMNS", "RunSummary", "OverlayWriter", "dra
 
 #: Per-frame columns of ``poses.csv`` after the pose and joint columns.
 EXTRA_COLUMNS = ("region_residual", "edge_residual", "edge_residual_after_region", "failed", "empty", "hypothesis",
-                 "score", "evaluations", "region_iterations",
-                 "edge_iterations", "ms_prepare", "ms_region", "ms_edge", "ms_recovery", "ms_total")
+                 "score", "origin", "evaluations", "region_iterations",
+                 "edge_iterations", "ms_prepare", "ms_region", "ms_edge", "ms_beam", "ms_proposals", "ms_total")
 #: Names of the 2D keypoint columns of ``poses.csv`` (input-video pixels).
 PIXEL_COLUMNS = tuple(f"{j}_{a}" for j in JOINT_NAMES for a in "uv")
 
@@ -93,11 +93,13 @@ def frame_row(result, camera=None, work_factor: int = 1, dark: bool | None = Non
               "edge_residual_after_region": [result.edge_residual_after_region],
               "failed": np.array([int(result.failed)]), "empty": np.array([int(result.empty)]),
               "hypothesis": np.array([result.hypothesis]), "score": [result.score],
+              "origin": np.array([result.origin]),
               "evaluations": np.array([result.evaluations]),
               "region_iterations": np.array([result.region_iterations]),
               "edge_iterations": np.array([result.edge_iterations]), "ms_prepare": [t.get("prepare", 0.0)],
               "ms_region": [t.get("region", 0.0)], "ms_edge": [t.get("edge", 0.0)],
-              "ms_recovery": [t.get("recovery", 0.0)], "ms_total": [t.get("total", 0.0)]}
+              "ms_beam": [t.get("beam", 0.0)], "ms_proposals": [t.get("proposals", 0.0)],
+              "ms_total": [t.get("total", 0.0)]}
     if dark is not None:
         extra["dark"] = np.array([int(dark)])
     if segment is not None:
