@@ -11,7 +11,8 @@ this process) does what ``MODE`` says:
 ``pause``        after the checkpoint, create the file ``$KILLPOINTS_PAUSED`` and wait until
                  it has been removed (another run can then meet the held lock)
 
-SIGKILL cannot be caught: nothing of the run's own clean-up happens, as with ``kill -9``.
+:func:`install` does the same inside any process (the cluster test starts a Dask worker with
+it). SIGKILL cannot be caught: nothing of the run's own clean-up happens, as with ``kill -9``.
 """
 from __future__ import annotations
 
@@ -22,14 +23,12 @@ import time
 from pathlib import Path
 
 
-def main(argv: list[str]) -> int:
-    mode, n, sep, *cli_args = argv
-    if mode not in ("after-row", "mid-row", "after-state", "pause") or sep != "--":
-        raise SystemExit(f"usage: MODE N -- CLI ARGS (got {argv})")
-    n = int(n)
-
+def install(mode: str, n: int) -> None:
+    """Wrap the run's two writes in this process so that the ``n``-th one does what ``mode`` says
+    (also usable before starting something else than the CLI, e.g. a Dask worker)."""
+    if mode not in ("after-row", "mid-row", "after-state", "pause"):
+        raise SystemExit(f"unknown mode {mode!r}")
     import mocap.pipeline as run
-    from mocap.cli import main as cli_main
     from mocap.io.pose_table import PoseTable
 
     counts = {"row": 0, "state": 0}
@@ -64,6 +63,14 @@ def main(argv: list[str]) -> int:
 
     PoseTable.append_to = append_and_maybe_die
     run.write_checkpoint = checkpoint_and_maybe_die
+
+
+def main(argv: list[str]) -> int:
+    mode, n, sep, *cli_args = argv
+    if sep != "--":
+        raise SystemExit(f"usage: MODE N -- CLI ARGS (got {argv})")
+    install(mode, int(n))
+    from mocap.cli import main as cli_main
     return cli_main(cli_args)
 
 
