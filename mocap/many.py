@@ -28,6 +28,7 @@ import csv
 import glob
 import io
 import json
+import logging
 import os
 import time
 import uuid
@@ -346,7 +347,7 @@ def _dask_client(workers: int, scheduler: str | None):
     if scheduler is not None:
         return Client(scheduler), f"dask {scheduler}"
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, memory_limit=0,
-                           dashboard_address=None)
+                           dashboard_address=None, silence_logs=logging.ERROR)
     return Client(cluster), f"{workers} local worker processes"
 
 
@@ -441,8 +442,10 @@ def _run_on_dask(client, todo, out: Path, tracker, options, rows: dict, bar: "_M
     """Submit one task per video and collect the rows as they finish (a task whose workers
     kept dying, or that raised, becomes a failed row with the reason)."""
     token = uuid.uuid4().hex[:8]
+    # the longest videos first: the last to finish is then a short one (less time with idle workers)
     futures = {client.submit(track_input, str(path), str(out / name), tracker, options, pure=False,
-                             key=f"track-many-{name}-{token}"): (path, name) for path, name in todo}
+                             key=f"track-many-{name}-{token}", priority=bar.expected[name]): (path, name)
+               for path, name in todo}
     keys = {f.key for f in futures}
     pending = dict(futures)
     try:
@@ -466,13 +469,14 @@ def _run_on_dask(client, todo, out: Path, tracker, options, rows: dict, bar: "_M
 
 class _ManyBar:
     """One tqdm bar over all frames of all videos: finished videos count their tracked frames,
-    running ones the rows of their journal; the total is each video's expected frames."""
+    running ones the rows of their journal; the total is each video's expected frames
+    (``expected``: name -> frames, estimated until the video has finished)."""
 
     def __init__(self, out: Path, items, rows: dict, max_frames: int | None, progress: bool) -> None:
         from tqdm import tqdm
 
         self.out, self.items, self.count = out, items, _JournalRows()
-        self.expected = {name: _estimated_frames(path, max_frames) for path, name in items} if progress else {}
+        self.expected = {name: _estimated_frames(path, max_frames) for path, name in items}
         self.bar = tqdm(total=sum(self.expected.values()), desc="tracking", unit="frame", disable=not progress)
         self.update(rows, running=0)
 

@@ -1,13 +1,14 @@
 """``python -m mocap track-many``: every input as its own ``track`` run, failures kept apart, reruns resume.
 
 Each tracked video is compared with its own single ``python -m mocap track`` run (timing columns
-aside); every summary row with the video's ``run.json`` and ``poses.csv``. The killed-worker case on
-a real Dask cluster is in tests/test_track_many_cluster.py.
+aside); every summary row with the video's ``run.json`` and ``poses.csv``.
 """
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import signal
 import subprocess
 import sys
 
@@ -19,6 +20,7 @@ from mocap.io.pose_table import PoseTable
 from mocap.many import SUMMARY_COLUMNS, read_summary
 
 from tests.conftest import REPO_ROOT
+from tests.dask_cluster import cluster_env, local_cluster, wait_for
 
 N_FRAMES = 6
 #: Few evaluations, no decoding lag (a row per frame: the kill points fall between known rows).
@@ -154,3 +156,31 @@ def test_a_damaged_input_fails_alone_with_its_reason(clips, single_runs, tmp_pat
     assert rows[1]["reason"] == reason and rows[1]["frames"] == ""
     for clip in good:
         assert_same_track(out / clip.name, single_runs[clip.name])
+
+
+@pytest.mark.slow
+def test_a_killed_worker_s_video_resumes_elsewhere_and_every_video_is_its_single_run(clips, single_runs, tmp_path):
+    """A scheduler and two workers on 127.0.0.1; worker b, after its second frame's checkpoint,
+    announces itself and waits (:func:`tests.killpoints.install`), and is killed there by SIGKILL."""
+    pytest.importorskip("distributed")
+    out, paused, pause_at = tmp_path / "out", tmp_path / "paused", 2
+    workers = {"worker-a": {}, "worker-b": {"prelude": f"from tests.killpoints import install; install('pause', "
+                                                       f"{pause_at}); ", "env": {"KILLPOINTS_PAUSED": str(paused)}}}
+    with local_cluster(tmp_path, workers) as (address, processes):
+        many = subprocess.Popen([sys.executable, "-m", "mocap", "track-many", *map(str, clips), "--out", str(out),
+                                 "--scheduler", address, "--no-progress", *TRACK_ARGS],
+                                cwd=REPO_ROOT, env=cluster_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True)
+        processes["track-many"] = many
+        wait_for(paused.exists, 300, "worker-b in the middle of a video", processes.values())
+        os.kill(processes["worker-b"].pid, signal.SIGKILL)
+        processes["worker-b"].wait(timeout=30)
+        stdout, stderr = many.communicate(timeout=300)
+        assert many.returncode == 0, stderr
+    assert processes["worker-b"].returncode == -signal.SIGKILL
+    assert "3 of 3 inputs finished (0 already were), 0 failed, " in stdout and f"on dask {address}" in stdout
+    resumed = [json.loads((out / clip.name / "run.json").read_text())["resumed_from_frame"] for clip in clips]
+    assert sorted(resumed) == [0, 0, pause_at]          # the killed worker's video went on from its checkpoint
+    for clip in clips:
+        assert_same_track(out / clip.name, single_runs[clip.name])
+    assert [r["status"] for r in assert_summary_matches_runs(out, clips)] == ["finished"] * 3

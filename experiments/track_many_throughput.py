@@ -1,0 +1,69 @@
+"""``python -m experiments.track_many_throughput``: ``track-many --workers 2`` against ``--workers 1``.
+
+Writes ``--clips`` short synthetic sequence folders (the six sequences in turn, seeds 0, 1, ...;
+160x120, ``--frames`` frames), tracks one of them once to fill the compiled-kernel cache, then
+times the whole :func:`mocap.many.track_many` call (local cluster started and stopped included,
+as a user's command) over all clips with 1 worker process and with 2, into fresh folders, and
+prints both times, the ratio and the machine's load average (1 minute) before and after. The
+machine may be shared: the ratio of one run is the measurement, not either time alone.
+
+Issue 25's target: a ratio of at least 1.8 on a 2-core machine over 8 clips.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m experiments.track_many_throughput",
+                                description=__doc__.split("\n\n")[0])
+    p.add_argument("--clips", type=int, default=8, help="clips (default 8)")
+    p.add_argument("--frames", type=int, default=100, help="frames per clip (default 100)")
+    p.add_argument("--iterations", type=int, default=None, help="cost evaluations per frame (default: the tracker's)")
+    p.add_argument("--work", type=Path, help="working folder (default: a temporary one)")
+    args = p.parse_args(argv)
+    if args.clips < 1 or args.frames < 1 or (args.iterations is not None and args.iterations < 1):
+        p.error("--clips, --frames and --iterations must be at least 1")
+
+    from mocap.many import InputOptions, track_many
+    from mocap.synth import generate_sequence
+    from mocap.synth.sequence import SEQUENCE_NAMES
+    from mocap.track import TrackerConfig
+
+    tracker = TrackerConfig() if args.iterations is None else TrackerConfig(evaluations=args.iterations)
+    options = InputOptions(write_overlay=False)
+    with tempfile.TemporaryDirectory() as tmp:
+        work = args.work or Path(tmp)
+        clips = []
+        for i in range(args.clips):
+            name = SEQUENCE_NAMES[i % len(SEQUENCE_NAMES)]
+            seed = i // len(SEQUENCE_NAMES)
+            clips.append(generate_sequence(name, work / "clips" / f"{name}-{seed}", frames=args.frames, seed=seed,
+                                           progress=False))
+        track_many(clips[:1], work / "warm-up", tracker, InputOptions(write_overlay=False, max_frames=2), workers=0,
+                   overwrite=True, progress=False)
+        load_before = os.getloadavg()[0]
+        seconds = {}
+        for workers in (1, 2):
+            start = time.perf_counter()
+            summary = track_many(clips, work / f"workers-{workers}", tracker, options, workers=workers,
+                                 overwrite=True, progress=False)
+            seconds[workers] = time.perf_counter() - start
+            if summary.failed:
+                raise RuntimeError(f"{summary.failed} clips failed: {[r['reason'] for r in summary.rows]}")
+            frames = sum(int(r["frames"]) for r in summary.rows)
+            print(f"--workers {workers}: {frames} frames of {len(clips)} clips in {seconds[workers]:.1f} s "
+                  f"({frames / seconds[workers]:.1f} frames/s, cluster start included)")
+        load_after = os.getloadavg()[0]
+    print(f"ratio --workers 2 / --workers 1: {seconds[1] / seconds[2]:.2f}x (target 1.8x); load average "
+          f"(1 min) {load_before:.2f} before, {load_after:.2f} after, on {os.cpu_count()} cores")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
