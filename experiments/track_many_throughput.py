@@ -30,13 +30,14 @@ def main(argv=None) -> int:
     if args.clips < 1 or args.frames < 1 or (args.iterations is not None and args.iterations < 1):
         p.error("--clips, --frames and --iterations must be at least 1")
 
-    from mocap.many import InputOptions, track_many
+    from mocap.many import track_many
+    from mocap.own_video import OwnVideoOptions
     from mocap.synth import generate_sequence
     from mocap.synth.sequence import SEQUENCE_NAMES
     from mocap.track import TrackerConfig
 
     tracker = TrackerConfig() if args.iterations is None else TrackerConfig(evaluations=args.iterations)
-    options = InputOptions(write_overlay=False)
+    options = OwnVideoOptions(overlay=False, overwrite=True, tracker=tracker)
     with tempfile.TemporaryDirectory() as tmp:
         work = args.work or Path(tmp)
         clips = []
@@ -45,14 +46,13 @@ def main(argv=None) -> int:
             seed = i // len(SEQUENCE_NAMES)
             clips.append(generate_sequence(name, work / "clips" / f"{name}-{seed}", frames=args.frames, seed=seed,
                                            progress=False))
-        track_many(clips[:1], work / "warm-up", tracker, InputOptions(write_overlay=False, max_frames=2), workers=0,
-                   overwrite=True, progress=False)
+        track_many(clips[:1], work / "warm-up", OwnVideoOptions(overlay=False, max_frames=2, tracker=tracker),
+                   workers=0, progress=False)
         load_before = os.getloadavg()[0]
         seconds = {}
         for workers in (1, 2):
             start = time.perf_counter()
-            summary = track_many(clips, work / f"workers-{workers}", tracker, options, workers=workers,
-                                 overwrite=True, progress=False)
+            summary = track_many(clips, work / f"workers-{workers}", options, workers=workers, progress=False)
             seconds[workers] = time.perf_counter() - start
             if summary.failed:
                 raise RuntimeError(f"{summary.failed} clips failed: {[r['reason'] for r in summary.rows]}")

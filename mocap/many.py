@@ -20,7 +20,7 @@ What a crash leaves behind, and what happens next:
 
 At the end ``OUT/summary.csv`` (:data:`SUMMARY_COLUMNS`, one row per input, from each
 video's ``run.json``) and ``OUT/summary.png`` are written atomically. ``OUT/track-many.json``
-keeps the options, so that a rerun with other options is refused instead of mixing results.
+keeps the options (:class:`mocap.own_video.OwnVideoOptions`), so that a rerun with other options is refused instead of mixing results.
 """
 from __future__ import annotations
 
@@ -35,12 +35,10 @@ import uuid
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from mocap.config import JsonConfig
 from mocap.io.atomic import write_bytes_atomic, write_text_atomic
-from mocap.render.camera import DEFAULT_HFOV_DEG
-from mocap.track import TrackerConfig
+from mocap.own_video import OwnVideoOptions, track_own_video
 
-__all__ = ["InputOptions", "ManySummary", "SUMMARY_COLUMNS", "expand_inputs", "track_input", "track_many",
+__all__ = ["PER_VIDEO_OPTIONS", "ManySummary", "SUMMARY_COLUMNS", "expand_inputs", "track_input", "track_many",
            "read_summary", "summary_row"]
 
 #: Files written at the top of the output folder.
@@ -52,42 +50,11 @@ SUMMARY_CSV, SUMMARY_PNG, OPTIONS_FILE = "summary.csv", "summary.png", "track-ma
 #: ``wall_seconds_this_session``), and for a failed video its one-line reason.
 SUMMARY_COLUMNS = ("input", "output", "status", "frames", "failed_frames", "fps", "background", "calibration",
                    "time_s", "reason")
+#: Options of :class:`mocap.own_video.OwnVideoOptions` that name one video's files or a window:
+#: not for many videos (a sequence folder brings its own background, calibration, ground truth).
+PER_VIDEO_OPTIONS = ("background", "background_frames", "calibration", "ground_truth", "show")
 #: Seconds between two looks at the output folders for the progress bar.
 POLL_S = 0.5
-
-
-@dataclass(frozen=True)
-class InputOptions(JsonConfig):
-    """The options of ``python -m mocap track`` that apply to every input alike.
-
-    Attributes
-    ----------
-    hfov_deg : float, degrees
-        Camera horizontal field of view where no calibration is given.
-    height_m : float or None, metres
-        The person's stature (same person in every video), else default adult proportions.
-    work_width : int or None, pixels
-        Working width (None: the tracker chooses).
-    no_background : bool
-        Colour-only foreground (no background estimated or taken from a sequence folder).
-    colour : {"calibration", "face"}
-        Where the colour classes are learnt.
-    max_frames : int or None
-        Track only the first frames of each input.
-    write_overlay : bool
-        Write ``overlay.mp4``.
-    allow_damaged : bool
-        Track the frames that decode of a damaged video instead of failing it.
-    """
-
-    hfov_deg: float = DEFAULT_HFOV_DEG
-    height_m: float | None = None
-    work_width: int | None = None
-    no_background: bool = False
-    colour: str = "calibration"
-    max_frames: int | None = None
-    write_overlay: bool = True
-    allow_damaged: bool = False
 
 
 @dataclass
@@ -165,44 +132,6 @@ def expand_inputs(patterns: list[str]) -> list[tuple[Path, str]]:
     return [(p, output_name(p)) for p in unique.values()]
 
 
-def _track_input_as_cli(source: Path, out_dir: Path, tracker: TrackerConfig, options: InputOptions) -> None:
-    """``python -m mocap track SOURCE --out OUT_DIR`` with the options (no output printed)."""
-    from mocap.calibrate import Calibration
-    from mocap.imaging.resample import working_factor
-    from mocap.io.frames import VideoSource
-    from mocap.io.sequence import find_sequence
-    from mocap.io.video import read_image
-    from mocap.own_video import setup_own_video
-    from mocap.pipeline import track_video
-
-    seq = find_sequence(source)
-    frames = VideoSource(seq.frames)
-    background = None if options.no_background else seq.background
-    factor = None if options.work_width is None else working_factor(frames.width, frames.height, options.work_width)
-    given = None
-    if seq.calibration is not None:
-        given = Calibration.from_json(seq.calibration)
-        cam = given.camera
-        factor = factor or working_factor(frames.width, frames.height)
-        if cam.shape == (frames.height, frames.width) and factor > 1:
-            given = replace(given, camera=type(cam)(frames.width // factor, frames.height // factor, cam.fx / factor,
-                                                    cam.fy / factor, cam.cx / factor, cam.cy / factor))
-        elif cam.shape != (frames.height // factor, frames.width // factor):
-            raise ValueError(f"frames are {frames.width}x{frames.height} but the calibration's camera is "
-                             f"{cam.width}x{cam.height}: calibrate for this video (python -m mocap calibrate)")
-    mode = "image" if background is not None else ("none" if options.no_background else "auto")
-    setup, _ = setup_own_video(frames, factor, background_mode=mode,
-                               background_image=read_image(background) if background is not None else None,
-                               calibration=given, hfov_deg=options.hfov_deg, height_m=options.height_m,
-                               progress=False)
-    fps = (seq.fps(frames.fps or 25.0) if seq.meta is not None else frames.fps) or 25.0
-    track_video(frames, setup.background, setup.calibration, out_dir, tracker, colour=options.colour,
-                ground_truth=seq.ground_truth, fps=fps, max_frames=options.max_frames, progress=False,
-                imaging=setup.imaging, write_overlay=options.write_overlay, work_factor=setup.factor,
-                colour_model=setup.colour_model, scene=setup.scene, setup_record=setup.record,
-                allow_damaged=options.allow_damaged)
-
-
 def _read_run(out_dir: Path) -> dict | None:
     """The video's ``run.json``, or None when it has none (or a damaged one)."""
     try:
@@ -236,8 +165,10 @@ def summary_row(source: str | Path, out_dir: str | Path, reason: str | None = No
     return row
 
 
-def track_input(source: str, out_dir: str, tracker: TrackerConfig, options: InputOptions) -> dict:
-    """Track one input into ``out_dir`` (the task a worker runs); its summary row.
+def track_input(source: str, out_dir: str, options: OwnVideoOptions) -> dict:
+    """Track one input into ``out_dir`` as ``python -m mocap track`` would
+    (:func:`mocap.own_video.track_own_video`, no progress bar): the task a worker runs; its
+    summary row.
 
     Resumes an unfinished run found in ``out_dir`` and does nothing to a finished one. Bad
     input (ValueError, OSError: a damaged video, nobody found, a folder another run holds)
@@ -245,7 +176,7 @@ def track_input(source: str, out_dir: str, tracker: TrackerConfig, options: Inpu
     """
     if not _finished(Path(out_dir)):
         try:
-            _track_input_as_cli(Path(source), Path(out_dir), tracker, options)
+            track_own_video(source, out_dir, options, progress=False)
         except (ValueError, OSError) as exc:
             return summary_row(source, out_dir, reason=_one_line(exc))
     return summary_row(source, out_dir)
@@ -285,9 +216,9 @@ def _check_options(out: Path, record: dict, overwrite: bool) -> None:
     write_json(path, record)
 
 
-def _estimated_frames(path: Path, max_frames: int | None) -> int:
-    """Frames an input will give, for the progress bar: an image count, or what a video's
-    container announces (duration times rate, no decoding); at most ``max_frames``."""
+def _estimated_frames(path: Path, start: int, max_frames: int | None) -> int:
+    """Frames an input will give from frame ``start``, for the progress bar: an image count, or
+    what a video's container announces (duration times rate, no decoding); at most ``max_frames``."""
     from mocap.io.sequence import find_sequence
     from mocap.io.video import image_files
 
@@ -304,6 +235,7 @@ def _estimated_frames(path: Path, max_frames: int | None) -> int:
             n = 0                       # unreadable: the task will say why
         finally:
             reader.close()
+    n = max(n - start, 0)
     return n if max_frames is None else min(n, max_frames)
 
 
@@ -351,9 +283,8 @@ def _dask_client(workers: int, scheduler: str | None):
     return Client(cluster), f"{workers} local worker processes"
 
 
-def track_many(inputs: list[str | Path], out: str | Path, tracker: TrackerConfig | None = None,
-               options: InputOptions | None = None, *, workers: int | None = None, scheduler: str | None = None,
-               overwrite: bool = False, progress: bool = True) -> ManySummary:
+def track_many(inputs: list[str | Path], out: str | Path, options: OwnVideoOptions | None = None, *,
+               workers: int | None = None, scheduler: str | None = None, progress: bool = True) -> ManySummary:
     """Track every input, one Dask task per video, and write ``summary.csv`` and ``summary.png``.
 
     Parameters
@@ -362,17 +293,16 @@ def track_many(inputs: list[str | Path], out: str | Path, tracker: TrackerConfig
         Video files, image folders, sequence folders, or globs of them.
     out : str or Path
         Output folder: ``out/<name>/`` per input, the summary files at the top.
-    tracker : TrackerConfig, optional
-    options : InputOptions, optional
+    options : OwnVideoOptions, optional
+        How every input is tracked (those of ``python -m mocap track``), none of
+        :data:`PER_VIDEO_OPTIONS`. ``overwrite``: every input is tracked afresh (finished or
+        not), and other options than the folder's previous run are accepted.
     workers : int, optional
         Local worker processes, one thread each (default: the machine's cores); 0 tracks the
         videos one after another in this process, without Dask. Ignored with ``scheduler``.
     scheduler : str, optional
         Address of a running Dask scheduler (``tcp://host:8786``); its workers must reach
         ``out`` at the same path and import this ``mocap``.
-    overwrite : bool
-        Track every input afresh (finished or not), and accept other options than the
-        folder's previous run.
     progress : bool
         One progress bar over all frames of all videos.
 
@@ -383,20 +313,24 @@ def track_many(inputs: list[str | Path], out: str | Path, tracker: TrackerConfig
     Raises
     ------
     ValueError
-        Bad inputs (missing, name clashes), a folder tracked with other options, a bad worker
-        count, Dask missing for ``workers > 0``.
+        Bad inputs (missing, name clashes), a per-video option, a folder tracked with other
+        options, a bad worker count, Dask missing for ``workers > 0``.
     """
-    tracker = TrackerConfig() if tracker is None else tracker
-    options = InputOptions() if options is None else options
+    options = OwnVideoOptions() if options is None else options
     workers = default_workers() if workers is None else workers
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 0:
         raise ValueError(f"workers must be a non-negative integer, got {workers!r}")
-    if options.max_frames is not None and options.max_frames < 1:
-        raise ValueError(f"max_frames must be at least 1, got {options.max_frames}")
+    default = OwnVideoOptions()
+    per_video = [name for name in PER_VIDEO_OPTIONS if getattr(options, name) != getattr(default, name)]
+    if per_video:
+        raise ValueError(f"{', '.join(per_video)}: not for many videos (a sequence folder brings its own "
+                         "background.png, calibration.json, ground_truth.csv)")
+    overwrite = options.overwrite
+    options = replace(options, overwrite=False)     # a task run again after a lost worker resumes
     items = expand_inputs([str(i) for i in inputs])
     out = Path(out)
     started = time.perf_counter()
-    _check_options(out, {"tracker": tracker.to_dict(), "options": options.to_dict()}, overwrite)
+    _check_options(out, options.to_dict(), overwrite)
     rows: dict[str, dict] = {}
     todo: list[tuple[Path, str]] = []
     for path, name in items:
@@ -407,19 +341,19 @@ def track_many(inputs: list[str | Path], out: str | Path, tracker: TrackerConfig
         else:
             todo.append((path, name))
     summary = ManySummary(out, skipped=len(rows))
-    bar = _ManyBar(out, items, rows, options.max_frames, progress)
+    bar = _ManyBar(out, items, rows, options, progress)
     try:
         if not todo:
             summary.backend = "nothing to track"
         elif workers == 0 and scheduler is None:
             summary.backend = "this process"
             for path, name in todo:
-                rows[name] = track_input(str(path), str(out / name), tracker, options)
+                rows[name] = track_input(str(path), str(out / name), options)
                 bar.update(rows, running=0)
         else:
             client, summary.backend = _dask_client(workers, scheduler)
             try:
-                _run_on_dask(client, todo, out, tracker, options, rows, bar)
+                _run_on_dask(client, todo, out, options, rows, bar)
             finally:
                 _close_client(client, scheduler)
     finally:
@@ -438,12 +372,12 @@ def _close_client(client, scheduler: str | None) -> None:
         cluster.close()
 
 
-def _run_on_dask(client, todo, out: Path, tracker, options, rows: dict, bar: "_ManyBar") -> None:
+def _run_on_dask(client, todo, out: Path, options: OwnVideoOptions, rows: dict, bar: "_ManyBar") -> None:
     """Submit one task per video and collect the rows as they finish (a task whose workers
     kept dying, or that raised, becomes a failed row with the reason)."""
     token = uuid.uuid4().hex[:8]
     # the longest videos first: the last to finish is then a short one (less time with idle workers)
-    futures = {client.submit(track_input, str(path), str(out / name), tracker, options, pure=False,
+    futures = {client.submit(track_input, str(path), str(out / name), options, pure=False,
                              key=f"track-many-{name}-{token}", priority=bar.expected[name]): (path, name)
                for path, name in todo}
     keys = {f.key for f in futures}
@@ -472,11 +406,11 @@ class _ManyBar:
     running ones the rows of their journal; the total is each video's expected frames
     (``expected``: name -> frames, estimated until the video has finished)."""
 
-    def __init__(self, out: Path, items, rows: dict, max_frames: int | None, progress: bool) -> None:
+    def __init__(self, out: Path, items, rows: dict, options: OwnVideoOptions, progress: bool) -> None:
         from tqdm import tqdm
 
         self.out, self.items, self.count = out, items, _JournalRows()
-        self.expected = {name: _estimated_frames(path, max_frames) for path, name in items}
+        self.expected = {name: _estimated_frames(path, options.start, options.max_frames) for path, name in items}
         self.bar = tqdm(total=sum(self.expected.values()), desc="tracking", unit="frame", disable=not progress)
         self.update(rows, running=0)
 

@@ -102,8 +102,8 @@ def test_fake_camera_gives_the_same_poses_as_the_file(sequence, tmp_path):
         if source.live:
             assert len(consumed) == N_FRAMES
             source.hold(consumed)
-        track_video(source, setup.background, setup.calibration, tmp_path / name, TrackerConfig(evaluations=60),
-                    colour_model=setup.colour_model, setup_record=setup.record, progress=False, write_overlay=False)
+        track_video(source, setup, tmp_path / name, TrackerConfig(evaluations=60), progress=False,
+                    write_overlay=False)
         poses.append(PoseTable.read(tmp_path / name / "poses.csv").poses)
     assert poses[0].shape == (N_FRAMES, 23)
     np.testing.assert_array_equal(poses[0], poses[1])

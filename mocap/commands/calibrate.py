@@ -63,8 +63,7 @@ def run(args: argparse.Namespace) -> int:
                                    background_image=read_image(background) if background is not None else None,
                                    background_frames=args.background_frames, hfov_deg=args.hfov,
                                    height_m=args.height)
-        k, small = setup.factor, setup.calibration.camera
-        camera = Camera(source.width, source.height, small.fx * k, small.fy * k, small.cx * k, small.cy * k)
+        camera = setup.calibration.camera.enlarged(setup.factor, source.width, source.height)
         calibration = Calibration(setup.calibration.dims, setup.calibration.initial_pose, camera)
         note = setup.record
         how = (f"frame {note['calibration']['frame']}, background {note['background']['mode']} "

@@ -41,6 +41,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--work-width", type=int, default=None, metavar="PX", help="working width (see track --help)")
     p.add_argument("--colour", choices=("calibration", "face"), default="calibration",
                    help="learn colours inside the calibrated model (default) or from the detected face")
+    p.add_argument("--start", type=int, default=0, metavar="N", help="first frame to track in every input (default 0)")
     p.add_argument("--allow-damaged", action="store_true",
                    help="track the frames that decode of a damaged video instead of failing it")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -49,13 +50,15 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from mocap.many import InputOptions, track_many
+    from mocap.many import track_many
+    from mocap.own_video import OwnVideoOptions
 
-    options = InputOptions(hfov_deg=args.hfov, height_m=args.height, work_width=args.work_width,
-                           no_background=args.no_background, colour=args.colour, max_frames=args.max_frames,
-                           write_overlay=not args.no_overlay, allow_damaged=args.allow_damaged)
-    summary = track_many(args.inputs, args.out, tracker_config(args), options, workers=args.workers,
-                         scheduler=args.scheduler, overwrite=args.overwrite, progress=not args.no_progress)
+    options = OwnVideoOptions(no_background=args.no_background, hfov_deg=args.hfov, height_m=args.height,
+                              work_width=args.work_width, colour=args.colour, start=args.start,
+                              max_frames=args.max_frames, allow_damaged=args.allow_damaged,
+                              overlay=not args.no_overlay, overwrite=args.overwrite, tracker=tracker_config(args))
+    summary = track_many(args.inputs, args.out, options, workers=args.workers, scheduler=args.scheduler,
+                         progress=not args.no_progress)
     for row in summary.rows:
         if row["status"] == "failed":
             print(f"failed: {row['input']}: {row['reason']}", file=sys.stderr)
