@@ -5,8 +5,9 @@ a Dask cluster (docs/design.md sections 3-4, docs/cluster.md).
 refuses two inputs that would write to the same output folder before anything runs, and sends
 one task per video (:func:`track_input`) to a local Dask cluster of single-threaded worker
 processes or to an existing cluster's scheduler. Each video goes to ``OUT/<name>/`` (its file
-name without the extension, or its folder's name), written by :func:`mocap.pipeline.track_video`:
-under the folder's lock, with a crash-exact checkpoint after every frame.
+name without the extension, or its folder's name), tracked by
+:func:`mocap.own_video.track_own_video` (what ``python -m mocap track`` calls): under the
+folder's lock, with a crash-exact checkpoint after every frame.
 
 What a crash leaves behind, and what happens next:
 
@@ -20,7 +21,8 @@ What a crash leaves behind, and what happens next:
 
 At the end ``OUT/summary.csv`` (:data:`SUMMARY_COLUMNS`, one row per input, from each
 video's ``run.json``) and ``OUT/summary.png`` are written atomically. ``OUT/track-many.json``
-keeps the options (:class:`mocap.own_video.OwnVideoOptions`), so that a rerun with other options is refused instead of mixing results.
+keeps the options (:class:`mocap.own_video.OwnVideoOptions`), so that a rerun with other
+options is refused instead of mixing results.
 """
 from __future__ import annotations
 
@@ -102,14 +104,15 @@ def expand_inputs(patterns: list[str]) -> list[tuple[Path, str]]:
     Raises
     ------
     ValueError
-        No input, a path that does not exist, a glob that matches nothing, or two inputs with
-        the same output name (compared ignoring case, as some file systems do).
+        No input, a path that does not exist, a glob that matches nothing, two inputs with the
+        same output name (compared ignoring case, as some file systems do), or an output name
+        that is one of the files written at the top of the output folder.
     """
     if not patterns:
         raise ValueError("no input given")
     paths: list[Path] = []
     for pattern in patterns:
-        if glob.has_magic(pattern):
+        if glob.escape(pattern) != pattern:              # *, ? or [ in it
             matches = sorted(glob.glob(pattern))
             if not matches:
                 raise ValueError(f"{pattern} matches no file or folder")
@@ -129,6 +132,10 @@ def expand_inputs(patterns: list[str]) -> list[tuple[Path, str]]:
         text = "; ".join(" and ".join(str(p) for p in ps) + f" (both {output_name(ps[0])})" for ps in clashes)
         raise ValueError(f"inputs with the same output folder name: {text}; rename them or track them in "
                          "separate runs")
+    reserved = [p for p in unique.values() if output_name(p).casefold() in (SUMMARY_CSV, SUMMARY_PNG, OPTIONS_FILE)]
+    if reserved:
+        raise ValueError(f"{reserved[0]} would be tracked into a folder named {output_name(reserved[0])}, the "
+                         "name of a file track-many writes: rename it")
     return [(p, output_name(p)) for p in unique.values()]
 
 

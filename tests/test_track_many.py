@@ -92,6 +92,9 @@ def test_name_clashes_and_missing_inputs_are_refused_before_anything_runs(tmp_pa
     assert "(both x)" in capsys.readouterr().err            # names compared as a case-blind file system would
     assert main(["track-many", str(tmp_path / "a" / "clip"), str(tmp_path / "nothing*"), "--out", str(out)]) == 2
     assert "nothing* matches no file or folder" in capsys.readouterr().err
+    (tmp_path / "summary.csv.mp4").write_bytes(b"")
+    assert main(["track-many", str(tmp_path / "summary.csv.mp4"), "--out", str(out)]) == 2
+    assert "a folder named summary.csv, the name of a file track-many writes" in capsys.readouterr().err
     assert not out.exists()                                  # nothing written, no cluster started
 
 
