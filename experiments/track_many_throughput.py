@@ -5,7 +5,8 @@ Writes ``--clips`` short synthetic sequence folders (the six sequences in turn, 
 times the whole :func:`mocap.many.track_many` call (local cluster started and stopped included,
 as a user's command) over all clips with 1 worker process and with 2, into fresh folders, and
 prints both times, the ratio and the machine's load average (1 minute) before and after. The
-machine may be shared: the ratio of one run is the measurement, not either time alone.
+machine may be shared: the ratio of one run is the measurement, not either time alone; with
+``--repeats N`` the two alternate (1, 2, then 2, 1, ...) and the ratio is of the summed times.
 
 Issue 25's target: a ratio of at least 1.8 on a 2-core machine over 8 clips.
 """
@@ -25,10 +26,11 @@ def main(argv=None) -> int:
     p.add_argument("--clips", type=int, default=8, help="clips (default 8)")
     p.add_argument("--frames", type=int, default=100, help="frames per clip (default 100)")
     p.add_argument("--iterations", type=int, default=None, help="cost evaluations per frame (default: the tracker's)")
+    p.add_argument("--repeats", type=int, default=1, help="measurements of each, alternating (default 1)")
     p.add_argument("--work", type=Path, help="working folder (default: a temporary one)")
     args = p.parse_args(argv)
-    if args.clips < 1 or args.frames < 1 or (args.iterations is not None and args.iterations < 1):
-        p.error("--clips, --frames and --iterations must be at least 1")
+    if min(args.clips, args.frames, args.repeats, args.iterations or 1) < 1:
+        p.error("--clips, --frames, --iterations and --repeats must be at least 1")
 
     from mocap.many import track_many
     from mocap.own_video import OwnVideoOptions
@@ -49,16 +51,18 @@ def main(argv=None) -> int:
         track_many(clips[:1], work / "warm-up", OwnVideoOptions(overlay=False, max_frames=2, tracker=tracker),
                    workers=0, progress=False)
         load_before = os.getloadavg()[0]
-        seconds = {}
-        for workers in (1, 2):
-            start = time.perf_counter()
-            summary = track_many(clips, work / f"workers-{workers}", options, workers=workers, progress=False)
-            seconds[workers] = time.perf_counter() - start
-            if summary.failed:
-                raise RuntimeError(f"{summary.failed} clips failed: {[r['reason'] for r in summary.rows]}")
-            frames = sum(int(r["frames"]) for r in summary.rows)
-            print(f"--workers {workers}: {frames} frames of {len(clips)} clips in {seconds[workers]:.1f} s "
-                  f"({frames / seconds[workers]:.1f} frames/s, cluster start included)")
+        seconds = {1: 0.0, 2: 0.0}
+        for repeat in range(args.repeats):
+            for workers in ((1, 2) if repeat % 2 == 0 else (2, 1)):
+                start = time.perf_counter()
+                summary = track_many(clips, work / f"workers-{workers}", options, workers=workers, progress=False)
+                took = time.perf_counter() - start
+                seconds[workers] += took
+                if summary.failed:
+                    raise RuntimeError(f"{summary.failed} clips failed: {[r['reason'] for r in summary.rows]}")
+                frames = sum(int(r["frames"]) for r in summary.rows)
+                print(f"--workers {workers}: {frames} frames of {len(clips)} clips in {took:.1f} s "
+                      f"({frames / took:.1f} frames/s, cluster start included; load {os.getloadavg()[0]:.2f})")
         load_after = os.getloadavg()[0]
     print(f"ratio --workers 2 / --workers 1: {seconds[1] / seconds[2]:.2f}x (target 1.8x); load average "
           f"(1 min) {load_before:.2f} before, {load_after:.2f} after, on {os.cpu_count()} cores")
