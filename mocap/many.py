@@ -355,7 +355,8 @@ def track_many(inputs: list[str | Path], out: str | Path, options: OwnVideoOptio
         elif workers == 0 and scheduler is None:
             summary.backend = "this process"
             for path, name in todo:
-                rows[name] = track_input(str(path), str(out / name), options)
+                rows[name] = {**track_input(str(path.resolve()), str((out / name).resolve()), options),
+                              "input": str(path)}
                 bar.update(rows, running=0)
         else:
             client, summary.backend = _dask_client(workers, scheduler)
@@ -384,7 +385,8 @@ def _run_on_dask(client, todo, out: Path, options: OwnVideoOptions, rows: dict, 
     kept dying, or that raised, becomes a failed row with the reason)."""
     token = uuid.uuid4().hex[:8]
     # the longest videos first: the last to finish is then a short one (less time with idle workers)
-    futures = {client.submit(track_input, str(path), str(out / name), options, pure=False,
+    # absolute paths: a remote worker's working folder is not this one
+    futures = {client.submit(track_input, str(path.resolve()), str((out / name).resolve()), options, pure=False,
                              key=f"track-many-{name}-{token}", priority=bar.expected[name]): (path, name)
                for path, name in todo}
     keys = {f.key for f in futures}
@@ -394,7 +396,7 @@ def _run_on_dask(client, todo, out: Path, options: OwnVideoOptions, rows: dict, 
             for fut in [f for f in pending if f.done()]:
                 path, name = pending.pop(fut)
                 try:
-                    rows[name] = fut.result()
+                    rows[name] = {**fut.result(), "input": str(path)}
                 except Exception as exc:     # the task raised, or its workers died too often (KilledWorker)
                     rows[name] = summary_row(path, out / name, reason=_one_line(exc))
             # a worker's processing list also holds what it has queued: at most nthreads of them run

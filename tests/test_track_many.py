@@ -169,10 +169,12 @@ def test_a_killed_worker_s_video_resumes_elsewhere_and_every_video_is_its_single
     out, paused, pause_at = tmp_path / "out", tmp_path / "paused", 2
     workers = {"worker-a": {}, "worker-b": {"prelude": f"from tests.killpoints import install; install('pause', "
                                                        f"{pause_at}); ", "env": {"KILLPOINTS_PAUSED": str(paused)}}}
+    # paths relative to the command's folder, which is not the workers' (they run in REPO_ROOT)
+    inputs = [os.path.relpath(clip, tmp_path) for clip in clips]
     with local_cluster(tmp_path, workers) as (address, processes):
-        many = subprocess.Popen([sys.executable, "-m", "mocap", "track-many", *map(str, clips), "--out", str(out),
+        many = subprocess.Popen([sys.executable, "-m", "mocap", "track-many", *inputs, "--out", "out",
                                  "--scheduler", address, "--no-progress", *TRACK_ARGS],
-                                cwd=REPO_ROOT, env=cluster_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                cwd=tmp_path, env=cluster_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                 text=True)
         processes["track-many"] = many
         wait_for(paused.exists, 300, "worker-b in the middle of a video", processes.values())
@@ -186,4 +188,4 @@ def test_a_killed_worker_s_video_resumes_elsewhere_and_every_video_is_its_single
     assert sorted(resumed) == [0, 0, pause_at]          # the killed worker's video went on from its checkpoint
     for clip in clips:
         assert_same_track(out / clip.name, single_runs[clip.name])
-    assert [r["status"] for r in assert_summary_matches_runs(out, clips)] == ["finished"] * 3
+    assert [r["status"] for r in assert_summary_matches_runs(out, inputs)] == ["finished"] * 3
