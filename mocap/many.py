@@ -459,8 +459,13 @@ def read_summary(out: str | Path) -> list[dict]:
         return list(csv.DictReader(fh))
 
 
+#: Above this many videos summary.png shows one dot per video instead of one bar per video.
+MAX_BARS = 50
+
+
 def _summary_plot(path: Path, rows: list[dict]) -> None:
-    """Frames per second and share of failed frames per video; failed videos named in red."""
+    """Frames per second and share of failed frames per video: a bar each, failed videos named
+    in red; above :data:`MAX_BARS` videos one dot each (fps against failed share), unnamed."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -471,20 +476,29 @@ def _summary_plot(path: Path, rows: list[dict]) -> None:
     fps = np.array([float(r["fps"]) if r["fps"] != "" else 0.0 for r in rows])
     share = np.array([100.0 * int(r["failed_frames"]) / max(int(r["frames"]), 1) if r["frames"] != "" else 0.0
                       for r in rows])
-    y = np.arange(len(rows))
-    fig, axes = plt.subplots(1, 2, figsize=(9, 1.2 + 0.28 * len(rows)), sharey=True, constrained_layout=True)
-    axes[0].barh(y, fps, color="tab:blue")
-    axes[0].set_xlabel("frames per second (one core)")
-    axes[1].barh(y, share, color="tab:orange")
-    axes[1].set_xlabel("failed frames (%)")
-    axes[1].set_xlim(0, 100)
-    axes[0].set_yticks(y, names)
-    axes[0].invert_yaxis()
-    for tick, good in zip(axes[0].get_yticklabels(), ok):
-        if not good:
-            tick.set_color("tab:red")
-    if not ok.all():
-        axes[0].set_title("red: not tracked (reason in summary.csv)", fontsize=8, color="tab:red", loc="left")
+    note = f"{int(ok.sum())} of {len(rows)} videos tracked" + ("" if ok.all() else ", red: not tracked (reason in "
+                                                                                  "summary.csv)")
+    if len(rows) > MAX_BARS:
+        fig, ax = plt.subplots(figsize=(6, 4.5), constrained_layout=True)
+        ax.plot(fps[ok], share[ok], "o", ms=3, alpha=0.6, color="tab:blue")
+        ax.set_xlabel("frames per second (one core)")
+        ax.set_ylabel("failed frames (%)")
+        ax.set_ylim(-2, 102)
+        ax.set_title(note, fontsize=8, loc="left", color="black" if ok.all() else "tab:red")
+    else:
+        y = np.arange(len(rows))
+        fig, axes = plt.subplots(1, 2, figsize=(9, 1.2 + 0.28 * len(rows)), sharey=True, constrained_layout=True)
+        axes[0].barh(y, fps, color="tab:blue")
+        axes[0].set_xlabel("frames per second (one core)")
+        axes[1].barh(y, share, color="tab:orange")
+        axes[1].set_xlabel("failed frames (%)")
+        axes[1].set_xlim(0, 100)
+        axes[0].set_yticks(y, names)
+        axes[0].invert_yaxis()
+        for tick, good in zip(axes[0].get_yticklabels(), ok):
+            if not good:
+                tick.set_color("tab:red")
+        axes[0].set_title(note, fontsize=8, loc="left", color="black" if ok.all() else "tab:red")
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=100)
     plt.close(fig)
