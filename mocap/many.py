@@ -366,8 +366,7 @@ def track_many(inputs: list[str | Path], out: str | Path, options: OwnVideoOptio
                 _close_client(client, scheduler)
     finally:
         bar.close()
-    summary.rows = [rows.get(name) or summary_row(path, out / name, reason="not tracked (interrupted)")
-                    for path, name in items]
+    summary.rows = [rows[name] for _, name in items]
     summary.wall_s = time.perf_counter() - started
     write_summary(out, summary.rows)
     return summary
