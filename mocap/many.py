@@ -382,6 +382,8 @@ def _close_client(client, scheduler: str | None) -> None:
 def _run_on_dask(client, todo, out: Path, options: OwnVideoOptions, rows: dict, bar: "_ManyBar") -> None:
     """Submit one task per video and collect the rows as they finish (a task whose workers
     kept dying, or that raised, becomes a failed row with the reason)."""
+    from distributed import wait
+
     token = uuid.uuid4().hex[:8]
     # the longest videos first: the last to finish is then a short one (less time with idle workers)
     # absolute paths: a remote worker's working folder is not this one
@@ -403,7 +405,10 @@ def _run_on_dask(client, todo, out: Path, options: OwnVideoOptions, rows: dict, 
             running = sum(min(sum(k in keys for k in ks), threads.get(w, 1)) for w, ks in client.processing().items())
             bar.update(rows, running=running)
             if pending:
-                time.sleep(POLL_S)
+                try:                        # until a task ends, or the bar's next look
+                    wait(list(pending), timeout=POLL_S, return_when="FIRST_COMPLETED")
+                except TimeoutError:
+                    pass
     finally:
         for fut in pending:
             fut.cancel()
