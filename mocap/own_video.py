@@ -36,7 +36,7 @@ import numpy as np
 
 from mocap.calibrate import AutoCalibrationConfig, Calibration, calibrate_person
 from mocap.config import JsonConfig
-from mocap.imaging import Box, ColourModel, ImagingConfig, detect_face, median_background, rgb_to_hsv
+from mocap.imaging import Box, ImagingConfig, detect_face, median_background, rgb_to_hsv
 from mocap.imaging.background import PERSON_MIN_SHARE, estimate_background, person_against_background, \
     subtract_background
 from mocap.imaging.resample import downscale, working_factor
@@ -73,13 +73,11 @@ def working_camera(width: int, height: int, factor: int, hfov_deg: float = DEFAU
     return Camera.default(width, height, hfov_deg).working(width, height, factor)
 
 
-def _sample(frames, count: int, limit: int) -> list[tuple[int, np.ndarray]]:
-    """Up to ``count`` frames spread evenly over the first ``limit`` (index, frame) pairs."""
-    frames = list(frames)[:limit]
-    if len(frames) <= count:
-        return frames
-    picks = np.unique(np.linspace(0, len(frames) - 1, count).round().astype(int))
-    return [frames[i] for i in picks]
+def spread(start: int, stop: int, count: int) -> list[int]:
+    """Up to ``count`` frame numbers spread evenly over ``start`` to ``stop - 1`` (sorted, unique)."""
+    if stop <= start:
+        return []
+    return sorted({int(i) for i in np.linspace(start, stop - 1, min(count, stop - start)).round()})
 
 
 def _scene_around_model(frame: np.ndarray, model, calibration: Calibration):
@@ -162,6 +160,67 @@ def choose_background(frames: list[np.ndarray], imaging: ImagingConfig | None = 
     return (estimate if moves else None), record
 
 
+def find_person(frame: np.ndarray, factor: int, camera: Camera, background: np.ndarray | None,
+                imaging: ImagingConfig, *, height_m: float | None = None, auto: AutoCalibrationConfig | None = None,
+                whole_person: bool = True):
+    """Calibrate the person in one input-size frame, or None when there is nobody to calibrate.
+
+    The face first (:func:`mocap.imaging.detect_face` at input resolution, :func:`_plausible_face`);
+    without one and with a background, a person-sized foreground clear of the borders.
+
+    Parameters
+    ----------
+    frame : ndarray of uint8, shape (H, W, 3)
+        Input-size frame.
+    factor : int
+        Working-resolution factor; ``camera`` is the working camera.
+    background : ndarray of uint8, shape (H // factor, W // factor, 3), or None
+    whole_person : bool
+        Also try without a face (with a background).
+
+    Returns
+    -------
+    (PersonCalibration, face box in input pixels or None) or None
+    """
+    small = downscale(frame, factor)
+    found = detect_face(frame, min_size=max(24, MIN_FACE_WORKING_PX * factor))
+    if found is not None and _plausible_face(frame, found):
+        face = Box(*(int(round(v / factor)) for v in found))
+        try:
+            return calibrate_person(small, camera, background=background, face=face, height_m=height_m,
+                                    imaging=imaging, config=auto), found
+        except ValueError:
+            pass
+    if not whole_person or background is None or not _whole_person(subtract_background(small, background, imaging)):
+        return None
+    try:
+        return calibrate_person(small, camera, background=background, height_m=height_m, imaging=imaging,
+                                config=auto), None
+    except ValueError:
+        return None             # a person too small or cut off for every colour class
+
+
+def newcomer_finder(setup: RunSetup, width: int, height: int, *, hfov_deg: float = DEFAULT_HFOV_DEG,
+                    height_m: float | None = None, auto: AutoCalibrationConfig | None = None):
+    """The run's way to calibrate a new person (:func:`mocap.pipeline.track_video` ``newcomer``):
+    a function of ``(frame index, input-size frame)`` giving the new person's
+    :class:`mocap.pipeline.RunSetup` (same working resolution and background, a fresh
+    calibration, colours and scene) or None (:func:`find_person`)."""
+    camera = Camera.default(width, height, hfov_deg).working(width, height, setup.factor)
+
+    def newcomer(index: int, frame: np.ndarray):
+        found = find_person(frame, setup.factor, camera, setup.background, setup.imaging, height_m=height_m,
+                            auto=auto)
+        if found is None:
+            return None
+        person, face = found
+        record = {"frame": int(index), "face_input_px": None if face is None else [int(v) for v in face],
+                  "depth_m": round(float(person.calibration.initial_pose[2]), 3)}
+        return dataclasses.replace(setup, calibration=person.calibration, colour_model=person.colour_model,
+                                   scene=person.scene, record=record)
+    return newcomer
+
+
 def setup_own_video(source, factor: int | None = None, *, background_mode: str = "auto", background_image=None,
                     background_frames: tuple[int, int] | None = None, calibration: Calibration | None = None,
                     hfov_deg: float = DEFAULT_HFOV_DEG, height_m: float | None = None,
@@ -196,7 +255,9 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
     auto : AutoCalibrationConfig, optional
     sample_frames, sample_limit : int
         Background estimation uses ``sample_frames`` frames spread over the first
-        ``sample_limit``.
+        ``sample_limit`` (chosen by number first, each reduced to the working resolution as it
+        is read: the set-up holds at most ``sample_frames`` working-size frames and one
+        input-size frame of a file); ``--background-frames A:B`` likewise.
     search_frames : int
         Calibration looks at most this many frames into the video for a usable frame.
 
@@ -231,38 +292,49 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
                                                                        MIN_PERSON_FRACTION))
     record: dict = {"hfov_deg": hfov_deg, "height_m": height_m}
     consumed: list[np.ndarray] = []
-    # frames the setup may look at: a file is read again later, a camera is not
+    # frames the setup looks at, by index: a file is read again later (only the chosen frames
+    # are converted, and only one input-size frame is held at a time); a camera is not, so
+    # what it delivered is kept to be tracked (at most ``search_frames`` frames)
     if source.live:
-        def early(limit):
-            while len(consumed) < limit:
-                frame = next(stream, None)
-                if frame is None:
-                    break
-                consumed.append(frame)
-            return list(enumerate(consumed[:limit]))
         stream = iter(source.frames())
+
+        def frames_at(indices):
+            for index in indices:
+                while len(consumed) <= index:
+                    frame = next(stream, None)
+                    if frame is None:
+                        return
+                    consumed.append(frame)
+                yield index, consumed[index]
+        count = search_frames
     else:
-        def early(limit):
-            return list(enumerate(source.frames(0, limit)))
+        def frames_at(indices):
+            indices = list(indices)
+            return zip(indices, source.frames(indices=indices))
+        count = source.count
 
     # 1. the first usable frame: a face (or, with a background, a person-sized foreground)
-    face = None
+    face = face_frame_full = None
     calib_index = None
-    candidates = early(search_frames)
-    if not candidates:
+    searched = range(0, min(search_frames, count), 3)
+    first = next(iter(frames_at([0])), (0, None))[1]
+    if first is None:
         raise ValueError(f"{source.name} has no frames")
     if calibration is None:
-        for index, frame in tqdm(candidates[::3], desc="looking for a face", unit="frame", disable=not progress):
+        for index, frame in tqdm(frames_at(searched), total=len(searched), desc="looking for a face", unit="frame",
+                                 disable=not progress):
             found = detect_face(frame, min_size=max(24, MIN_FACE_WORKING_PX * factor))
             if found is not None and _plausible_face(frame, found):
-                face_full, calib_index = found, index
+                face_full, calib_index, face_frame_full = found, index, frame
                 if auto_factor:
                     factor = max(factor, int(found.width // FACE_WORKING_PX))
                 face = Box(*(int(round(v / factor)) for v in found))
                 break
 
-    # 2. background (at the working resolution now settled)
+    # 2. background (at the working resolution now settled), from frames reduced as they are read
     camera = working_camera(source.width, source.height, factor, hfov_deg)
+    face_frame = downscale(face_frame_full, factor) if face is not None else None
+    del face_frame_full
     background = None
     if background_mode == "image":
         if background_image.shape[:2] != (source.height, source.width):
@@ -272,10 +344,10 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
         record["background"] = {"mode": "image", "reason": "given"}
     elif background_mode == "frames":
         a, b = background_frames
-        empty = [f for i, f in early(b) if i >= a]
+        empty = [downscale(f, factor) for _, f in frames_at(spread(a, min(b, count), sample_frames))]
         if not empty:
             raise ValueError(f"background frames {a}:{b}: the video has no such frames")
-        background = downscale(median_background(empty), factor)
+        background = median_background(empty)
         record["background"] = {"mode": "frames", "frames": [a, b], "reason": "median of the given empty frames"}
     elif background_mode == "none":
         record["background"] = {"mode": "none", "reason": "asked for: colour-only foreground"}
@@ -283,13 +355,12 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
         record["background"] = {"mode": "none", "reason": "live camera without --background: colour-only foreground"}
 
     if background_mode == "auto" and not source.live:
-        sample = _sample(enumerate(source.frames(0, sample_limit)), sample_frames, sample_limit)
-        face_frame = downscale(candidates[calib_index][1], factor) if face is not None else None
-        background, record["background"] = choose_background([downscale(f, factor) for _, f in sample], imaging,
-                                                             face=face, face_frame=face_frame)
+        sample = [downscale(f, factor) for _, f in frames_at(spread(0, min(sample_limit, count), sample_frames))]
+        background, record["background"] = choose_background(sample, imaging, face=face, face_frame=face_frame)
+        del sample
 
     if calibration is not None:
-        first = downscale(candidates[0][1], factor)
+        first = downscale(first, factor)
         if calibration.camera.shape != first.shape[:2]:
             raise ValueError(f"the calibration's camera is {calibration.camera.width}x{calibration.camera.height}, "
                              f"the working frames {first.shape[1]}x{first.shape[0]}")
@@ -306,18 +377,14 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
         return RunSetup(calibration, background, factor, imaging, colour, scene=scene, record=record), consumed
 
     if face is not None:
-        frame = downscale(candidates[calib_index][1], factor)
-        person = calibrate_person(frame, camera, background=background, face=face, height_m=height_m,
+        person = calibrate_person(face_frame, camera, background=background, face=face, height_m=height_m,
                                   imaging=imaging, config=auto)
     else:
         if background is None:
-            raise ValueError(f"no face found in the first {len(candidates)} frames and no background to find the "
+            raise ValueError(f"no face found in the first {searched.stop} frames and no background to find the "
                              "person by: pass --background IMG or --background-frames A:B, or --calibration JSON")
         person = None
-        stream = candidates if source.live else enumerate(source.frames(0, sample_limit))
-        for index, full in stream:
-            if index % 3:
-                continue
+        for index, full in frames_at(range(0, min(sample_limit, count), 3)):
             frame = downscale(full, factor)
             if not _whole_person(subtract_background(frame, background, imaging)):
                 continue
@@ -474,7 +541,8 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
         seq, frames_in = None, source
     else:
         seq = find_sequence(source)
-        frames_in = VideoSource(seq.frames)
+        frames_in = VideoSource(seq.frames, fps=seq.fps() if seq.meta is not None else None)
+        frames_in.damaged_frames(options.allow_damaged)     # refused before anything is read
     seq_background = seq.background if seq is not None and not options.no_background and \
         options.background_frames is None else None
     background = options.background or seq_background
@@ -504,9 +572,10 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
         on_setup(account)
     fps = (seq.fps(frames_in.fps or 25.0) if seq is not None and seq.meta is not None else frames_in.fps) or 25.0
     ground_truth = options.ground_truth or (seq.ground_truth if seq is not None else None)
+    newcomer = newcomer_finder(setup, width, height, hfov_deg=options.hfov_deg, height_m=options.height_m)
     summary = track_video(frames_in, setup, out_dir, options.tracker, ground_truth=ground_truth, fps=fps,
                           max_frames=options.max_frames, overwrite=options.overwrite, progress=progress,
                           write_overlay=options.overlay, allow_damaged=options.allow_damaged,
-                          start_frame=options.start, show=options.show)
+                          start_frame=options.start, show=options.show, newcomer=newcomer)
     summary.setup = account
     return summary

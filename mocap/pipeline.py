@@ -2,11 +2,14 @@
 ``residuals.png`` and ``run.json`` out (docs/design.md sections 3–4): the run loop; the
 outputs are :mod:`mocap.io.run_outputs`'s.
 
-``poses.csv`` is a journal: every finished frame is appended and flushed at once, and after
-every frame the tracker's exact state is saved with the journal length it belongs to
-(:mod:`mocap.io.checkpoint`), so an interrupted run — even killed at any instant — loses
-nothing and the same command resumes bit for bit where it stopped (the settings must be the
-same; they are kept in ``run.json``). One run at a time may write to an output folder
+Frames are decoded, reduced to the working resolution and prepared on a reader thread
+(:mod:`mocap.io.prefetch`) :data:`READ_AHEAD` frames ahead of the tracker. ``poses.csv`` is a
+journal: every finished frame is appended at once, and every :data:`CHECKPOINT_EVERY` frames
+(and after the last) the tracker's exact state is saved with the journal length it belongs to,
+the journal synced to disk first (:mod:`mocap.io.checkpoint`), so an interrupted run — even
+killed at any instant — resumes with the same command from the last checkpoint (the rows after
+it are cut off and done again) and gives bit for bit the poses of an uninterrupted run (the
+settings must be the same; they are kept in ``run.json``). One run at a time may write to an output folder
 (:mod:`mocap.io.lock`). The other outputs are written atomically at the end.
 """
 from __future__ import annotations
@@ -14,6 +17,7 @@ from __future__ import annotations
 import collections
 import json
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,9 +30,9 @@ from mocap.io.checkpoint import Checkpoint, read_checkpoint, truncate_journal, w
 from mocap.io.frames import VideoSource
 from mocap.io.lock import one_writer
 from mocap.io.pose_table import PoseTable
+from mocap.io.prefetch import prefetch
 from mocap.io.run_outputs import OverlayWriter, RunSummary, finish_run, frame_row
-from mocap.io.video import count_frames, read_image
-from mocap.io.video_check import check_video
+from mocap.io.video import read_image
 from mocap.track import FrameResult, Tracker, TrackerConfig
 
 __all__ = ["RunSetup", "RunSummary", "track_video", "STATE_FILE"]
@@ -102,7 +106,8 @@ def _settings(source: str, background: Path | None, calibration: Calibration, co
 def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerConfig | None = None, *,
                 ground_truth: str | Path | None = None, fps: float = 25.0, max_frames: int | None = None,
                 overwrite: bool = False, progress: bool = True, write_overlay: bool = True,
-                allow_damaged: bool = False, start_frame: int = 0, show: bool = False) -> RunSummary:
+                allow_damaged: bool = False, start_frame: int = 0, show: bool = False,
+                newcomer: Callable[[int, np.ndarray], RunSetup | None] | None = None) -> RunSummary:
     """Track every frame of a video or image folder and write the outputs.
 
     Parameters
@@ -139,6 +144,14 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
         silhouette, or where a face is detected (``run.json``: ``colour_model_frame``).
     show : bool
         Show the overlay live in a window (needs a display).
+    newcomer : callable, optional
+        People change: once nobody has been in view for :data:`PERSON_GONE_FRAMES` frames, it is
+        called with ``(index, input-size frame)`` of every third frame that shows someone until
+        it returns a set-up: that set-up (a new person's calibration, colours and scene:
+        :func:`mocap.own_video.newcomer_finder`) ends the segment and starts a new one with a
+        fresh tracker. Segments go to ``run.json`` (``segments``) and the ``segment`` column
+        of ``poses.csv``. It must give the same answer for the same frame (a resumed run asks
+        again).
 
     Returns
     -------
@@ -164,16 +177,14 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
     imaging, work_factor = setup.imaging, setup.factor
     if setup.colour_from not in COLOUR_SOURCES:
         raise ValueError(f"colour must be one of {COLOUR_SOURCES}, got {setup.colour_from!r}")
-    frames_in = source if hasattr(source, "frames") else VideoSource(source)
+    frames_in = source if hasattr(source, "frames") else VideoSource(source, fps=fps)
     out_dir = Path(out_dir)
     if isinstance(start_frame, bool) or not isinstance(start_frame, int) or start_frame < 0:
         raise ValueError(f"the start frame must be a non-negative integer, got {start_frame!r}")
     if frames_in.live:
         total, damaged = frames_in.count, []
     else:
-        total, damaged = _frames_to_track(frames_in.path, allow_damaged)
-        if total == 0:
-            raise ValueError(f"{frames_in.name} has no frames")
+        total, damaged = frames_in.count, frames_in.damaged_frames(allow_damaged)
         if start_frame >= total:
             raise ValueError(f"start frame {start_frame} is past the end of {frames_in.name} ({total} frames)")
     if max_frames is not None:
@@ -216,7 +227,10 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
     colour_model.to_json(out_dir / "colour_model.json")
     model = model.with_class_names(colour_model.names)        # classes the first frame supports
 
-    tracker = Tracker(model, camera, config, calibration.initial_pose)
+    # people: the segments (one per person), frames in a row with nobody in view, the last with someone
+    people = {"segments": [_segment_record(start_frame, calibration, colour_model, None)], "absent": 0,
+              "last_seen": start_frame - 1, "vacant": False}
+    person = (model, colour_model, setup.scene, calibration)
     state_path = out_dir / STATE_FILE
     start = start_frame
     if checkpoint is not None:
@@ -225,6 +239,16 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
         start = checkpoint.next_index
         state = dict(checkpoint.state)
         pending_dark = state.pop(PENDING_DARK, np.zeros((0, 2), np.int64))
+        people = json.loads(str(state.pop(PEOPLE, np.array(json.dumps(people)))))
+        if len(people["segments"]) > 1:      # the person of the last segment, found again as before
+            first = people["segments"][-1]["first_frame"]
+            found = None if newcomer is None else newcomer(first, next(frames_in.frames(indices=[first])))
+            if found is None:
+                raise ValueError(f"{out_dir}: the person found on frame {first} is not found again; start afresh "
+                                 "with --overwrite")
+            person = _person(found, config, resolution)
+    tracker = Tracker(person[0], camera, config, person[3].initial_pose)
+    if checkpoint is not None:
         tracker.restore(state)
     else:
         write_text_atomic(run_json, json.dumps({"status": "running", "settings": settings}, indent=2))
@@ -233,7 +257,7 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
     # the overlay is drawn as frames come (no second decoding pass) unless an earlier session's
     # frames must be in it too (a resumed file run redraws it whole at the end)
     overlay_now = frames_in.live or (write_overlay and start == start_frame)
-    live = OverlayWriter(out_dir, fps, model, camera, show=show, write=overlay_now) \
+    live = OverlayWriter(out_dir, fps, person[0], camera, show=show, write=overlay_now) \
         if (overlay_now or show) else None
     pending: dict[int, np.ndarray] = {}
     # dark flags of the frames pushed but not decided yet (kept in the checkpoint with the tracker)
@@ -242,9 +266,30 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
                unit="frame", disable=not progress)
     interrupted = False
 
+    clock = time.perf_counter()
+    every = CHECKPOINT_EVERY
+
+    # the colours the frames are prepared with: (segment, colour model, scene), replaced whole
+    # when a new person comes (frames the reader prepared before are prepared again)
+    colours = [(len(people["segments"]) - 1, person[1], person[2])]
+
+    def read():
+        """Decoded, reduced and prepared frames (on the reader thread, ahead of the tracker)."""
+        for index, frame in enumerate(frames_in.frames(start, total), start=start):
+            # a live source's frame time is when it came; a file's its own timestamp
+            when = time.perf_counter() - clock if frames_in.live else frames_in.time_s(index)
+            small = downscale(frame, work_factor)
+            segment, colour, scene = colours[0]
+            yield index, when, bool(small.mean() < DARK_MEAN), small, segment, \
+                prepare_frame(small, bg_image, colour, imaging, scene=scene), frame if newcomer else None
+
+    times: dict[int, float] = {}         # a live source's frame times, until the frames are decided
+
     def emit(results: list[FrameResult]) -> None:
         for result in results:
-            frame_row(result, camera, work_factor, dark.pop(result.frame, None)).append_to(journal)
+            when = times.pop(result.frame) if frames_in.live else frames_in.time_s(result.frame)
+            frame_row(result, camera, work_factor, dark.pop(result.frame, None), when,
+                      len(people["segments"]) - 1).append_to(journal, sync=False)
             results_ms.append(result.timings_ms["total"])
             frame = pending.pop(result.frame, None)
             if live is not None and frame is not None:
@@ -253,17 +298,43 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
                             D=f"{result.edge_residual:.1f}")
 
     try:
-        for index, frame in enumerate(frames_in.frames(start, total), start=start):
-            small = downscale(frame, work_factor)
-            dark[index] = bool(small.mean() < DARK_MEAN)
+        for index, when, is_dark, small, segment, prepared, frame in prefetch(read, READ_AHEAD,
+                                                                              name="mocap-reader"):
+            dark[index] = is_dark
+            if frames_in.live:
+                times[index] = when
             if live is not None:
                 pending[index] = small
-            prepared = prepare_frame(small, bg_image, colour_model, imaging, scene=setup.scene)
+            if segment != len(people["segments"]) - 1:           # prepared with the last person's colours
+                prepared = prepare_frame(small, bg_image, colours[0][1], imaging, scene=colours[0][2])
+            if newcomer is not None and people["vacant"] and not prepared.is_empty and index % 3 == 0:
+                found = newcomer(index, frame)
+                if found is not None:                           # someone new: a segment of their own
+                    emit(tracker.finish())
+                    people["vacant"] = False
+                    person = _person(found, config, resolution)
+                    people["segments"].append(_segment_record(index, person[3], person[1], found.record))
+                    colours[0] = (len(people["segments"]) - 1, person[1], person[2])
+                    tracker = Tracker(person[0], camera, config, person[3].initial_pose)
+                    if live is not None:
+                        live.model = person[0]
+                    prepared = prepare_frame(small, bg_image, person[1], imaging, scene=person[2])
+            del frame
             emit(tracker.push(index, prepared))
-            write_checkpoint(state_path, {**tracker.state(), PENDING_DARK: np.array(sorted(dark.items()), np.int64)
-                                          .reshape(-1, 2)}, index + 1, journal)
+            if prepared.is_empty:
+                people["absent"] += 1
+                seen = people["last_seen"] >= people["segments"][-1]["first_frame"]
+                if people["absent"] == PERSON_GONE_FRAMES and seen and not people["vacant"]:   # the person left
+                    people["vacant"] = True
+                    people["segments"][-1]["last_frame"] = people["last_seen"]
+            else:
+                people["absent"], people["last_seen"] = 0, index
+            if (index + 1) % every == 0 or index + 1 == total:
+                write_checkpoint(state_path, {**tracker.state(), PENDING_DARK: np.array(sorted(dark.items()),
+                                                                                         np.int64).reshape(-1, 2),
+                                              PEOPLE: np.array(json.dumps(people))}, index + 1, journal)
             bar.update(1)
-        # the held-back frames: not checkpointed, a resume continues from the last push instead
+        # the held-back frames: not checkpointed, a resume continues from the last checkpoint instead
         emit(tracker.finish())
     except KeyboardInterrupt:
         if not frames_in.live:
@@ -282,9 +353,28 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
     redraw = write_overlay and not overlay_now
     overlay_frames = ((i, downscale(f, work_factor)) for i, f in
                       enumerate(frames_in.frames(0, int(table.frames.max()) + 1))) if redraw else None
+    if not people["vacant"]:
+        people["segments"][-1]["last_frame"] = people["last_seen"]
+    models = [Calibration.from_dict(seg["calibration"]).body_model(resolution)
+              .with_class_names(tuple(seg["colour_classes"])) for seg in people["segments"]]
     return finish_run(out_dir, table, settings, calibration=calibration, camera=camera, ground_truth=gt, fps=fps,
                       start=start, wall_s=time.perf_counter() - started, damaged=damaged, colour_frame=colour_frame,
-                      overlay_frames=overlay_frames, model=model)
+                      overlay_frames=overlay_frames, models=models, extra_run={"segments": people["segments"]})
+
+
+def _segment_record(first_frame: int, calibration: Calibration, colour_model: ColourModel,
+                    found: dict | None) -> dict:
+    """A segment of ``run.json``: its frames, the person's calibration, colours and how found."""
+    return {"first_frame": int(first_frame), "last_frame": None, "calibration": calibration.to_dict(),
+            "colour_classes": list(colour_model.names), "found": found}
+
+
+def _person(setup: RunSetup, config: TrackerConfig, resolution: int):
+    """(body model, colour model, scene, calibration) of a new person's set-up."""
+    if setup.colour_model is None:
+        raise ValueError("a new person's set-up needs its colour model")
+    model = setup.calibration.body_model(resolution).with_class_names(setup.colour_model.names)
+    return model, setup.colour_model, setup.scene, setup.calibration
 
 
 #: Fraction of the calibrated model's silhouette (pixels) the foreground must cover for a frame to
@@ -319,17 +409,16 @@ def _learn_colours(frames, name: str, bg_image, model, camera, pose, imaging,
                      f"last: {reason}")
 
 
-def _frames_to_track(source: Path, allow_damaged: bool) -> tuple[int, list[int]]:
-    """Frames a video or folder delivers, and the damaged frame numbers of a video (what
-    decodes checked against what its container announces); ValueError on damage unless allowed."""
-    if source.is_dir():
-        return count_frames(source), []
-    check = check_video(source)
-    if check.damaged and not allow_damaged:
-        raise ValueError(f"{check.describe(source)}; to track the frames that decode anyway, add --allow-damaged")
-    return check.readable, check.damaged_frames
-
-
+#: Frames between two checkpoints (and after the last frame of a file): a resumed run redoes at
+#: most this many frames (the journal is cut back to the checkpoint), bit for bit the same.
+CHECKPOINT_EVERY = 25
+#: Frames decoded, reduced and prepared ahead of the tracker on the reader thread.
+READ_AHEAD = 4
+#: Frames in a row with nobody in view after which the tracked person has left: the next person
+#: seen is calibrated afresh (``newcomer`` of :func:`track_video`).
+PERSON_GONE_FRAMES = 10
+#: Checkpoint entry holding the people's bookkeeping (segments, JSON text).
+PEOPLE = "run_people"
 #: Checkpoint entry holding ``(frame, dark)`` of the frames the tracker still holds back.
 PENDING_DARK = "run_pending_dark"
 #: Checkpoint (:mod:`mocap.io.checkpoint`): the tracker's exact state after the last pushed

@@ -11,8 +11,12 @@ this process) does what ``MODE`` says:
 ``pause``        after the checkpoint, create the file ``$KILLPOINTS_PAUSED`` and wait until
                  it has been removed (another run can then meet the held lock)
 
-:func:`install` does the same inside any process (the cluster test starts a Dask worker with
-it). SIGKILL cannot be caught: nothing of the run's own clean-up happens, as with ``kill -9``.
+The checkpoint interval is :data:`CHECKPOINT_EVERY` frames (instead of the run's default), so
+that the kill points of a short clip fall on every position inside an interval.
+
+SIGKILL cannot be caught: nothing of the run's own clean-up happens, as with ``kill -9``.
+:func:`install` does the same inside any process (the track-many cluster test starts a Dask
+worker with it).
 """
 from __future__ import annotations
 
@@ -23,9 +27,14 @@ import time
 from pathlib import Path
 
 
+#: Frames between checkpoints in the killed runs.
+CHECKPOINT_EVERY = 3
+
+
 def install(mode: str, n: int) -> None:
-    """Wrap the run's two writes in this process so that the ``n``-th one does what ``mode`` says
-    (also usable before starting something else than the CLI, e.g. a Dask worker)."""
+    """Wrap the run's two writes in this process so that the ``n``-th one does what ``mode`` says,
+    and checkpoint every :data:`CHECKPOINT_EVERY` frames (also before starting something else
+    than the CLI, e.g. a Dask worker)."""
     if mode not in ("after-row", "mid-row", "after-state", "pause"):
         raise SystemExit(f"unknown mode {mode!r}")
     import mocap.pipeline as run
@@ -37,7 +46,7 @@ def install(mode: str, n: int) -> None:
     def die() -> None:
         os.kill(os.getpid(), signal.SIGKILL)
 
-    def append_and_maybe_die(self, path) -> None:
+    def append_and_maybe_die(self, path, *, sync: bool = True) -> None:
         counts["row"] += 1
         if mode == "mid-row" and counts["row"] == n:
             line = self.to_csv_text().split("\n")[1]
@@ -46,7 +55,7 @@ def install(mode: str, n: int) -> None:
                 fh.flush()
                 os.fsync(fh.fileno())
             die()
-        append_to(self, path)
+        append_to(self, path, sync=sync)
         if mode == "after-row" and counts["row"] == n:
             die()
 
@@ -63,6 +72,7 @@ def install(mode: str, n: int) -> None:
 
     PoseTable.append_to = append_and_maybe_die
     run.write_checkpoint = checkpoint_and_maybe_die
+    run.CHECKPOINT_EVERY = CHECKPOINT_EVERY
 
 
 def main(argv: list[str]) -> int:

@@ -21,6 +21,7 @@ from mocap.many import SUMMARY_COLUMNS, read_summary
 
 from tests.conftest import REPO_ROOT
 from tests.dask_cluster import cluster_env, local_cluster, wait_for
+from tests.killpoints import CHECKPOINT_EVERY
 
 N_FRAMES = 6
 #: Few evaluations, no decoding lag (a row per frame: the kill points fall between known rows).
@@ -102,8 +103,9 @@ def test_name_clashes_and_missing_inputs_are_refused_before_anything_runs(tmp_pa
 def test_an_interrupted_run_resumes_without_retracking_finished_videos(clips, single_runs, tmp_path):
     out = tmp_path / "out"
     a, b = clips[:2]
-    # in this process (--workers 0), killed by SIGKILL after the third frame of the second video
-    cmd = [sys.executable, "-m", "tests.killpoints", "after-state", str(N_FRAMES + 3), "--",
+    # in this process (--workers 0), killed by SIGKILL at the second video's first checkpoint
+    per_video = -(-N_FRAMES // CHECKPOINT_EVERY)                 # checkpoints of a whole video
+    cmd = [sys.executable, "-m", "tests.killpoints", "after-state", str(per_video + 1), "--",
            "track-many", str(a), str(b), "--out", str(out), "--workers", "0", "--no-progress", *TRACK_ARGS]
     proc = subprocess.run(cmd, cwd=REPO_ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == -9, proc.stderr
@@ -117,7 +119,7 @@ def test_an_interrupted_run_resumes_without_retracking_finished_videos(clips, si
     assert proc.returncode == 0, proc.stderr
     assert "2 of 2 inputs finished (1 already were), 0 failed" in proc.stdout
     assert {p.name: (p.read_bytes(), p.stat().st_mtime_ns) for p in (out / a.name).iterdir()} == finished
-    assert json.loads((out / b.name / "run.json").read_text())["resumed_from_frame"] == 3
+    assert json.loads((out / b.name / "run.json").read_text())["resumed_from_frame"] == CHECKPOINT_EVERY
     for clip in (a, b):
         assert_same_track(out / clip.name, single_runs[clip.name])
     assert [r["status"] for r in assert_summary_matches_runs(out, [a, b])] == ["finished", "finished"]
@@ -163,10 +165,12 @@ def test_a_damaged_input_fails_alone_with_its_reason(clips, single_runs, tmp_pat
 
 @pytest.mark.slow
 def test_a_killed_worker_s_video_resumes_elsewhere_and_every_video_is_its_single_run(clips, single_runs, tmp_path):
-    """A scheduler and two workers on 127.0.0.1; worker b, after its second frame's checkpoint,
-    announces itself and waits (:func:`tests.killpoints.install`), and is killed there by SIGKILL."""
+    """A scheduler and two workers on 127.0.0.1; worker b, at its first checkpoint (after frame
+    :data:`tests.killpoints.CHECKPOINT_EVERY` of a video), announces itself and waits
+    (:func:`tests.killpoints.install`), and is killed there by SIGKILL."""
     pytest.importorskip("distributed")
-    out, paused, pause_at = tmp_path / "out", tmp_path / "paused", 2
+    out, paused, pause_at = tmp_path / "out", tmp_path / "paused", 1
+    assert CHECKPOINT_EVERY < N_FRAMES                  # the first checkpoint is in the middle of a video
     workers = {"worker-a": {}, "worker-b": {"prelude": f"from tests.killpoints import install; install('pause', "
                                                        f"{pause_at}); ", "env": {"KILLPOINTS_PAUSED": str(paused)}}}
     # paths relative to the command's folder, which is not the workers' (they run in REPO_ROOT)
@@ -185,7 +189,7 @@ def test_a_killed_worker_s_video_resumes_elsewhere_and_every_video_is_its_single
     assert processes["worker-b"].returncode == -signal.SIGKILL
     assert "3 of 3 inputs finished (0 already were), 0 failed, " in stdout and f"on dask {address}" in stdout
     resumed = [json.loads((out / clip.name / "run.json").read_text())["resumed_from_frame"] for clip in clips]
-    assert sorted(resumed) == [0, 0, pause_at]          # the killed worker's video went on from its checkpoint
+    assert sorted(resumed) == [0, 0, CHECKPOINT_EVERY]  # the killed worker's video went on from its checkpoint
     for clip in clips:
         assert_same_track(out / clip.name, single_runs[clip.name])
     assert [r["status"] for r in assert_summary_matches_runs(out, inputs)] == ["finished"] * 3

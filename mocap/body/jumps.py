@@ -36,13 +36,12 @@ import numpy as np
 from mocap.body.ik import reach_arm
 from mocap.body.kinematics import Skeleton, joint_positions, segment_transforms
 from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX, check_pose, clamp_to_limits
-from mocap.body.skeleton import JOINT_NAMES, SEGMENT_NAMES
+from mocap.body.skeleton import JOINT_INDEX, SEGMENT_NAMES
 
 #: Names of the arm jumps, in the order :func:`arm_jumps` returns them.
 ARM_JUMPS: tuple[str, ...] = ("upper_arm", "forearm", "both")
 #: Sides of the body, as in the parameter names.
 SIDES: tuple[str, ...] = ("r", "l")
-_JOINT = {name: i for i, name in enumerate(JOINT_NAMES)}
 _SEGMENT = {name: i for i, name in enumerate(SEGMENT_NAMES)}
 
 
@@ -171,7 +170,7 @@ def arm_jumps(pose, skeleton: Skeleton, side: str) -> dict[str, np.ndarray]:
     """
     q = check_pose(pose)
     joints = joint_positions(q, skeleton)
-    s, e, w = (joints[_JOINT[f"{side}_{j}"]] for j in ("shoulder", "elbow", "wrist"))
+    s, e, w = (joints[JOINT_INDEX[f"{side}_{j}"]] for j in ("shoulder", "elbow", "wrist"))
     out = {}
     w_forearm = reflect_on_ray(w, e)
     out["forearm"] = arm_angles_for_points(q, skeleton, side, e, w_forearm)
@@ -191,16 +190,43 @@ def arm_jumps(pose, skeleton: Skeleton, side: str) -> dict[str, np.ndarray]:
 _MIRRORED_SIGNS = ("chest_roll", "head_tilt", "head_turn")
 
 
+def turned_mirror(pose) -> np.ndarray:
+    """The torso's front/back mirror without re-posing: the body reflected through the plane
+    facing the camera at its root (its silhouette under an orthographic camera is unchanged).
+
+    The chest heading ``yaw`` becomes ``pi - yaw`` (or ``-pi - yaw``, whichever is nearer); the
+    sideways lean and the head's tilt and turn change sign; each arm takes the other arm's angles.
+
+    Parameters
+    ----------
+    pose : array_like, shape (23,)
+
+    Returns
+    -------
+    ndarray, shape (23,), float64
+        Inside the joint limits.
+    """
+    q = check_pose(pose)
+    out = q.copy()
+    yaw = q[PARAMETER_INDEX["chest_yaw"]]
+    out[PARAMETER_INDEX["chest_yaw"]] = min((math.pi - yaw, -math.pi - yaw), key=lambda y: abs(y - yaw))
+    for name in _MIRRORED_SIGNS:
+        out[PARAMETER_INDEX[name]] = -q[PARAMETER_INDEX[name]]
+    for name, i in PARAMETER_INDEX.items():
+        if name.startswith("r_"):
+            j = PARAMETER_INDEX["l_" + name[2:]]
+            out[i], out[j] = q[j], q[i]
+    return clamp_to_limits(out)
+
+
 def torso_flip(pose, skeleton: Skeleton) -> np.ndarray:
     """The torso's front/back mirror: the heading seen the other way round, arms re-posed.
 
-    The chest heading ``yaw`` becomes ``pi - yaw`` (or ``-pi - yaw``, whichever is nearer, within
-    the limits); the sideways lean and the head's tilt and turn change sign; each arm takes the
-    other arm's angles (the mirrored body's right arm stands where the left one was) and is then
-    re-posed (:func:`mocap.body.ik.reach_arm`) towards the camera ray of the hand it replaces, at
-    the depth the mirrored body gives it, when that brings the hand nearer. Under a pinhole camera
-    a turned torso is not the mirror image of the original, so unlike the arm jumps this one
-    keeps the projections only approximately (to a pixel or two at 160x120).
+    :func:`turned_mirror`, then each arm is re-posed (:func:`mocap.body.ik.reach_arm`) towards
+    the camera ray of the hand it replaces, at the depth the mirrored body gives it, when that
+    brings the hand nearer. Under a pinhole camera a turned torso is not the mirror image of the
+    original, so unlike the arm jumps this one keeps the projections only approximately (to a
+    pixel or two at 160x120).
 
     Parameters
     ----------
@@ -213,20 +239,11 @@ def torso_flip(pose, skeleton: Skeleton) -> np.ndarray:
         Inside the joint limits.
     """
     q = check_pose(pose)
-    old_hands = {side: joint_positions(q, skeleton)[_JOINT[f"{side}_hand"]] for side in SIDES}
-    out = q.copy()
-    yaw = q[PARAMETER_INDEX["chest_yaw"]]
-    out[PARAMETER_INDEX["chest_yaw"]] = min((math.pi - yaw, -math.pi - yaw), key=lambda y: abs(y - yaw))
-    for name in _MIRRORED_SIGNS:
-        out[PARAMETER_INDEX[name]] = -q[PARAMETER_INDEX[name]]
-    for name, i in PARAMETER_INDEX.items():
-        if name.startswith("r_"):
-            j = PARAMETER_INDEX["l_" + name[2:]]
-            out[i], out[j] = q[j], q[i]
-    out = clamp_to_limits(out)
+    old_hands = {side: joint_positions(q, skeleton)[JOINT_INDEX[f"{side}_hand"]] for side in SIDES}
+    out = turned_mirror(q)
     mirrored_hands = joint_positions(out, skeleton)
     for side, other in (("r", "l"), ("l", "r")):
-        hand = _JOINT[f"{side}_hand"]
+        hand = JOINT_INDEX[f"{side}_hand"]
         ray = _unit(old_hands[other])
         target = float(ray @ mirrored_hands[hand]) * ray
         moved = reach_arm(out, skeleton, side, target)

@@ -31,8 +31,8 @@ __all__ = ["EXTRA_COLUMNS", "PIXEL_COLUMNS", "RunSummary", "OverlayWriter", "dra
 
 #: Per-frame columns of ``poses.csv`` after the pose and joint columns.
 EXTRA_COLUMNS = ("region_residual", "edge_residual", "edge_residual_after_region", "failed", "empty", "hypothesis",
-                 "score", "evaluations", "region_iterations",
-                 "edge_iterations", "ms_prepare", "ms_region", "ms_edge", "ms_recovery", "ms_total")
+                 "score", "origin", "evaluations", "region_iterations",
+                 "edge_iterations", "ms_prepare", "ms_region", "ms_edge", "ms_beam", "ms_proposals", "ms_total")
 #: Names of the 2D keypoint columns of ``poses.csv`` (input-video pixels).
 PIXEL_COLUMNS = tuple(f"{j}_{a}" for j in JOINT_NAMES for a in "uv")
 
@@ -78,11 +78,14 @@ def joint_pixels(joints: np.ndarray, camera, work_factor: int = 1) -> np.ndarray
     return work_factor * np.stack([u, v], axis=-1)
 
 
-def frame_row(result, camera=None, work_factor: int = 1, dark: bool | None = None) -> PoseTable:
-    """One ``poses.csv`` row of a decided frame (:class:`mocap.track.FrameResult`): pose,
-    joints, the joints' input pixels (with ``camera``), :data:`EXTRA_COLUMNS` and ``dark``."""
+def frame_row(result, camera=None, work_factor: int = 1, dark: bool | None = None,
+              time_s: float | None = None, segment: int | None = None) -> PoseTable:
+    """One ``poses.csv`` row of a decided frame (:class:`mocap.track.FrameResult`): its
+    ``time_s`` (seconds from the first frame, the frame's own timestamp), pose, joints, the
+    joints' input pixels (with ``camera``), :data:`EXTRA_COLUMNS`, ``dark`` and ``segment``
+    (the person: ``run.json`` ``segments``)."""
     t = result.timings_ms
-    extra = {}
+    extra = {} if time_s is None else {"time_s": [time_s]}
     if camera is not None:
         uv = joint_pixels(result.joints, camera, work_factor).reshape(-1)
         extra.update({name: [value] for name, value in zip(PIXEL_COLUMNS, uv)})
@@ -90,13 +93,17 @@ def frame_row(result, camera=None, work_factor: int = 1, dark: bool | None = Non
               "edge_residual_after_region": [result.edge_residual_after_region],
               "failed": np.array([int(result.failed)]), "empty": np.array([int(result.empty)]),
               "hypothesis": np.array([result.hypothesis]), "score": [result.score],
+              "origin": np.array([result.origin]),
               "evaluations": np.array([result.evaluations]),
               "region_iterations": np.array([result.region_iterations]),
               "edge_iterations": np.array([result.edge_iterations]), "ms_prepare": [t.get("prepare", 0.0)],
               "ms_region": [t.get("region", 0.0)], "ms_edge": [t.get("edge", 0.0)],
-              "ms_recovery": [t.get("recovery", 0.0)], "ms_total": [t.get("total", 0.0)]}
+              "ms_beam": [t.get("beam", 0.0)], "ms_proposals": [t.get("proposals", 0.0)],
+              "ms_total": [t.get("total", 0.0)]}
     if dark is not None:
         extra["dark"] = np.array([int(dark)])
+    if segment is not None:
+        extra["segment"] = np.array([int(segment)])
     return PoseTable([result.frame], result.pose[None], result.joints[None],
                      {k: np.asarray(v) for k, v in extra.items()})
 
@@ -169,14 +176,17 @@ class OverlayWriter:
             self.plt.close(self.figure)
 
 
-def redraw_overlay(out_dir: Path, frames, table: PoseTable, model, camera, fps: float) -> None:
+def redraw_overlay(out_dir: Path, frames, table: PoseTable, models: list, camera, fps: float) -> None:
     """``overlay.mp4`` drawn afresh from ``poses.csv``: ``frames`` are ``(index, working-size
-    frame)`` pairs from frame 0 (frames without a row are shown as they are)."""
-    poses = {int(f): p for f, p in zip(table.frames, table.poses)}
-    writer = OverlayWriter(out_dir, fps, model, camera)
+    frame)`` pairs from frame 0 (frames without a row are shown as they are); ``models`` are
+    the body models of the segments (column ``segment``, 0 without it)."""
+    segment = table.extra.get("segment", np.zeros(len(table)))
+    rows = {int(f): (p, int(s)) for f, p, s in zip(table.frames, table.poses, segment)}
+    writer = OverlayWriter(out_dir, fps, models[0], camera)
     try:
         for index, frame in frames:
-            writer.update(frame, poses.get(index))
+            pose, person = rows.get(index, (None, 0))
+            writer.update(frame, pose, models[person])
     finally:
         writer.close()
 
@@ -206,7 +216,7 @@ def residual_plot(path: Path, table: PoseTable, tracker: dict) -> None:
 
 def finish_run(out_dir: Path, table: PoseTable, settings: dict, *, calibration, camera, ground_truth: PoseTable | None,
                fps: float, start: int, wall_s: float, damaged: list[int], colour_frame: int | None,
-               overlay_frames=None, model=None, extra_run: dict | None = None) -> RunSummary:
+               overlay_frames=None, models: list | None = None, extra_run: dict | None = None) -> RunSummary:
     """Write ``poses.bvh``, ``residuals.png``, ``run.json`` (and ``overlay.mp4`` redrawn from
     ``overlay_frames`` when given, see :func:`redraw_overlay`) of a run whose journal is
     ``table``; its summary."""
@@ -232,7 +242,8 @@ def finish_run(out_dir: Path, table: PoseTable, settings: dict, *, calibration, 
            "resumed_from_frame": start, "wall_seconds_this_session": wall_s,
            "fps": float(1e3 / np.mean(ms_total)), "timings_ms": timings,
            "failures": failures, "empty_frames": int(extra["empty"].sum()),
-           "units": {"positions": "metres", "angles_in_csv": "degrees", "residual_edge": "pixels"}}
+           "units": {"positions": "metres", "angles_in_csv": "degrees", "residual_edge": "pixels",
+                     "time_s": "seconds from the first frame (the frame's own timestamp)"}}
     if metrics is not None:
         run["metrics"] = metrics
     run["colour_model_frame"] = colour_frame
@@ -243,7 +254,7 @@ def finish_run(out_dir: Path, table: PoseTable, settings: dict, *, calibration, 
     write_bvh(out_dir / "poses.bvh", table.poses, calibration.dims, fps)
     residual_plot(out_dir / "residuals.png", table, settings["tracker"])
     if overlay_frames is not None:
-        redraw_overlay(out_dir, overlay_frames, table, model, camera, fps)
+        redraw_overlay(out_dir, overlay_frames, table, models, camera, fps)
     if "dark" in extra:
         run["dark_frames"] = int(extra["dark"].sum())
     write_text_atomic(out_dir / "run.json", json.dumps(run, indent=2))
