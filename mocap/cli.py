@@ -12,7 +12,7 @@ import importlib.util
 import sys
 
 #: Sub-commands in the order ``--help`` lists them.
-COMMANDS: tuple[str, ...] = ("demo", "track", "calibrate", "segment", "synth", "bench")
+COMMANDS: tuple[str, ...] = ("demo", "track", "track_many", "calibrate", "segment", "synth", "bench")
 
 
 def build_parser() -> argparse.ArgumentParser:

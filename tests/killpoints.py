@@ -15,6 +15,8 @@ The checkpoint interval is :data:`CHECKPOINT_EVERY` frames (instead of the run's
 that the kill points of a short clip fall on every position inside an interval.
 
 SIGKILL cannot be caught: nothing of the run's own clean-up happens, as with ``kill -9``.
+:func:`install` does the same inside any process (the track-many cluster test starts a Dask
+worker with it).
 """
 from __future__ import annotations
 
@@ -29,14 +31,13 @@ from pathlib import Path
 CHECKPOINT_EVERY = 3
 
 
-def main(argv: list[str]) -> int:
-    mode, n, sep, *cli_args = argv
-    if mode not in ("after-row", "mid-row", "after-state", "pause") or sep != "--":
-        raise SystemExit(f"usage: MODE N -- CLI ARGS (got {argv})")
-    n = int(n)
-
+def install(mode: str, n: int) -> None:
+    """Wrap the run's two writes in this process so that the ``n``-th one does what ``mode`` says,
+    and checkpoint every :data:`CHECKPOINT_EVERY` frames (also before starting something else
+    than the CLI, e.g. a Dask worker)."""
+    if mode not in ("after-row", "mid-row", "after-state", "pause"):
+        raise SystemExit(f"unknown mode {mode!r}")
     import mocap.pipeline as run
-    from mocap.cli import main as cli_main
     from mocap.io.pose_table import PoseTable
 
     counts = {"row": 0, "state": 0}
@@ -72,6 +73,14 @@ def main(argv: list[str]) -> int:
     PoseTable.append_to = append_and_maybe_die
     run.write_checkpoint = checkpoint_and_maybe_die
     run.CHECKPOINT_EVERY = CHECKPOINT_EVERY
+
+
+def main(argv: list[str]) -> int:
+    mode, n, sep, *cli_args = argv
+    if sep != "--":
+        raise SystemExit(f"usage: MODE N -- CLI ARGS (got {argv})")
+    install(mode, int(n))
+    from mocap.cli import main as cli_main
     return cli_main(cli_args)
 
 

@@ -1,0 +1,68 @@
+"""``python -m mocap track-many INPUT... --out DIR [--workers N | --scheduler ADDRESS]``
+
+Tracks every input (video files, image folders, sequence folders, globs) exactly as
+``python -m mocap track INPUT`` would, into ``DIR/<input's name>/``, one Dask task per video:
+on N local single-threaded worker processes (default: the machine's cores; 0: one after another
+in this process) or on an existing Dask cluster (docs/cluster.md). A worker that dies is
+replaced and its video resumes from its checkpoint; the same command again skips finished
+videos and resumes the rest. Writes DIR/summary.csv and DIR/summary.png. Exit status 0 when
+every input finished, 1 when some failed (their reasons in the summary), 2 on bad input.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from mocap.commands._common import add_tracker_options, tracker_config
+
+
+def add_parser(subparsers) -> None:
+    from mocap.render.camera import DEFAULT_HFOV_DEG
+
+    p = subparsers.add_parser("track-many", help="track many videos at once, locally or on a Dask cluster",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("inputs", nargs="+", metavar="INPUT",
+                   help="video files, image folders or sequence folders, or globs of them ('clips/*.mp4')")
+    p.add_argument("--out", type=Path, required=True, metavar="DIR",
+                   help="output folder: DIR/<input's name>/ for each input, DIR/summary.csv, DIR/summary.png")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None, metavar="N",
+                       help="local worker processes, one thread each (default: the machine's cores; 0: in this "
+                            "process, one video after another)")
+    where.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="a running Dask scheduler (tcp://HOST:8786) whose workers reach DIR (docs/cluster.md)")
+    p.add_argument("--no-background", action="store_true",
+                   help="no empty view: the foreground is what the colour classes explain")
+    p.add_argument("--hfov", type=float, default=DEFAULT_HFOV_DEG, metavar="DEG",
+                   help=f"camera horizontal field of view without a calibration (default {DEFAULT_HFOV_DEG:g})")
+    p.add_argument("--height", type=float, default=None, metavar="M",
+                   help="the person's height in metres (the same person in every input)")
+    p.add_argument("--work-width", type=int, default=None, metavar="PX", help="working width (see track --help)")
+    p.add_argument("--colour", choices=("calibration", "face"), default="calibration",
+                   help="learn colours inside the calibrated model (default) or from the detected face")
+    p.add_argument("--start", type=int, default=0, metavar="N", help="first frame to track in every input (default 0)")
+    p.add_argument("--allow-damaged", action="store_true",
+                   help="track the frames that decode of a damaged video instead of failing it")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_tracker_options(p)
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from mocap.many import track_many
+    from mocap.own_video import OwnVideoOptions
+
+    options = OwnVideoOptions(no_background=args.no_background, hfov_deg=args.hfov, height_m=args.height,
+                              work_width=args.work_width, colour=args.colour, start=args.start,
+                              max_frames=args.max_frames, allow_damaged=args.allow_damaged,
+                              overlay=not args.no_overlay, overwrite=args.overwrite, tracker=tracker_config(args))
+    summary = track_many(args.inputs, args.out, options, workers=args.workers, scheduler=args.scheduler,
+                         progress=not args.no_progress)
+    for row in summary.rows:
+        if row["status"] == "failed":
+            print(f"failed: {row['input']}: {row['reason']}", file=sys.stderr)
+    print(f"{summary.finished} of {len(summary.rows)} inputs finished ({summary.skipped} already were), "
+          f"{summary.failed} failed, {summary.wall_s:.0f} s on {summary.backend}; "
+          f"summary in {args.out / 'summary.csv'}")
+    return 1 if summary.failed else 0
