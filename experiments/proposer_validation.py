@@ -13,7 +13,10 @@ other five subjects only. Printed:
   image side's labels, with the noise model's labels of the same poses on the calibrated model,
   and with clean renders;
 * pooled, the share with one of M proposals (M/2 exemplars and their turns) within 100 mm on
-  the image side's labels, for each PCA size of ``--components``.
+  the image side's labels, for each PCA size of ``--components``;
+* with ``--channel-weights``, the same for descriptors whose channels
+  (:data:`mocap.imaging.descriptor.DESCRIPTOR_CHANNELS`: foreground, skin, hair) are weighted
+  before the PCA (the shipped PCA size; weight 0 leaves a channel out).
 
 The sequences are kept under ``--out`` (default ``experiments/results/proposer_validation``).
 About 4 minutes of CPU plus the sequences' generation (about 1 minute each) the first time.
@@ -32,7 +35,7 @@ from experiments.fit_proposer import (COVERED_MM, IMAGE_SIZE, N_COMPONENTS, SEED
                                       nearest_within, render_descriptors, training_set)
 from mocap.body.jumps import turned_mirror
 from mocap.body.model import BodyModel
-from mocap.imaging.descriptor import silhouette_descriptor
+from mocap.imaging.descriptor import DESCRIPTOR_CHANNELS, silhouette_descriptor
 from mocap.render import Camera, render
 from mocap.synth import SEQUENCE_NAMES
 
@@ -63,7 +66,17 @@ def main(argv=None) -> int:
     p.add_argument("--train", type=Path, default=TRAIN_DIR, help="folder of CMU .asf/.amc trials")
     p.add_argument("--out", type=Path, default=RESULTS_DIR / "proposer_validation")
     p.add_argument("--components", default="16,32,64,128", help="comma-separated PCA sizes compared")
+    p.add_argument("--channel-weights", default="",
+                   help="semicolon-separated weights of the descriptor's channels, e.g. '1,0,0;1,0.5,0'")
     args = p.parse_args(argv)
+    try:
+        weightings = [tuple(float(v) for v in w.split(",")) for w in args.channel_weights.split(";") if w.strip()]
+    except ValueError:
+        weightings = None
+    if weightings is None or any(len(w) != len(DESCRIPTOR_CHANNELS) or min(w) < 0 for w in weightings):
+        print(f"error: --channel-weights takes {len(DESCRIPTOR_CHANNELS)} non-negative numbers per weighting, "
+              f"got {args.channel_weights!r}", file=sys.stderr)
+        return 2
     try:
         sizes = tuple(int(v) for v in args.components.split(",") if v.strip())
     except ValueError:
@@ -89,6 +102,8 @@ def main(argv=None) -> int:
     camera = Camera.default(*IMAGE_SIZE)
     rng = np.random.default_rng([SEED, 4])
     per_subject, pooled = [], {(n, m): [] for n in sizes for m in PROPOSALS}
+    weighted = {(w, m): [] for w in weightings for m in PROPOSALS}
+    cells = descriptors.shape[1] // len(DESCRIPTOR_CHANNELS)
     for index, (subject, trial) in enumerate(VALIDATION_TRIALS):
         loaded, prepared = validation_clip(index, args.train, args.out)
         model = loaded.model
@@ -117,6 +132,15 @@ def main(argv=None) -> int:
                     for m in PROPOSALS:
                         both = np.concatenate([joints[rows[:, :m // 2]], turned[rows[:, :m // 2]]], axis=1)
                         pooled[(n, m)].append(nearest_within(both, truth_joints).min(axis=1) <= COVERED_MM)
+        for w in weightings:
+            scale = np.repeat(np.array(w, dtype=np.float32), cells)
+            pca = PCA(N_COMPONENTS, svd_solver="randomized", random_state=SEED).fit(descriptors[train] * scale)
+            index_nn = NearestNeighbors().fit(pca.transform(descriptors[train] * scale))
+            _, rows = index_nn.kneighbors(pca.transform(queries["image side"] * scale), max(PROPOSALS) // 2)
+            rows = train[rows]
+            for m in PROPOSALS:
+                both = np.concatenate([joints[rows[:, :m // 2]], turned[rows[:, :m // 2]]], axis=1)
+                weighted[(w, m)].append(nearest_within(both, truth_joints).min(axis=1) <= COVERED_MM)
         per_subject.append(row)
     ks = " / ".join(map(str, NEIGHBOURS))
     print(f"| held out (trial) | image side's labels, k = {ks} | noise model | clean render |")
@@ -130,6 +154,14 @@ def main(argv=None) -> int:
     print("|---" * (1 + len(PROPOSALS)) + "|")
     for n in sizes:
         print(f"| {n} | " + " | ".join(f"{100 * np.concatenate(pooled[(n, m)]).mean():.1f} %" for m in PROPOSALS) + " |")
+    if weightings:
+        names = "/".join(name for name, _ in DESCRIPTOR_CHANNELS)
+        print()
+        print(f"| weights ({names}), PCA {N_COMPONENTS} | " + " | ".join(f"M = {m}" for m in PROPOSALS) + " |")
+        print("|---" * (1 + len(PROPOSALS)) + "|")
+        for w in weightings:
+            print(f"| {', '.join(f'{v:g}' for v in w)} | "
+                  + " | ".join(f"{100 * np.concatenate(weighted[(w, m)]).mean():.1f} %" for m in PROPOSALS) + " |")
     return 0
 
 
