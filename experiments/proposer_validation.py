@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments import RESULTS_DIR
-from experiments.fit_pose_prior import TRAIN_DIR
+from experiments.fit_pose_prior import TRAIN_DIR, positive_integers
 from experiments.fit_proposer import (COVERED_MM, IMAGE_SIZE, N_COMPONENTS, SEED, NoiseModel, joints_of, label_noise,
                                       nearest_within, render_descriptors, training_set)
 from mocap.body.jumps import turned_mirror
@@ -77,11 +77,8 @@ def main(argv=None) -> int:
         print(f"error: --channel-weights takes {len(DESCRIPTOR_CHANNELS)} non-negative numbers per weighting, "
               f"got {args.channel_weights!r}", file=sys.stderr)
         return 2
-    try:
-        sizes = tuple(int(v) for v in args.components.split(",") if v.strip())
-    except ValueError:
-        sizes = ()
-    if not sizes or min(sizes) < 1:
+    sizes = positive_integers(args.components)
+    if not sizes:
         print(f"error: --components takes positive integers, got {args.components!r}", file=sys.stderr)
         return 2
     if not args.train.is_dir():
