@@ -38,6 +38,15 @@ REG_COVAR = 1e-3
 SEED = 0
 
 
+def positive_integers(text: str) -> tuple[int, ...]:
+    """``"4,8,16"`` -> ``(4, 8, 16)``; an empty tuple unless the text is comma-separated positive integers."""
+    try:
+        values = tuple(int(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        return ()
+    return values if values and min(values) >= 1 else ()
+
+
 def mirror_poses(poses: np.ndarray) -> np.ndarray:
     """Left/right mirror images of poses (the actor's right arm becomes the left, and so on).
 
@@ -101,11 +110,8 @@ def main(argv=None) -> int:
                    help="comma-separated mixture sizes to choose from on held-out subjects (one size: "
                         "fitted without the choice)")
     args = p.parse_args(argv)
-    try:
-        sizes = tuple(int(v) for v in args.components.split(",") if v.strip())
-    except ValueError:
-        sizes = ()
-    if not sizes or min(sizes) < 1:
+    sizes = positive_integers(args.components)
+    if not sizes:
         print(f"error: --components takes positive integers, got {args.components!r}", file=sys.stderr)
         return 2
     if not args.train.is_dir():

@@ -107,8 +107,11 @@ class ExemplarSource:
         for name, value in arrays.items():
             value.setflags(write=False)
             object.__setattr__(self, name, value)
-        from sklearn.neighbors import NearestNeighbors
-        from threadpoolctl import ThreadpoolController
+        try:
+            from sklearn.neighbors import NearestNeighbors
+            from threadpoolctl import ThreadpoolController
+        except ImportError as error:
+            raise ImportError("the exemplar proposal source needs scikit-learn: pip install 'mocap[fit]'") from error
 
         object.__setattr__(self, "_mean", arrays["mean"].astype(np.float32))
         object.__setattr__(self, "_axes", np.ascontiguousarray(arrays["components"].astype(np.float32).T))
