@@ -47,7 +47,10 @@ CONFIGS = MappingProxyType({
     "no-prior": {"prior_weight": 0.0},
     "no-jumps": {"jumps": False},
     "two-class": {},
+    "oracle-keypoints": {},
 })
+#: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
+ORACLE_KEYPOINTS = MappingProxyType({"oracle-keypoints": 2.0})
 #: Configurations tracked with the paper's two-class model (skin and clothes: no hair region, no
 #: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.
 TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
@@ -62,7 +65,8 @@ def config_of(name: str) -> TrackerConfig:
 def unit_path(out: Path, name: str, sequence: str, seed: int) -> Path:
     from experiments.ambiguity import config_key
     model = "-two-class" if name in TWO_CLASS_MODEL else ""
-    return out / "units" / f"{sequence}-s{seed}-{config_key(config_of(name))}{model}.json"
+    keypoints = f"-oracle{ORACLE_KEYPOINTS[name]:g}px" if name in ORACLE_KEYPOINTS else ""
+    return out / "units" / f"{sequence}-s{seed}-{config_key(config_of(name))}{model}{keypoints}.json"
 
 
 def run_unit(out: Path, name: str, sequence: str, seed: int) -> dict:
@@ -74,7 +78,8 @@ def run_unit(out: Path, name: str, sequence: str, seed: int) -> dict:
     if path.is_file():
         return read_json(path)["result"]
     config = config_of(name)
-    row = measure(sequence, config, out, seed, without=EXTENSIONS if name in TWO_CLASS_MODEL else ())
+    row = measure(sequence, config, out, seed, without=EXTENSIONS if name in TWO_CLASS_MODEL else (),
+                  oracle_sigma_px=ORACLE_KEYPOINTS.get(name))
     write_json(path, {"config": config.to_dict(), "name": name, "seed": seed, "result": row})
     return row
 

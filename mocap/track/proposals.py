@@ -5,17 +5,22 @@
   camera ray (:func:`reach_proposals`, inverse kinematics of :mod:`mocap.body.ik`).
 * **Kinematic jumps** (:func:`jump_proposals`): each arm's other depth branches and the
   torso's front/back mirror (:mod:`mocap.body.jumps`), clamped to the joint limits.
+* **Keypoints** (:class:`KeypointArmSource`): given a frame's 2D keypoints, the torso turned
+  to the heading its shoulder keypoints show and each arm posed through its elbow and wrist
+  keypoints on every depth branch (:func:`mocap.body.jumps.arm_poses_on_rays`).
 """
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
 from mocap.body.ik import reach_arm
-from mocap.body.jumps import SIDES, arm_jumps, torso_flip
+from mocap.body.jumps import SIDES, arm_jumps, arm_poses_on_rays, torso_flip
 from mocap.body.model import BodyModel
-from mocap.body.pose import PARAMETER_NAMES, clamp_to_limits
+from mocap.body.pose import PARAMETER_INDEX, PARAMETER_NAMES, clamp_to_limits, within_limits
 from mocap.body.skeleton import JOINT_NAMES
 from mocap.imaging.blobs import label_blobs
 from mocap.labels import class_label
@@ -137,3 +142,167 @@ def jump_proposals(pose: np.ndarray, model: BodyModel) -> list[tuple[str, np.nda
             out.append((f"{side}_{name}", clamp_to_limits(q)))
     out.append(("torso_flip", torso_flip(pose, model.skeleton)))
     return out
+
+
+@dataclass(frozen=True)
+class Proposal:
+    """A pose the tracker should consider.
+
+    Attributes
+    ----------
+    pose : ndarray, shape (23,)
+        Metres and radians, root placed.
+    origin : str
+        What proposed it (``"keypoints"``, ...).
+    """
+
+    pose: np.ndarray
+    origin: str
+
+
+@dataclass(frozen=True)
+class ProposalContext:
+    """What a proposal source may look at besides the prepared frame.
+
+    Attributes
+    ----------
+    model : BodyModel
+    camera : Camera
+        The working camera.
+    leader : ndarray, shape (23,)
+        The leading hypothesis's registered pose this frame.
+    keypoints : Keypoints or None
+        The frame's 2D keypoints (:class:`mocap.io.keypoints.Keypoints`), working-camera pixels.
+    """
+
+    model: BodyModel
+    camera: Camera
+    leader: np.ndarray
+    keypoints: object | None
+
+
+class ProposalSource(Protocol):
+    """Something that proposes poses for a frame."""
+
+    origin: str
+
+    def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
+        """Poses to consider for the frame (:class:`mocap.imaging.PreparedFrame`)."""
+
+
+def camera_ray(camera: Camera, uv) -> np.ndarray:
+    """Unit direction (3,) of the camera ray through pixel position ``uv`` (u, v), camera coordinates."""
+    ray = np.array([(uv[0] - camera.cx) / camera.fx, (uv[1] - camera.cy) / camera.fy, 1.0])
+    return ray / np.linalg.norm(ray)
+
+
+def torso_on_shoulders(pose: np.ndarray, model: BodyModel, camera: Camera, r_shoulder_uv, l_shoulder_uv) -> np.ndarray:
+    """The pose turned and moved so that its shoulders project onto two shoulder keypoints.
+
+    The chest heading starts from the one whose shoulder line, at the shoulders' current depth,
+    has the keypoints' projected width (``cos(yaw) = width_px * depth / (fx * shoulder width)``,
+    capped at 1), facing the camera when the right shoulder keypoint is left of the left one and
+    away otherwise; of the two turns (which shoulder is nearer, which one view cannot tell) the
+    one nearer the current heading is taken. The heading is then refined (bounded scalar search,
+    scipy) to minimise the shoulders' reprojection distance, the whole body shifted at its depth
+    so that the shoulders' midpoint projects onto the keypoints' midpoint. Pitch, roll, head and
+    arm angles are kept.
+
+    Parameters
+    ----------
+    pose : ndarray, shape (23,)
+        Metres and radians; its shoulders in front of the camera.
+    model : BodyModel
+    camera : Camera
+    r_shoulder_uv, l_shoulder_uv : array_like, shape (2,), pixels
+
+    Returns
+    -------
+    ndarray, shape (23,), inside the joint limits
+    """
+    from scipy.optimize import minimize_scalar
+
+    rows = [_JOINT["r_shoulder"], _JOINT["l_shoulder"]]
+    target_uv = np.array([r_shoulder_uv, l_shoulder_uv], dtype=np.float64)
+    target_mid = camera_ray(camera, target_uv.mean(axis=0))          # unit ray through the 2D midpoint
+    yaw_index = PARAMETER_INDEX["chest_yaw"]
+
+    def placed(yaw: float) -> np.ndarray:
+        q = pose.copy()
+        q[yaw_index] = yaw
+        q = clamp_to_limits(q)
+        mid = model.joint_positions(q)[rows].mean(axis=0)
+        q[:3] += target_mid * (mid[2] / target_mid[2]) - mid
+        for _ in range(3):             # the 3D midpoint does not project onto the 2D midpoint: correct
+            joints = model.joint_positions(q)[rows]
+            if np.any(joints[:, 2] <= 0):
+                break
+            off = target_uv.mean(axis=0) - camera.project(joints).mean(axis=0)
+            depth = float(joints[:, 2].mean())
+            q[0] += off[0] * depth / camera.fx
+            q[1] += off[1] * depth / camera.fy
+        return clamp_to_limits(q)
+
+    def miss(yaw: float) -> float:
+        joints = model.joint_positions(placed(yaw))[rows]
+        if np.any(joints[:, 2] <= 0):
+            return math.inf
+        return float(np.linalg.norm(camera.project(joints) - target_uv, axis=1).sum())
+
+    shoulders = model.joint_positions(pose)[rows]
+    width_m = float(np.linalg.norm(shoulders[0] - shoulders[1]))
+    across = min(1.0, abs(float(target_uv[1, 0] - target_uv[0, 0])) * float(shoulders[:, 2].mean())
+                 / (camera.fx * width_m))
+    turn = math.acos(across)
+    yaw = float(pose[yaw_index])
+    facing = target_uv[1, 0] >= target_uv[0, 0]
+    headings = (turn, -turn) if facing else (math.pi - turn, -math.pi + turn)
+    # the candidate heading (modulo a full turn) nearest the current one
+    start = min((h + 2.0 * math.pi * round((yaw - h) / (2.0 * math.pi)) for h in headings), key=lambda h: abs(h - yaw))
+    best = minimize_scalar(miss, bounds=(start - 0.5, start + 0.5), method="bounded", options={"xatol": 1e-3})
+    return placed(float(best.x) if miss(float(best.x)) < miss(start) else start)
+
+
+class KeypointArmSource:
+    """Proposals from 2D keypoints: the torso on the shoulders, each arm on every depth branch.
+
+    From the leader's pose, the torso is turned and moved by :func:`torso_on_shoulders` when
+    both shoulder keypoints are present; then for each arm whose elbow and wrist keypoints are
+    present, every depth branch of :func:`mocap.body.jumps.arm_poses_on_rays` that lies inside
+    the joint limits (else the branches clamped to them, when none does) is proposed with the
+    other arm as it is, and one proposal puts every arm on its branch nearest the leader's arm.
+    """
+
+    origin = "keypoints"
+
+    def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
+        k = context.keypoints
+        if k is None:
+            return []
+        model, camera = context.model, context.camera
+        present = np.asarray(k.confidence) > 0
+        base = np.asarray(context.leader, dtype=np.float64)
+        r_s, l_s = _JOINT["r_shoulder"], _JOINT["l_shoulder"]
+        if present[r_s] and present[l_s] and np.all(model.joint_positions(base)[[r_s, l_s], 2] > 0):
+            base = torso_on_shoulders(base, model, camera, k.uv[r_s], k.uv[l_s])
+        out = [base] if not np.array_equal(base, context.leader) else []
+        leader_joints = model.joint_positions(base)
+        nearest = base.copy()
+        for side in SIDES:
+            e, w = _JOINT[f"{side}_elbow"], _JOINT[f"{side}_wrist"]
+            if not (present[e] and present[w]):
+                continue
+            branches = list(arm_poses_on_rays(base, model.skeleton, side, camera_ray(camera, k.uv[e]),
+                                              camera_ray(camera, k.uv[w])).values())
+            inside = [q for q in branches if within_limits(q)]
+            poses = inside or [clamp_to_limits(q) for q in branches]
+            if not poses:
+                continue
+            out += poses
+            moved = lambda q: float(np.linalg.norm(model.joint_positions(q)[[e, w]] - leader_joints[[e, w]]))
+            best = min(poses, key=moved)
+            arm = [PARAMETER_INDEX[n] for n in PARAMETER_NAMES if n.startswith(f"{side}_")]
+            nearest[arm] = best[arm]
+        if not any(np.array_equal(nearest, q) for q in out):
+            out.append(nearest)
+        return [Proposal(q, self.origin) for q in out]

@@ -5,8 +5,10 @@ registration (:func:`~mocap.track.registration.register`; the leading one with t
 budget, the others with ``hypothesis_evaluations``). Proposals compete with them: a recovery
 from the last good pose when the leader fails, hand re-acquisition when a skin region is left
 unexplained, and the leader's kinematic jumps (:mod:`mocap.body.jumps`), each refined by a short
-registration. Every candidate gets a **unary score** (``region_weight * F + edge_weight * edge
-distance + prior_weight * pose-prior energy``); between consecutive frames a **motion term**
+registration, and, given 2D keypoints, each arm posed on them by inverse kinematics
+(:class:`~mocap.track.proposals.KeypointArmSource`). Every candidate gets a **unary score**
+(``region_weight * F + edge_weight * edge distance + prior_weight * pose-prior energy``, plus
+``keypoint_weight * keypoint distance`` given keypoints, which the registrations also add); between consecutive frames a **motion term**
 (half the mean squared joint displacement over ``motion_sigma_m**2``) links them. The forward
 Viterbi recursion (:func:`~mocap.track.decode.viterbi_step`) gives each candidate the cost of
 the best path to it; near-duplicates are merged and the ``beam`` cheapest survive.
@@ -22,6 +24,7 @@ pose is now final, :meth:`Tracker.finish` the rest; :meth:`Tracker.state` and
 """
 from __future__ import annotations
 
+import functools
 import json
 import math
 import time
@@ -33,11 +36,12 @@ import numpy as np
 from mocap.body.model import BodyModel
 from mocap.body.pose import check_pose, clamp_to_limits
 from mocap.body.prior import PosePrior, default_prior
-from mocap.cost import EdgeCost, RegionCost
+from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.render.camera import Camera
 from mocap.track.config import TrackerConfig
 from mocap.track.decode import backtrack, viterbi_step
-from mocap.track.proposals import jump_proposals, reach_proposals, unexplained_hands
+from mocap.track.proposals import (KeypointArmSource, ProposalContext, jump_proposals, reach_proposals,
+                                   unexplained_hands)
 from mocap.track.registration import Registration, register
 
 
@@ -125,15 +129,18 @@ class Tracker:
         self.last_good = q
 
     # -- streaming ---------------------------------------------------------------------------
-    def push(self, frame_index: int, prepared) -> list[FrameResult]:
+    def push(self, frame_index: int, prepared, keypoints=None) -> list[FrameResult]:
         """Take one prepared frame (:class:`mocap.imaging.PreparedFrame`); return the frames
         whose pose is now final, oldest first.
+
+        ``keypoints`` (:class:`mocap.io.keypoints.Keypoints` in the working camera's pixels,
+        optional) are the frame's 2D keypoints: a cost term, a score term and proposals.
 
         Online with ``lag`` L, the first L calls return nothing and each later call one frame;
         offline, nothing comes out before :meth:`finish`. Every frame pushed comes out once,
         in order.
         """
-        frame = self._track(int(frame_index), prepared)
+        frame = self._track(int(frame_index), prepared, keypoints)
         self._window.append(frame)
         self._beam, self._cost = frame.hypotheses, frame.cost
         leader = frame.hypotheses[0]
@@ -174,7 +181,16 @@ class Tracker:
         return (RegionCost(prepared.labels, self.model, self.camera),
                 EdgeCost(prepared.distance, self.model, self.camera, edge_gap=self.config.edge_gap_m))
 
-    def _track(self, index: int, prepared) -> _Frame:
+    def keypoint_cost(self, keypoints) -> KeypointCost | None:
+        """The keypoint distance of a frame's :class:`~mocap.io.keypoints.Keypoints` (working
+        camera pixels) for this tracker; None when there are none or the config's
+        ``keypoint_weight`` is 0."""
+        if keypoints is None or self.config.keypoint_weight == 0:
+            return None
+        cost = KeypointCost(keypoints.uv, keypoints.confidence, self.model, self.camera)
+        return None if cost.empty else cost
+
+    def _track(self, index: int, prepared, keypoints=None) -> _Frame:
         cfg = self.config
         t0 = time.perf_counter()
         timings = {f"prepare_{k}": 1e3 * v for k, v in prepared.timings.items()}
@@ -186,13 +202,15 @@ class Tracker:
             timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)
             return _Frame(index, True, kept, self._cost - self._cost.min(), np.arange(len(kept)), 0, timings)
         region_cost, edge_cost = self.costs(prepared)
+        keypoint_cost = self.keypoint_cost(keypoints)
+        fit = functools.partial(register, region_cost, edge_cost, config=cfg, keypoint_cost=keypoint_cost)
         candidates: list[tuple[Registration, str]] = []
         evaluations = 0
         t1 = time.perf_counter()
         for rank, h in enumerate(self._beam):
             budget = cfg.evaluations if rank == 0 else cfg.hypothesis_evaluations
             if budget > 0 or rank == 0:                 # the leader always (0: its pose kept)
-                reg = register(region_cost, edge_cost, h.pose, cfg, evaluations=budget)
+                reg = fit(h.pose, evaluations=budget)
                 evaluations += reg.evaluations
                 candidates.append((reg, "tracked" if rank == 0 else f"hypothesis {rank} tracked"))
             if rank == 0:
@@ -203,13 +221,15 @@ class Tracker:
                 timings["edge"] = 1e3 * (t2 - t1) - timings["region"]
         leader = candidates[0][0]
         if cfg.recovery and leader.failed(cfg):
-            retry = register(region_cost, edge_cost, self.last_good, cfg, step_scale=cfg.recovery_step_scale)
+            retry = fit(self.last_good, step_scale=cfg.recovery_step_scale)
             evaluations += retry.evaluations
             candidates.append((retry, "recovered from last good pose"))
         if cfg.hand_reacquisition:
-            evaluations += self._reacquire(prepared, region_cost, edge_cost, leader, candidates)
+            evaluations += self._reacquire(prepared, region_cost, fit, leader, candidates)
         if cfg.jumps and cfg.jumps_refined > 0:
-            evaluations += self._jump(region_cost, edge_cost, leader, candidates)
+            evaluations += self._jump(region_cost, fit, leader, candidates)
+        if keypoint_cost is not None:
+            evaluations += self._keypoint_arms(keypoints, region_cost, keypoint_cost, fit, leader, candidates)
         hypotheses = [self._hypothesis(reg, note) for reg, note in candidates]
         transition = self._motion(self._beam, hypotheses)
         cost, back = viterbi_step(self._cost, transition, np.array([h.unary for h in hypotheses]))
@@ -223,6 +243,8 @@ class Tracker:
     def _hypothesis(self, reg: Registration, note: str) -> _Hypothesis:
         cfg = self.config
         unary = cfg.region_weight * reg.region_residual + cfg.edge_weight * reg.edge_residual
+        if not math.isnan(reg.keypoint_residual):
+            unary += cfg.keypoint_weight * reg.keypoint_residual
         if self.prior is not None and cfg.prior_weight > 0:
             unary += cfg.prior_weight * self.prior.energy(reg.pose)
         return _Hypothesis(reg.pose, self.model.joint_positions(reg.pose), reg.region_residual, reg.edge_residual,
@@ -249,7 +271,7 @@ class Tracker:
                 break
         return keep
 
-    def _reacquire(self, prepared, region_cost, edge_cost, leader: Registration, candidates: list) -> int:
+    def _reacquire(self, prepared, region_cost, fit, leader: Registration, candidates: list) -> int:
         """Hand re-acquisition from the leader (see :class:`TrackerConfig`); returns evaluations used."""
         joints = self.model.joint_positions(leader.pose)
         targets = unexplained_hands(prepared.labels, joints, self.model, self.camera, self.config)
@@ -259,21 +281,40 @@ class Tracker:
         if not proposals:
             return 0
         values = [region_cost.evaluate_unchecked(q) for q in proposals]
-        retry = register(region_cost, edge_cost, proposals[int(np.argmin(values))], self.config,
-                         evaluations=self.config.hypothesis_evaluations)
+        retry = fit(proposals[int(np.argmin(values))], evaluations=self.config.hypothesis_evaluations)
         candidates.append((retry, "hand re-acquired"))
         return len(proposals) + retry.evaluations
 
-    def _jump(self, region_cost, edge_cost, leader: Registration, candidates: list) -> int:
+    def _jump(self, region_cost, fit, leader: Registration, candidates: list) -> int:
         """The leader's kinematic jumps, the lowest-F ones refined; returns evaluations used."""
         jumps = jump_proposals(leader.pose, self.model)
         values = np.array([region_cost.evaluate_unchecked(q) for _, q in jumps])
         used = len(jumps)
         for i in np.argsort(values, kind="stable")[: self.config.jumps_refined]:
             name, q = jumps[int(i)]
-            reg = register(region_cost, edge_cost, q, self.config, evaluations=self.config.jump_evaluations)
+            reg = fit(q, evaluations=self.config.jump_evaluations)
             used += reg.evaluations
             candidates.append((reg, f"jump: {name}"))
+        return used
+
+    def _keypoint_arms(self, keypoints, region_cost, keypoint_cost, fit, leader: Registration,
+                       candidates: list) -> int:
+        """The keypoint proposals from the leader, the best-scoring ones refined like jumps;
+        returns evaluations used."""
+        cfg = self.config
+        context = ProposalContext(self.model, self.camera, leader.pose, keypoints)
+        proposals = KeypointArmSource().propose(None, context)
+        if not proposals:
+            return 0
+        scores = np.array([cfg.region_weight * region_cost.evaluate_unchecked(p.pose)
+                           + cfg.keypoint_weight * keypoint_cost.evaluate_unchecked(p.pose)
+                           + (cfg.prior_weight * self.prior.energy(p.pose) if self.prior is not None else 0.0)
+                           for p in proposals])
+        used = 2 * len(proposals)
+        for i in np.argsort(scores, kind="stable")[: max(cfg.jumps_refined, 1)]:
+            reg = fit(proposals[int(i)].pose, evaluations=cfg.jump_evaluations)
+            used += reg.evaluations
+            candidates.append((reg, f"proposal: {proposals[int(i)].origin}"))
         return used
 
     # -- exact state -------------------------------------------------------------------------

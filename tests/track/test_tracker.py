@@ -107,3 +107,25 @@ def test_beam_returns_to_the_true_branch_where_one_hypothesis_stays_lost():
     assert errors["single"][:8].min() > 0.15                              # follows the wrong branch
     assert errors["beam"][:6].max() < 0.06                                # jumps back to the truth
     assert errors["beam"].mean() < 0.4 * errors["single"].mean()
+
+
+def test_keypoints_bring_a_single_hypothesis_back_to_the_true_branch():
+    """As above, but one hypothesis without jumps given the oracle's keypoints (1 px noise): the
+    keypoint proposals pose the arm on every branch and the hand keypoint tells them apart."""
+    from experiments.keypoints import oracle_keypoints
+
+    truth = waving(12)
+    frames = clean_frames(truth)
+    arm = [JOINT_NAMES.index(f"r_{j}") for j in ("elbow", "wrist", "hand")]
+    start = arm_jumps(truth[0], MODEL.skeleton, "r")["forearm"]
+    single = TrackerConfig(beam=1, jumps=False, lag=0, hand_reacquisition=False, prior_weight=0.0)
+    keypoints = oracle_keypoints(np.array([MODEL.joint_positions(q) for q in truth]), CAMERA, 1.0, seed=0)
+    tracker = Tracker(MODEL, CAMERA, single, start)
+    results = []
+    for i, (frame, k) in enumerate(zip(frames, keypoints)):
+        results += tracker.push(i, frame, k)
+    results += tracker.finish()
+    errors = np.array([np.linalg.norm(r.joints[arm] - MODEL.joint_positions(q)[arm], axis=1).mean()
+                       for r, q in zip(results, truth)])
+    assert errors[0] > 0.1 or errors[1] > 0.1 or errors[:3].max() < 0.06   # started wrong (or fixed at once)
+    assert errors[3:].max() < 0.06                                         # back on the truth within 3 frames
