@@ -264,13 +264,15 @@ def torso_on_shoulders(pose: np.ndarray, model: BodyModel, camera: Camera, r_sho
 
 
 class KeypointArmSource:
-    """Proposals from 2D keypoints: the torso on the shoulders, each arm on every depth branch.
+    """Proposals from 2D keypoints: each arm on every depth branch, the torso on the shoulders.
 
-    From the leader's pose, the torso is turned and moved by :func:`torso_on_shoulders` when
-    both shoulder keypoints are present; then for each arm whose elbow and wrist keypoints are
-    present, every depth branch of :func:`mocap.body.jumps.arm_poses_on_rays` that lies inside
-    the joint limits (else the branches clamped to them, when none does) is proposed with the
-    other arm as it is, and one proposal puts every arm on its branch nearest the leader's arm.
+    For each arm whose elbow and wrist keypoints are present, every depth branch of
+    :func:`mocap.body.jumps.arm_poses_on_rays` from the leader's torso that lies inside the
+    joint limits (else the branches clamped to them, when none does) is proposed, the other arm
+    as it is. When both shoulder keypoints are present, one more proposal turns and moves the
+    torso onto them (:func:`torso_on_shoulders`: a heading from a shoulder line seen nearly
+    face-on is ill-conditioned, hence a proposal of its own) with every arm on its branch
+    nearest the leader's arm.
     """
 
     origin = "keypoints"
@@ -281,28 +283,31 @@ class KeypointArmSource:
             return []
         model, camera = context.model, context.camera
         present = np.asarray(k.confidence) > 0
-        base = np.asarray(context.leader, dtype=np.float64)
-        r_s, l_s = _JOINT["r_shoulder"], _JOINT["l_shoulder"]
-        if present[r_s] and present[l_s] and np.all(model.joint_positions(base)[[r_s, l_s], 2] > 0):
-            base = torso_on_shoulders(base, model, camera, k.uv[r_s], k.uv[l_s])
-        out = [base] if not np.array_equal(base, context.leader) else []
-        leader_joints = model.joint_positions(base)
-        nearest = base.copy()
+        leader = np.asarray(context.leader, dtype=np.float64)
+        out = []
         for side in SIDES:
-            e, w = _JOINT[f"{side}_elbow"], _JOINT[f"{side}_wrist"]
-            if not (present[e] and present[w]):
-                continue
-            branches = list(arm_poses_on_rays(base, model.skeleton, side, camera_ray(camera, k.uv[e]),
-                                              camera_ray(camera, k.uv[w])).values())
-            inside = [q for q in branches if within_limits(q)]
-            poses = inside or [clamp_to_limits(q) for q in branches]
-            if not poses:
-                continue
-            out += poses
-            moved = lambda q: float(np.linalg.norm(model.joint_positions(q)[[e, w]] - leader_joints[[e, w]]))
-            best = min(poses, key=moved)
-            arm = [PARAMETER_INDEX[n] for n in PARAMETER_NAMES if n.startswith(f"{side}_")]
-            nearest[arm] = best[arm]
-        if not any(np.array_equal(nearest, q) for q in out):
-            out.append(nearest)
+            out += self._arm_branches(leader, side, k, present, model, camera)
+        r_s, l_s = _JOINT["r_shoulder"], _JOINT["l_shoulder"]
+        if present[r_s] and present[l_s] and np.all(model.joint_positions(leader)[[r_s, l_s], 2] > 0):
+            torso = torso_on_shoulders(leader, model, camera, k.uv[r_s], k.uv[l_s])
+            lead_joints = model.joint_positions(leader)
+            for side in SIDES:
+                branches = self._arm_branches(torso, side, k, present, model, camera)
+                if branches:
+                    rows = [_JOINT[f"{side}_elbow"], _JOINT[f"{side}_wrist"]]
+                    best = min(branches, key=lambda q: float(np.linalg.norm(model.joint_positions(q)[rows]
+                                                                            - lead_joints[rows])))
+                    arm = [PARAMETER_INDEX[n] for n in PARAMETER_NAMES if n.startswith(f"{side}_")]
+                    torso[arm] = best[arm]
+            out.append(torso)
         return [Proposal(q, self.origin) for q in out]
+
+    @staticmethod
+    def _arm_branches(pose, side, k, present, model: BodyModel, camera: Camera) -> list[np.ndarray]:
+        e, w = _JOINT[f"{side}_elbow"], _JOINT[f"{side}_wrist"]
+        if not (present[e] and present[w]):
+            return []
+        branches = list(arm_poses_on_rays(pose, model.skeleton, side, camera_ray(camera, k.uv[e]),
+                                          camera_ray(camera, k.uv[w])).values())
+        inside = [q for q in branches if within_limits(q)]
+        return inside or [clamp_to_limits(q) for q in branches]

@@ -299,11 +299,15 @@ class Tracker:
 
     def _keypoint_arms(self, keypoints, region_cost, keypoint_cost, fit, leader: Registration,
                        candidates: list) -> int:
-        """The keypoint proposals from the leader, the best-scoring ones refined like jumps;
-        returns evaluations used."""
+        """The keypoint proposals from the leader that move its joints by ``merge_distance_m`` or
+        more on average, the ``jumps_refined`` best-scoring ones (region, keypoint and prior
+        terms) refined like jumps; returns evaluations used."""
         cfg = self.config
         context = ProposalContext(self.model, self.camera, leader.pose, keypoints)
-        proposals = KeypointArmSource().propose(None, context)
+        lead_joints = self.model.joint_positions(leader.pose)
+        proposals = [p for p in KeypointArmSource().propose(None, context)       # new places only
+                     if np.linalg.norm(self.model.joint_positions(p.pose) - lead_joints, axis=1).mean()
+                     >= cfg.merge_distance_m]
         if not proposals:
             return 0
         scores = np.array([cfg.region_weight * region_cost.evaluate_unchecked(p.pose)
