@@ -48,6 +48,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
+import math
 import sys
 import time
 from dataclasses import replace
@@ -194,13 +195,17 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     truth_joints = loaded.ground_truth.joints
     keypoints = ([None] * len(prepared) if oracle_sigma_px is None
                  else oracle_keypoints(truth_joints[: len(prepared)], camera, oracle_sigma_px, seed))
-    results, beam_best, seconds = [], [], 0.0
+    results, beam_best, proposal_best, other_best, seconds = [], [], [], [], 0.0
+    proposal_origins = {source.origin for source in tracker.sources}
+    error = lambda q, i: mpjpe(loaded.model.joint_positions(q)[None], truth_joints[i:i + 1])
     for i, frame in enumerate(prepared):      # track_prepared's loop, timed and with the beam looked at
         started = time.perf_counter()
         results += tracker.push(i, frame, keypoints[i])
         seconds += time.perf_counter() - started
-        beam_best.append(min(mpjpe(loaded.model.joint_positions(q)[None], truth_joints[i:i + 1])
-                             for q in tracker.hypotheses))
+        beam_best.append(min(error(q, i) for q in tracker.hypotheses))
+        candidates = tracker.candidates if not frame.is_empty else []
+        proposal_best.append(min([error(q, i) for o, q in candidates if o in proposal_origins], default=math.inf))
+        other_best.append(min([error(q, i) for o, q in candidates if o not in proposal_origins], default=math.inf))
     started = time.perf_counter()
     results += tracker.finish()
     seconds += time.perf_counter() - started
@@ -222,7 +227,17 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
             "frame_mpjpe_mm": mpjpe(joints, truth, per_frame=True).tolist(),
             "beam_oracle_mpjpe_mm": float(np.mean(beam_best)),
             "beam_oracle_failure_rate": float(np.mean(np.array(beam_best) > DEFAULT_FAILURE_MM)),
+            # the proposal stage: its best refined proposal per frame, and the frames on which every
+            # other candidate (tracked hypotheses, recovery, re-acquisition, jumps) misses but it does not
+            # (None without a proposal stage)
+            "proposal_oracle_failure_rate": float(np.mean(np.array(proposal_best) > DEFAULT_FAILURE_MM))
+            if proposal_origins else None,
+            "proposal_catches_rate": float(np.mean((np.array(other_best) > DEFAULT_FAILURE_MM)
+                                                   & (np.array(proposal_best) <= DEFAULT_FAILURE_MM)))
+            if proposal_origins else None,
+            "others_miss_rate": float(np.mean(np.array(other_best) > DEFAULT_FAILURE_MM)),
             "tracking_ms_per_frame": 1e3 * seconds / len(joints),
+            "evaluations_per_frame": float(np.mean([r.evaluations for r in results])),
             "prepare_ms_per_frame": float(np.mean([r.timings_ms.get("prepare", 0.0) for r in results])),
             "reprojection_px": reprojection_error(joints, truth, camera),
             "flip_oracle_mpjpe_mm": mpjpe(oracle, truth), "flip_oracle_failure_rate": failure_rate(oracle, truth),

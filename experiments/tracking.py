@@ -17,6 +17,7 @@ keeps the section when it rewrites the rest).
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 from types import MappingProxyType
@@ -47,13 +48,22 @@ CONFIGS = MappingProxyType({
     "no-prior": {"prior_weight": 0.0},
     "no-jumps": {"jumps": False},
     "two-class": {},
+    "blobs": {"blob_arms": True},
+    "exemplars": {"exemplars": True},
+    "both": {"blob_arms": True, "exemplars": True},
+    # the proposal stage's budget: proposals refined per source and evaluations per refinement
+    "both-P1": {"blob_arms": True, "exemplars": True, "proposals_refined": 1},
+    "both-P4": {"blob_arms": True, "exemplars": True, "proposals_refined": 4},
+    "both-E50": {"blob_arms": True, "exemplars": True, "proposal_evaluations": 50},
+    "both-E200": {"blob_arms": True, "exemplars": True, "proposal_evaluations": 200},
+    # the default tracker given the oracle's 2D keypoints (ORACLE_KEYPOINTS)
     "oracle-keypoints": {},
 })
-#: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
-ORACLE_KEYPOINTS = MappingProxyType({"oracle-keypoints": 2.0})
 #: Configurations tracked with the paper's two-class model (skin and clothes: no hair region, no
 #: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.
 TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
+#: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
+ORACLE_KEYPOINTS = MappingProxyType({"oracle-keypoints": 2.0})
 
 
 def config_of(name: str) -> TrackerConfig:
@@ -96,23 +106,34 @@ def summarise(rows: list[dict]) -> dict:
                                                          weights=[r["frames"] for r in rows])),
             "cost_equivalent_both_rate": float(np.average([r["cost_equivalent_both_rate"] for r in rows],
                                                           weights=[r["frames"] for r in rows])),
+            **{key: float(np.average([math.nan if r.get(key) is None else r[key] for r in rows],
+                                     weights=[r["frames"] for r in rows]))
+               for key in ("proposal_oracle_failure_rate", "proposal_catches_rate", "others_miss_rate")},
             "ms_per_frame": float(np.average([r["tracking_ms_per_frame"] + r["prepare_ms_per_frame"] for r in rows],
-                                             weights=[r["frames"] for r in rows]))}
+                                             weights=[r["frames"] for r in rows])),
+            "evaluations_per_frame": float(np.average([r.get("evaluations_per_frame", math.nan) for r in rows],
+                                                      weights=[r["frames"] for r in rows]))}
 
 
 def table(summaries: dict[str, dict]) -> str:
     """Markdown table of :func:`summarise` results by configuration name."""
     head = ("configuration", "median MPJPE mm", "median root-rel. mm", "median PA-MPJPE mm",
-            f"frames > {DEFAULT_FAILURE_MM:g} mm", "worst sequence mm", "beam oracle > 100 mm", "failing, costs <= truth's",
-            "ms / frame (fps)")
+            f"frames > {DEFAULT_FAILURE_MM:g} mm", "worst sequence mm", "beam oracle > 100 mm",
+            "proposal oracle > 100 mm", "caught by a proposal alone", "failing, costs <= truth's", "ms / frame (fps)")
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for name, s in summaries.items():
         lines.append(f"| {name} | {s['median_mpjpe_mm']:.0f} | {s['median_root_relative_mm']:.0f} | "
                      f"{s['median_pa_mpjpe_mm']:.0f} | {100 * s['failure_rate']:.1f} % | {s['worst_mpjpe_mm']:.0f} | "
-                     f"{100 * s['beam_oracle_failure_rate']:.1f} % | {100 * s['cost_equivalent_both_rate']:.1f} % | "
+                     f"{100 * s['beam_oracle_failure_rate']:.1f} % | {_percent(s['proposal_oracle_failure_rate'])} | "
+                     f"{_percent(s['proposal_catches_rate'])} | {100 * s['cost_equivalent_both_rate']:.1f} % | "
                      f"{s['ms_per_frame']:.1f} "
                      f"({1e3 / s['ms_per_frame']:.0f}) |")
     return "\n".join(lines)
+
+
+def _percent(rate: float) -> str:
+    """A rate as a percentage, or a dash where it was not measured (no proposal stage)."""
+    return "-" if not math.isfinite(rate) else f"{100 * rate:.1f} %"
 
 
 def main(argv=None) -> int:
@@ -159,17 +180,21 @@ def main(argv=None) -> int:
 def write_report_section(rows: dict[str, list[dict]], summaries: dict[str, dict], heading: str) -> Path:
     """Draw the figure and put the table and figure into ``experiments/REPORT.md``."""
     from experiments import EXPERIMENTS_DIR
-    from experiments.figures import ext_tracking
+    from experiments.figures import ext_proposal_budget, ext_tracking
     from experiments.report import replace_section
 
     figures = EXPERIMENTS_DIR / "report"
     ext_tracking.main({n: np.concatenate([r["frame_mpjpe_mm"] for r in rs]) for n, rs in rows.items()}, figures)
+    ext_proposal_budget.main(summaries, figures)
     text = "\n".join([
         "## Tracking that recovers: the beam tracker's ablation",
         "",
         f"`python -m experiments.tracking --configs {','.join(rows)} --report` ({heading}). "
         "Medians over the sequences; frames over 100 mm pooled over all frames; the beam oracle is the "
-        "share of frames on which no kept hypothesis is within 100 mm (what the search leaves); the last "
+        "share of frames on which no kept hypothesis is within 100 mm (what the search leaves); the proposal "
+        "oracle the share on which no refined proposal of the proposal stage is within 100 mm, and 'caught by a "
+        "proposal alone' the frames on which every other candidate (tracked hypotheses, recovery, re-acquisition, "
+        "jumps) is over 100 mm but a refined proposal is not; the last "
         "columns are the failing frames that both costs rate no worse than the truth, and the tracking "
         "time per frame (image side included) as measured in the run, while other jobs shared the machine's "
         "two cores: for speed see `python -m mocap bench` (`frame_beam`, `frame_500`). `default` is the beam "
@@ -180,6 +205,11 @@ def write_report_section(rows: dict[str, list[dict]], summaries: dict[str, dict]
         table(summaries),
         "",
         "![share of frames under each error](report/ext_tracking.png)",
+        "",
+        "Accuracy against the cost evaluations each configuration spends per frame (all hypotheses, "
+        "proposals and refinements):",
+        "",
+        "![accuracy against evaluations per frame](report/ext_proposal_budget.png)",
         ""])
     return replace_section(EXPERIMENTS_DIR / "REPORT.md", REPORT_SECTION, text)
 

@@ -392,11 +392,9 @@ def measure_table2(sizes: tuple[tuple[int, int], ...], sequence: str, frames: in
     from mocap.bench import environment, time_calls
     from mocap.body import JOINT_LIMITS, clamp_to_limits
     from mocap.cost import EdgeCost, RegionCost
-    from mocap.track import TrackerConfig
 
     rows = []
     rng = np.random.default_rng(seed)
-    edge_gap = TrackerConfig().edge_gap_m
     for width, height in sizes:
         spec = DataSpec(sequence, None, frames, seed, width, height)
         folder = Path(prepare_data(spec, root))
@@ -418,7 +416,7 @@ def measure_table2(sizes: tuple[tuple[int, int], ...], sequence: str, frames: in
             q[3:] += rng.normal(0.0, 0.1, q.size - 3)
             poses.append(clamp_to_limits(q, JOINT_LIMITS))
         region = [RegionCost(p.labels, seq.model, camera) for p in prepared]
-        edge = [EdgeCost(p.distance, seq.model, camera, edge_gap=edge_gap) for p in prepared]
+        edge = [EdgeCost(p.distance, seq.model, camera) for p in prepared]
         t_region = time_calls(lambda i: region[i % len(region)](poses[i % len(poses)]), min_runs=min_runs,
                               min_seconds=min_seconds) / 1e3
         t_edge = time_calls(lambda i: edge[i % len(edge)](poses[i % len(poses)]), min_runs=min_runs,

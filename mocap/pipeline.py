@@ -34,8 +34,8 @@ from mocap.track import FrameResult, Tracker, TrackerConfig
 
 #: Per-frame columns of ``poses.csv`` after the pose and joint columns.
 EXTRA_COLUMNS = ("region_residual", "edge_residual", "edge_residual_after_region", "failed", "empty", "hypothesis",
-                 "score", "evaluations", "region_iterations",
-                 "edge_iterations", "ms_prepare", "ms_region", "ms_edge", "ms_recovery", "ms_total")
+                 "score", "origin", "evaluations", "region_iterations",
+                 "edge_iterations", "ms_prepare", "ms_region", "ms_edge", "ms_beam", "ms_proposals", "ms_total")
 COLOUR_SOURCES = ("calibration", "face")
 
 
@@ -96,11 +96,11 @@ def _frame_row(r: FrameResult, camera=None, work_factor: int = 1, dark: bool | N
     extra |= {"region_residual": [r.region_residual], "edge_residual": [r.edge_residual],
              "edge_residual_after_region": [r.edge_residual_after_region],
              "failed": np.array([int(r.failed)]), "empty": np.array([int(r.empty)]),
-             "hypothesis": np.array([r.hypothesis]), "score": [r.score],
+             "hypothesis": np.array([r.hypothesis]), "score": [r.score], "origin": np.array([r.origin]),
              "evaluations": np.array([r.evaluations]), "region_iterations": np.array([r.region_iterations]),
              "edge_iterations": np.array([r.edge_iterations]), "ms_prepare": [t.get("prepare", 0.0)],
              "ms_region": [t.get("region", 0.0)], "ms_edge": [t.get("edge", 0.0)],
-             "ms_recovery": [t.get("recovery", 0.0)], "ms_total": [t.get("total", 0.0)]}
+             "ms_beam": [t.get("beam", 0.0)], "ms_proposals": [t.get("proposals", 0.0)], "ms_total": [t.get("total", 0.0)]}
     if dark is not None:
         extra["dark"] = np.array([int(dark)])
     return PoseTable([r.frame], r.pose[None], r.joints[None], {k: np.asarray(v) for k, v in extra.items()})

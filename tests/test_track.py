@@ -169,7 +169,7 @@ def test_hand_reacquisition_refinds_a_lost_arm():
         tracker = Tracker(MODEL, CAMERA, config, lost)
         result, = tracker.push(0, frame)
         errors[on] = joint_error(result.pose, truth)
-        assert ("hand re-acquired" in result.recovery) == on
+        assert (result.origin == "reacquisition") == on
         np.testing.assert_array_equal(tracker.hypotheses[0], result.pose)
     assert errors[False] > 0.1 and errors[True] < SINGLE_FRAME_BOUND_M
 

@@ -36,13 +36,12 @@ import numpy as np
 from mocap.body.ik import reach_arm
 from mocap.body.kinematics import Skeleton, joint_positions, segment_transforms
 from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX, check_pose, clamp_to_limits
-from mocap.body.skeleton import JOINT_NAMES, SEGMENT_NAMES
+from mocap.body.skeleton import JOINT_INDEX, SEGMENT_NAMES
 
 #: Names of the arm jumps, in the order :func:`arm_jumps` returns them.
 ARM_JUMPS: tuple[str, ...] = ("upper_arm", "forearm", "both")
 #: Sides of the body, as in the parameter names.
 SIDES: tuple[str, ...] = ("r", "l")
-_JOINT = {name: i for i, name in enumerate(JOINT_NAMES)}
 _SEGMENT = {name: i for i, name in enumerate(SEGMENT_NAMES)}
 
 
@@ -168,7 +167,7 @@ def arm_jumps(pose, skeleton: Skeleton, side: str) -> dict[str, np.ndarray]:
     """
     q = check_pose(pose)
     joints = joint_positions(q, skeleton)
-    s, e, w = (joints[_JOINT[f"{side}_{j}"]] for j in ("shoulder", "elbow", "wrist"))
+    s, e, w = (joints[JOINT_INDEX[f"{side}_{j}"]] for j in ("shoulder", "elbow", "wrist"))
     out = {}
     w_forearm = reflect_on_ray(w, e)
     out["forearm"] = arm_angles_for_points(q, skeleton, side, e, w_forearm)
@@ -210,7 +209,7 @@ def torso_flip(pose, skeleton: Skeleton) -> np.ndarray:
         Inside the joint limits.
     """
     q = check_pose(pose)
-    old_hands = {side: joint_positions(q, skeleton)[_JOINT[f"{side}_hand"]] for side in SIDES}
+    old_hands = {side: joint_positions(q, skeleton)[JOINT_INDEX[f"{side}_hand"]] for side in SIDES}
     out = q.copy()
     yaw = q[PARAMETER_INDEX["chest_yaw"]]
     out[PARAMETER_INDEX["chest_yaw"]] = min((math.pi - yaw, -math.pi - yaw), key=lambda y: abs(y - yaw))
@@ -223,7 +222,7 @@ def torso_flip(pose, skeleton: Skeleton) -> np.ndarray:
     out = clamp_to_limits(out)
     mirrored_hands = joint_positions(out, skeleton)
     for side, other in (("r", "l"), ("l", "r")):
-        hand = _JOINT[f"{side}_hand"]
+        hand = JOINT_INDEX[f"{side}_hand"]
         ray = _unit(old_hands[other])
         target = float(ray @ mirrored_hands[hand]) * ray
         moved = reach_arm(out, skeleton, side, target)
@@ -266,7 +265,7 @@ def arm_poses_on_rays(pose, skeleton: Skeleton, side: str, elbow_ray, wrist_ray)
         raise ValueError("elbow_ray and wrist_ray must be 3 finite numbers, not all 0")
     ray_e, ray_w = (_unit(r) for r in rays)
     joints = joint_positions(q, skeleton)
-    s, e, w = (joints[_JOINT[f"{side}_{j}"]] for j in ("shoulder", "elbow", "wrist"))
+    s, e, w = (joints[JOINT_INDEX[f"{side}_{j}"]] for j in ("shoulder", "elbow", "wrist"))
     upper, fore = float(np.linalg.norm(e - s)), float(np.linalg.norm(w - e))
     out = {}
     for e_name, e_new in _points_on_ray(ray_e, s, upper):

@@ -53,6 +53,8 @@ JOINT_NAMES: tuple[str, ...] = (
     "r_shoulder", "r_elbow", "r_wrist", "r_hand",
     "l_shoulder", "l_elbow", "l_wrist", "l_hand",
 )
+#: Row of each named joint in the joint arrays (shape (10, 3), :data:`JOINT_NAMES` order).
+JOINT_INDEX = MappingProxyType({name: i for i, name in enumerate(JOINT_NAMES)})
 
 #: Shoulder joint placement relative to the torso: lateral offset = SHOULDER_OUT_TORSO * torso
 #: width + SHOULDER_OUT_ARM * upper-arm width; height below the neck = SHOULDER_DROP_ARM *

@@ -22,6 +22,8 @@ from mocap.io.atomic import write_text_atomic
 JOINT_COLUMNS: tuple[str, ...] = tuple(f"{j}_{a}" for j in JOINT_NAMES for a in "xyz")
 #: Leading columns of every pose table.
 BASE_COLUMNS: tuple[str, ...] = ("frame", *PARAMETER_NAMES, *JOINT_COLUMNS)
+#: Extra columns that hold words, not numbers (read back as str arrays).
+TEXT_COLUMNS: frozenset[str] = frozenset({"origin"})
 
 
 @dataclass
@@ -71,8 +73,11 @@ class PoseTable:
             row += [repr(float(v)) for v in flat[i]]
             for value in self.extra.values():
                 v = value[i]
-                row.append(str(int(v)) if np.issubdtype(value.dtype, np.integer) or value.dtype == bool
-                           else repr(float(v)))
+                if value.dtype.kind in "UO":
+                    row.append(str(v))
+                else:
+                    row.append(str(int(v)) if np.issubdtype(value.dtype, np.integer) or value.dtype == bool
+                               else repr(float(v)))
             writer.writerow(row)
         return out.getvalue()
 
@@ -100,7 +105,7 @@ class PoseTable:
     @classmethod
     def read(cls, path: str | Path, *, tolerate_partial: bool = False) -> "PoseTable":
         """Read a table written by :meth:`write` or :meth:`append_to` (extra columns come back
-        as float64). With ``tolerate_partial`` a malformed last row (a run killed while writing
+        as float64, those of :data:`TEXT_COLUMNS` as str). With ``tolerate_partial`` a malformed last row (a run killed while writing
         it) is dropped instead of raising."""
         path = Path(path)
         with path.open(newline="") as fh:
@@ -113,20 +118,27 @@ class PoseTable:
                 raise ValueError(f"{path}: not a pose table (columns must start with frame, the {N_PARAMETERS} "
                                  f"parameters and the joint columns)")
             rows = [r for r in reader if r]
+        text = [k for k, name in enumerate(header) if name in TEXT_COLUMNS]
+        numeric = [k for k in range(len(header)) if k not in text]
         if tolerate_partial and rows:
             try:
                 if len(rows[-1]) != len(header):
                     raise ValueError
-                [float(v) for v in rows[-1]]
+                [float(rows[-1][k]) for k in numeric]
             except ValueError:
                 rows = rows[:-1]
+        if any(len(r) != len(header) for r in rows):
+            raise ValueError(f"{path}: malformed pose table (a row has other than {len(header)} fields)")
         try:
-            data = np.array(rows, dtype=np.float64).reshape(len(rows), len(header))
+            data = np.full((len(rows), len(header)), np.nan)
+            data[:, numeric] = np.array([[r[k] for k in numeric] for r in rows], dtype=np.float64).reshape(
+                len(rows), len(numeric))
         except ValueError as exc:
             raise ValueError(f"{path}: malformed pose table ({exc})") from None
         poses = data[:, 1:1 + N_PARAMETERS].copy()
         poses[:, 3:] = np.deg2rad(poses[:, 3:])
         j0 = 1 + N_PARAMETERS
         joints = data[:, j0:j0 + len(JOINT_COLUMNS)]
-        extra = {name: data[:, k] for k, name in enumerate(header) if k >= len(BASE_COLUMNS)}
+        extra = {name: (np.array([r[k] for r in rows], dtype=str) if k in text else data[:, k])
+                 for k, name in enumerate(header) if k >= len(BASE_COLUMNS)}
         return cls(data[:, 0].astype(np.int64), poses, joints, extra)

@@ -20,6 +20,17 @@ from mocap.config import JsonConfig
 AUTO_SPLIT_THRESHOLD = 200
 #: Where the edge step's simplex starts: the region step's final simplex (paper) or a fresh one.
 EDGE_STARTS = ("region_simplex", "fresh")
+#: Size of a fresh edge-step simplex (``edge_start="fresh"``, the paper's Fig. 8) relative to the
+#: initial steps.
+FRESH_STEP_SCALE = 3.0
+#: Size of the recovery simplex (from the last good pose) relative to the initial steps.
+RECOVERY_STEP_SCALE = 2.5
+#: Skin regions smaller than this (pixels) are left out by hand re-acquisition and the blob source.
+MIN_SKIN_BLOB_PIXELS = 2
+#: Kinematic jumps refined per frame: the lowest-F ones.
+JUMPS_REFINED = 2
+#: Hypotheses whose joints are on average closer than this (metres) are merged, the better kept.
+MERGE_DISTANCE_M = 0.02
 
 
 @dataclass(frozen=True)
@@ -34,15 +45,13 @@ class TrackerConfig(JsonConfig):
     split : str
         ``"auto"`` (paper's policy) or ``"R:E"``, e.g. ``"250:250"`` (scaled to ``evaluations``).
     edge_start : str
-        ``"region_simplex"`` (paper) or ``"fresh"`` (a new simplex of ``fresh_step_scale``
+        ``"region_simplex"`` (paper) or ``"fresh"`` (a new simplex of :data:`FRESH_STEP_SCALE`
         times the initial steps around the region step's best pose; the paper's Fig. 8).
     position_step_m : float, metres
         Initial simplex step of the three root coordinates.
     angle_step_deg : float, degrees
         Initial simplex step of the 20 angles (20 degrees and 5 cm were chosen on the six
         synthetic sequences with three seeds; see docs/research-log.md).
-    fresh_step_scale : float
-        Size of the fresh edge-step simplex relative to the initial steps.
     ftol : float
         Convergence: relative spread of the simplex values (the paper's test).
     region_failure_threshold : float
@@ -51,21 +60,16 @@ class TrackerConfig(JsonConfig):
         A frame with mean edge distance above this is an edge failure.
     recovery : bool
         Beyond the paper: retry a failed frame from the last good pose with a wider simplex.
-    recovery_step_scale : float
-        Size of the recovery simplex relative to the initial steps.
     mesh_resolution : int
         Mesh level of detail; 0 chooses it from the image size.
-    edge_gap_m : float, metres
-        Depth step that makes an occluding contour between parts.
     hand_reacquisition : bool
         Beyond the paper: skin regions of the image that the model's hands and head leave
         unexplained are taken for a lost hand; either arm is posed to reach each (inverse
         kinematics) and the best such pose is registered (``hypothesis_evaluations``) as a
         further hypothesis.
     reacquisition_distance_px : float, pixels
-        A skin region whose centroid is farther than this from both projected hands triggers it.
-    reacquisition_min_pixels : int, pixels
-        Smaller skin regions are ignored.
+        A skin region (of at least :data:`MIN_SKIN_BLOB_PIXELS`) whose centroid is farther than
+        this from both projected hands triggers it.
     beam : int
         Hypotheses kept per frame (1: a single-hypothesis tracker, as the paper's).
     hypothesis_evaluations : int
@@ -73,12 +77,10 @@ class TrackerConfig(JsonConfig):
         a re-acquired hand's).
     jumps : bool
         Propose the kinematic jumps of the leading hypothesis (each arm's depth branches and the
-        torso's front/back mirror, :mod:`mocap.body.jumps`), each refined by a short
-        registration of ``jump_evaluations``.
+        torso's front/back mirror, :mod:`mocap.body.jumps`); the :data:`JUMPS_REFINED`
+        lowest-F ones are refined by a short registration of ``jump_evaluations``.
     jump_evaluations : int
         Evaluations of each jump's refinement.
-    jumps_refined : int
-        Jumps refined per frame: the lowest-F ones.
     lag : int, frames
         Online decoding: a frame's pose is decided ``lag`` frames later, by the best path
         (Viterbi) through the hypotheses of the frames since. 0 takes the best hypothesis of
@@ -92,7 +94,9 @@ class TrackerConfig(JsonConfig):
         distance D_k (:class:`mocap.cost.KeypointCost`). The registration steps add D_k at the
         same rate relative to their own cost: the region step minimises
         ``F + keypoint_weight / region_weight * D_k``, the edge step
-        ``D_c + keypoint_weight / edge_weight * D_k``. Without keypoints it changes nothing.
+        ``D_c + keypoint_weight / edge_weight * D_k``; and the keypoint source
+        (:class:`mocap.track.proposals.KeypointArmSource`) joins the proposal stage. Without
+        keypoints it changes nothing.
     prior_weight : float
         Score per nat of the pose prior's negative log-density (:mod:`mocap.body.prior`); 0: off.
     motion_sigma_m : float, metres
@@ -101,8 +105,16 @@ class TrackerConfig(JsonConfig):
     motion_cap : float
         ...at most this much (a truncated quadratic): a jump between branches or to a
         re-acquired arm costs a fixed price that a clearly better fit pays.
-    merge_distance_m : float, metres
-        Hypotheses whose joints are on average closer than this are merged (the better kept).
+    blob_arms : bool
+        Proposal stage: both depth branches of the arm that reaches each hand blob
+        (:class:`mocap.track.proposals.BlobArmSource`).
+    exemplars : bool
+        Proposal stage: the nearest exemplars of the shipped set rendered from motion capture
+        (:mod:`mocap.track.exemplars`), and their half turns.
+    proposals_refined : int
+        Proposals of each source refined per frame: the lowest-F ones (0: the stage is off).
+    proposal_evaluations : int
+        Evaluations of each proposal's refinement.
     """
 
     evaluations: int = 500
@@ -110,22 +122,17 @@ class TrackerConfig(JsonConfig):
     edge_start: str = "region_simplex"
     position_step_m: float = 0.05
     angle_step_deg: float = 20.0
-    fresh_step_scale: float = 3.0
     ftol: float = 1e-3
     region_failure_threshold: float = 0.45
     edge_failure_threshold_px: float = 4.0
     recovery: bool = True
-    recovery_step_scale: float = 2.5
     mesh_resolution: int = 0
-    edge_gap_m: float = 0.03
     hand_reacquisition: bool = True
     reacquisition_distance_px: float = 6.0
-    reacquisition_min_pixels: int = 2
     beam: int = 3
     hypothesis_evaluations: int = 150
     jumps: bool = True
     jump_evaluations: int = 80
-    jumps_refined: int = 2
     lag: int = 8
     offline: bool = False
     region_weight: float = 50.0
@@ -134,34 +141,34 @@ class TrackerConfig(JsonConfig):
     prior_weight: float = 0.05
     motion_sigma_m: float = 0.05
     motion_cap: float = 8.0
-    merge_distance_m: float = 0.02
+    blob_arms: bool = False
+    exemplars: bool = False
+    proposals_refined: int = 2
+    proposal_evaluations: int = 100
 
     def __post_init__(self) -> None:
         for name in ("beam",):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise ValueError(f"{name} must be an integer of at least 1, got {v!r}")
-        for name in ("evaluations", "hypothesis_evaluations", "jump_evaluations", "jumps_refined", "lag", "mesh_resolution"):
+        for name in ("evaluations", "hypothesis_evaluations", "jump_evaluations", "lag", "mesh_resolution",
+                     "proposals_refined", "proposal_evaluations"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                 raise ValueError(f"{name} must be a non-negative integer, got {v!r}")
-        if (isinstance(self.reacquisition_min_pixels, bool) or not isinstance(self.reacquisition_min_pixels, int)
-                or self.reacquisition_min_pixels < 1):
-            raise ValueError(f"reacquisition_min_pixels must be a positive integer, got {self.reacquisition_min_pixels!r}")
-        for name in ("recovery", "hand_reacquisition", "jumps", "offline"):
+        for name in ("recovery", "hand_reacquisition", "jumps", "offline", "blob_arms", "exemplars"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         split_budget(self.evaluations, self.split)          # validates the split
         if self.edge_start not in EDGE_STARTS:
             raise ValueError(f"edge_start must be one of {EDGE_STARTS}, got {self.edge_start!r}")
-        for name in ("position_step_m", "angle_step_deg", "fresh_step_scale", "recovery_step_scale",
+        for name in ("position_step_m", "angle_step_deg",
                      "edge_failure_threshold_px", "region_failure_threshold", "reacquisition_distance_px",
                      "motion_sigma_m", "motion_cap"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be a finite positive number, got {v!r}")
-        for name in ("ftol", "edge_gap_m", "region_weight", "edge_weight", "keypoint_weight", "prior_weight",
-                     "merge_distance_m"):
+        for name in ("ftol", "region_weight", "edge_weight", "keypoint_weight", "prior_weight"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise ValueError(f"{name} must be finite and non-negative, got {v!r}")
@@ -169,16 +176,10 @@ class TrackerConfig(JsonConfig):
             raise ValueError("keypoint_weight > 0 needs positive region_weight and edge_weight (the registration "
                              "steps weigh the keypoint distance relative to them)")
 
-    def keypoint_step_weights(self) -> tuple[float, float]:
-        """Weight of the keypoint distance in the region step (units of F per pixel) and in the
-        edge step (pixels per pixel): ``keypoint_weight`` over ``region_weight`` and ``edge_weight``."""
-        if self.keypoint_weight == 0:
-            return 0.0, 0.0
-        return self.keypoint_weight / self.region_weight, self.keypoint_weight / self.edge_weight
-
     @classmethod
     def paper(cls, **changes) -> "TrackerConfig":
-        """The paper's method: one hypothesis, no recovery, re-acquisition, jumps, prior or keypoints.
+        """The paper's method: one hypothesis, no recovery, re-acquisition, jumps, proposals, prior
+        or keypoints.
 
         Parameters
         ----------
@@ -187,7 +188,14 @@ class TrackerConfig(JsonConfig):
             unknown names raise TypeError.
         """
         return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
-                           prior_weight=0.0, keypoint_weight=0.0), **changes)
+                           prior_weight=0.0, keypoint_weight=0.0, blob_arms=False, exemplars=False), **changes)
+
+    def keypoint_step_weights(self) -> tuple[float, float]:
+        """Weight of the keypoint distance in the region step (units of F per pixel) and in the
+        edge step (pixels per pixel): ``keypoint_weight`` over ``region_weight`` and ``edge_weight``."""
+        if self.keypoint_weight == 0:
+            return 0.0, 0.0
+        return self.keypoint_weight / self.region_weight, self.keypoint_weight / self.edge_weight
 
     def steps(self) -> np.ndarray:
         """Initial simplex steps, shape (23,): metres for the root, radians for the angles."""

@@ -1,13 +1,21 @@
 """Hypothesis proposals: where else the actor might be, beyond the local search.
 
-* **Hand re-acquisition**: skin regions of the image that the model's hands and head leave
-  unexplained are taken for a lost hand; each arm is posed to reach each such region on its
-  camera ray (:func:`reach_proposals`, inverse kinematics of :mod:`mocap.body.ik`).
-* **Kinematic jumps** (:func:`jump_proposals`): each arm's other depth branches and the
-  torso's front/back mirror (:mod:`mocap.body.jumps`), clamped to the joint limits.
-* **Keypoints** (:class:`KeypointArmSource`): given a frame's 2D keypoints, the torso turned
-  to the heading its shoulder keypoints show and each arm posed through its elbow and wrist
-  keypoints on every depth branch (:func:`mocap.body.jumps.arm_poses_on_rays`).
+Two kinds feed the beam (:class:`mocap.track.Tracker`):
+
+* **From the previous poses.** Hand re-acquisition: skin regions of the image that the
+  leader's hands and head leave unexplained are taken for a lost hand; each arm is posed to
+  reach each such region on its camera ray (:func:`reach_proposals`, inverse kinematics of
+  :mod:`mocap.body.ik`). Kinematic jumps (:func:`jump_proposals`): each arm's other depth
+  branches and the torso's front/back mirror (:mod:`mocap.body.jumps`).
+* **From the current image** (the *proposal stage*). A :class:`ProposalSource` reads the
+  frame's observation (:class:`mocap.imaging.PreparedFrame`: class labels, edges, distance
+  map; and, where a detector gave them, 2D keypoints) and returns full poses
+  (:class:`Proposal`), whatever the previous pose was. The tracker scores every proposal once
+  by F, refines the lowest-F ones of each source by a short registration and lets them
+  compete in the beam; the decoder decides. Sources here: :class:`BlobArmSource` (both depth
+  branches of the arm that reaches each hand blob) and :class:`KeypointArmSource` (each arm
+  on every depth branch of its elbow and wrist keypoints, the torso on the shoulder
+  keypoints); elsewhere the exemplar source (:mod:`mocap.track.exemplars`).
 """
 from __future__ import annotations
 
@@ -18,24 +26,194 @@ from typing import Protocol
 import numpy as np
 
 from mocap.body.ik import reach_arm
-from mocap.body.jumps import SIDES, arm_jumps, arm_poses_on_rays, torso_flip
+from mocap.body.jumps import SIDES, arm_jumps, arm_poses_on_rays, ray_sphere_depths, torso_flip
 from mocap.body.model import BodyModel
 from mocap.body.pose import PARAMETER_INDEX, PARAMETER_NAMES, clamp_to_limits, within_limits
-from mocap.body.skeleton import JOINT_NAMES
+from mocap.body.skeleton import JOINT_INDEX
 from mocap.imaging.blobs import label_blobs
 from mocap.labels import class_label
 from mocap.render.camera import Camera
-from mocap.track.config import TrackerConfig
-
-#: Row of each named joint in the joint arrays.
-_JOINT = {name: i for i, name in enumerate(JOINT_NAMES)}
+from mocap.render.rasterize import render_labels
+from mocap.track.config import MERGE_DISTANCE_M, MIN_SKIN_BLOB_PIXELS, TrackerConfig
 
 
-#: Hand depths tried by hand re-acquisition, as fractions of the arm's reach (shoulder to hand
-#: centre, arm straight): the hand on the camera ray at that distance from the shoulder, nearer
-#: and farther than the shoulder (the two depth branches), plus the point of the ray nearest
-#: the shoulder.
-REACQUISITION_REACH = (0.95, 0.7)
+#: Hand distances from the shoulder tried when an arm is posed to reach an image point, as
+#: fractions of the arm's straight reach (shoulder to hand centre).
+REACH_FRACTIONS = (0.95, 0.7)
+
+
+@dataclass(frozen=True)
+class Proposal:
+    """A full pose proposed for the current frame.
+
+    Attributes
+    ----------
+    pose : ndarray, shape (23,), float64
+        Metres and radians, the root placed in camera coordinates.
+    origin : str
+        The source that made it (its ``origin``), written to ``poses.csv``.
+    """
+
+    pose: np.ndarray
+    origin: str
+
+
+@dataclass(frozen=True)
+class ProposalContext:
+    """What a proposal source may use besides the frame's observation.
+
+    Attributes
+    ----------
+    model : BodyModel
+        The calibrated actor.
+    camera : Camera
+        The working camera (the observation's size).
+    leader : ndarray, shape (23,), float64
+        The leading hypothesis's pose registered on this frame (metres, radians).
+    keypoints : object or None
+        The frame's 2D keypoints in working-camera pixels, when a detector gave them.
+    """
+
+    model: BodyModel
+    camera: Camera
+    leader: np.ndarray
+    keypoints: object | None = None
+
+
+class ProposalSource(Protocol):
+    """Anything that proposes full poses from one frame's observation."""
+
+    #: Name of the source (``Proposal.origin``).
+    origin: str
+
+    def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
+        """Poses for this frame (possibly none), from ``prepared``
+        (:class:`mocap.imaging.PreparedFrame`) and ``context``."""
+
+
+def place_by_silhouette(pose: np.ndarray, foreground: np.ndarray, model: BodyModel, camera: Camera, *,
+                        rounds: int = 2) -> np.ndarray:
+    """Move a pose's root sideways so that its silhouette's centroid lands on the foreground's.
+
+    The root keeps its depth; its x and y are shifted in the camera plane at that depth by the
+    pixel offset between the centroids of the observed foreground and of the rendered model
+    (repeated ``rounds`` times: perspective makes one shift inexact).
+
+    Parameters
+    ----------
+    pose : ndarray, shape (23,)
+        Metres and radians; its ``root_z`` must be in front of the camera.
+    foreground : ndarray of bool, shape (H, W)
+        The observed foreground (``PreparedFrame.foreground``), the camera's size.
+    model : BodyModel
+    camera : Camera
+    rounds : int
+        Shifts made (each one render).
+
+    Returns
+    -------
+    ndarray, shape (23,), float64
+        The pose with ``root_x`` and ``root_y`` moved (unchanged when either silhouette is empty),
+        clamped to the joint limits.
+    """
+    q = np.array(pose, dtype=np.float64)
+    rows, cols = np.nonzero(foreground)
+    if len(rows) == 0:
+        return clamp_to_limits(q)
+    target = np.array([cols.mean(), rows.mean()])
+    depth = q[PARAMETER_INDEX["root_z"]]
+    if not depth > 0:
+        raise ValueError(f"root_z must be in front of the camera to place a pose, got {depth!r} m")
+    f = np.array([camera.fx, camera.fy])
+    for _ in range(rounds):
+        model_rows, model_cols = np.nonzero(render_labels(q, model, camera))
+        if len(model_rows) == 0:
+            break
+        shift = (target - np.array([model_cols.mean(), model_rows.mean()])) * depth / f
+        q[PARAMETER_INDEX["root_x"]] += shift[0]
+        q[PARAMETER_INDEX["root_y"]] += shift[1]
+    return clamp_to_limits(q)
+
+
+def arm_reach_m(pose: np.ndarray, model: BodyModel, side: str) -> float:
+    """Distance from shoulder to hand centre with the arm straight (metres)."""
+    straight = np.array(pose, dtype=np.float64)
+    straight[[i for i, name in enumerate(PARAMETER_NAMES) if name.startswith(f"{side}_")]] = 0.0
+    joints = model.joint_positions(straight)
+    return float(np.linalg.norm(joints[JOINT_INDEX[f"{side}_hand"]] - joints[JOINT_INDEX[f"{side}_shoulder"]]))
+
+
+def pixel_ray(camera: Camera, uv) -> np.ndarray:
+    """Unit direction (camera coordinates) of the ray through pixel ``uv = (u, v)``."""
+    ray = np.linalg.solve(camera.intrinsics(), np.array([uv[0], uv[1], 1.0]))
+    return ray / np.linalg.norm(ray)
+
+
+def skin_blobs_off_head(labels: np.ndarray, joints: np.ndarray, model: BodyModel, camera: Camera,
+                        min_pixels: int) -> np.ndarray:
+    """Centroids of the skin regions of a label image, but the one nearest the projected head.
+
+    Parameters
+    ----------
+    labels : ndarray of uint8, shape (H, W)
+    joints : ndarray, shape (10, 3), metres
+        A pose's joints (the head's projection picks the head's region).
+    model : BodyModel
+        Its ``skin`` class (none: nothing is returned).
+    camera : Camera
+    min_pixels : int
+        Smaller regions are ignored.
+
+    Returns
+    -------
+    ndarray, shape (n, 2), float64, pixels
+        ``(u, v)`` of each region, largest first.
+    """
+    if "skin" not in model.class_names or np.any(joints[:, 2] <= 0.0):
+        return np.zeros((0, 2))         # (a joint at or behind the camera plane projects nowhere)
+    blobs = label_blobs(labels, class_label("skin", model.class_names), min_pixels=min_pixels)
+    if len(blobs) == 0:
+        return np.zeros((0, 2))
+    head = int(np.argmin(np.linalg.norm(blobs.centroids - camera.project(joints)[JOINT_INDEX["head"]], axis=1)))
+    return np.delete(blobs.centroids, head, axis=0)
+
+
+@dataclass(frozen=True)
+class BlobArmSource:
+    """Both depth branches of each arm that reaches a hand blob (the skin regions but the head's).
+
+    For every such region and arm whose reach (shoulder to hand centre, arm straight, times
+    each of :data:`REACH_FRACTIONS`) the region's camera ray meets, the hand is put on the ray at
+    the two depths where it does (nearer and farther than the shoulder: the two depth branches)
+    by :func:`mocap.body.ik.reach_arm`, the rest of the body kept as the leader's; joint limits
+    hold. Up to ``max_blobs`` regions, largest first.
+
+    Attributes
+    ----------
+    min_pixels : int, pixels
+        Smaller skin regions are ignored.
+    max_blobs : int
+        Regions used at most.
+    """
+
+    min_pixels: int = MIN_SKIN_BLOB_PIXELS
+    max_blobs: int = 3
+    origin: str = "blob"
+
+    def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
+        model, camera, leader = context.model, context.camera, context.leader
+        joints = model.joint_positions(leader)
+        out = []
+        for uv in skin_blobs_off_head(prepared.labels, joints, model, camera, self.min_pixels)[: self.max_blobs]:
+            ray = pixel_ray(camera, uv)
+            for side in SIDES:
+                shoulder = joints[JOINT_INDEX[f"{side}_shoulder"]]
+                reach = arm_reach_m(leader, model, side)
+                for fraction in REACH_FRACTIONS:
+                    for depth in ray_sphere_depths(ray, shoulder, fraction * reach):
+                        if depth > 0:
+                            out.append(Proposal(reach_arm(leader, model.skeleton, side, depth * ray), self.origin))
+        return out
 
 
 def unexplained_hands(labels: np.ndarray, joints: np.ndarray, model: BodyModel, camera: Camera,
@@ -52,7 +230,8 @@ def unexplained_hands(labels: np.ndarray, joints: np.ndarray, model: BodyModel, 
         Its ``skin`` colour class is the hands' (none: nothing is returned).
     camera : Camera
     config : TrackerConfig
-        ``reacquisition_min_pixels`` and ``reacquisition_distance_px``.
+        ``reacquisition_distance_px`` (skin regions of at least
+        :data:`~mocap.track.config.MIN_SKIN_BLOB_PIXELS`).
 
     Returns
     -------
@@ -61,17 +240,12 @@ def unexplained_hands(labels: np.ndarray, joints: np.ndarray, model: BodyModel, 
         whose centroid is farther than ``reacquisition_distance_px`` from both projected hand
         centres.
     """
-    if "skin" not in model.class_names or np.any(joints[:, 2] <= 0.0):
-        return np.zeros((0, 2))         # (a joint at or behind the camera plane projects nowhere)
-    blobs = label_blobs(labels, class_label("skin", model.class_names), min_pixels=config.reacquisition_min_pixels)
+    blobs = skin_blobs_off_head(labels, joints, model, camera, MIN_SKIN_BLOB_PIXELS)
     if len(blobs) == 0:
-        return np.zeros((0, 2))
-    projected = camera.project(joints)
-    head = int(np.argmin(np.linalg.norm(blobs.centroids - projected[_JOINT["head"]], axis=1)))
-    hands = projected[[_JOINT["r_hand"], _JOINT["l_hand"]]]
-    far = np.linalg.norm(blobs.centroids[:, None, :] - hands[None], axis=2).min(axis=1) > config.reacquisition_distance_px
-    far[head] = False
-    return blobs.centroids[far]
+        return blobs
+    hands = camera.project(joints)[[JOINT_INDEX["r_hand"], JOINT_INDEX["l_hand"]]]
+    far = np.linalg.norm(blobs[:, None, :] - hands[None], axis=2).min(axis=1) > config.reacquisition_distance_px
+    return blobs[far]
 
 
 def reach_proposals(pose: np.ndarray, joints: np.ndarray, targets: np.ndarray, model: BodyModel,
@@ -79,8 +253,9 @@ def reach_proposals(pose: np.ndarray, joints: np.ndarray, targets: np.ndarray, m
     """Poses with one arm moved so that its hand projects onto each image point.
 
     For every target pixel and arm, the hand is put on the camera ray through the pixel at the
-    depths of :data:`REACQUISITION_REACH` (both branches where the ray passes within reach) and
-    at the ray's point nearest the shoulder, by :func:`mocap.body.ik.reach_arm`.
+    depths where the ray meets the spheres of :data:`REACH_FRACTIONS` of the arm's reach about
+    the shoulder (both branches) and at the ray's point nearest the shoulder, by
+    :func:`mocap.body.ik.reach_arm`.
 
     Parameters
     ----------
@@ -96,27 +271,15 @@ def reach_proposals(pose: np.ndarray, joints: np.ndarray, targets: np.ndarray, m
     -------
     list of ndarray, shape (23,)
     """
-    reach = {}
-    for side in "rl":                      # shoulder to hand centre with the arm straight
-        straight = pose.copy()
-        straight[[i for i, name in enumerate(PARAMETER_NAMES) if name.startswith(f"{side}_")]] = 0.0
-        straight_joints = model.joint_positions(straight)
-        reach[side] = float(np.linalg.norm(straight_joints[_JOINT[f"{side}_hand"]]
-                                           - straight_joints[_JOINT[f"{side}_shoulder"]]))
+    reach = {side: arm_reach_m(pose, model, side) for side in SIDES}
     out = []
-    k_inv = np.linalg.inv(camera.intrinsics())
     for uv in targets:
-        ray = k_inv @ np.array([uv[0], uv[1], 1.0])
-        ray /= np.linalg.norm(ray)
-        for side in "rl":
-            shoulder = joints[_JOINT[f"{side}_shoulder"]]
-            nearest = float(shoulder @ ray)
-            miss = float(np.linalg.norm(shoulder - nearest * ray))
-            depths = [nearest]
-            for fraction in REACQUISITION_REACH:
-                if fraction * reach[side] > miss:
-                    half = math.sqrt((fraction * reach[side]) ** 2 - miss ** 2)
-                    depths += [nearest - half, nearest + half]
+        ray = pixel_ray(camera, uv)
+        for side in SIDES:
+            shoulder = joints[JOINT_INDEX[f"{side}_shoulder"]]
+            depths = [float(shoulder @ ray)]
+            for fraction in REACH_FRACTIONS:
+                depths += list(ray_sphere_depths(ray, shoulder, fraction * reach[side]))
             out += [reach_arm(pose, model.skeleton, side, t * ray) for t in depths if t > 0]
     return out
 
@@ -142,58 +305,6 @@ def jump_proposals(pose: np.ndarray, model: BodyModel) -> list[tuple[str, np.nda
             out.append((f"{side}_{name}", clamp_to_limits(q)))
     out.append(("torso_flip", torso_flip(pose, model.skeleton)))
     return out
-
-
-@dataclass(frozen=True)
-class Proposal:
-    """A pose the tracker should consider.
-
-    Attributes
-    ----------
-    pose : ndarray, shape (23,)
-        Metres and radians, root placed.
-    origin : str
-        What proposed it (``"keypoints"``, ...).
-    """
-
-    pose: np.ndarray
-    origin: str
-
-
-@dataclass(frozen=True)
-class ProposalContext:
-    """What a proposal source may look at besides the prepared frame.
-
-    Attributes
-    ----------
-    model : BodyModel
-    camera : Camera
-        The working camera.
-    leader : ndarray, shape (23,)
-        The leading hypothesis's registered pose this frame.
-    keypoints : Keypoints or None
-        The frame's 2D keypoints (:class:`mocap.io.keypoints.Keypoints`), working-camera pixels.
-    """
-
-    model: BodyModel
-    camera: Camera
-    leader: np.ndarray
-    keypoints: object | None
-
-
-class ProposalSource(Protocol):
-    """Something that proposes poses for a frame."""
-
-    origin: str
-
-    def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
-        """Poses to consider for the frame (:class:`mocap.imaging.PreparedFrame`)."""
-
-
-def camera_ray(camera: Camera, uv) -> np.ndarray:
-    """Unit direction (3,) of the camera ray through pixel position ``uv`` (u, v), camera coordinates."""
-    ray = np.array([(uv[0] - camera.cx) / camera.fx, (uv[1] - camera.cy) / camera.fy, 1.0])
-    return ray / np.linalg.norm(ray)
 
 
 def torso_on_shoulders(pose: np.ndarray, model: BodyModel, camera: Camera, r_shoulder_uv, l_shoulder_uv) -> np.ndarray:
@@ -222,9 +333,9 @@ def torso_on_shoulders(pose: np.ndarray, model: BodyModel, camera: Camera, r_sho
     """
     from scipy.optimize import minimize_scalar
 
-    rows = [_JOINT["r_shoulder"], _JOINT["l_shoulder"]]
+    rows = [JOINT_INDEX["r_shoulder"], JOINT_INDEX["l_shoulder"]]
     target_uv = np.array([r_shoulder_uv, l_shoulder_uv], dtype=np.float64)
-    target_mid = camera_ray(camera, target_uv.mean(axis=0))          # unit ray through the 2D midpoint
+    target_mid = pixel_ray(camera, target_uv.mean(axis=0))          # unit ray through the 2D midpoint
     yaw_index = PARAMETER_INDEX["chest_yaw"]
 
     def placed(yaw: float) -> np.ndarray:
@@ -272,7 +383,9 @@ class KeypointArmSource:
     as it is. When both shoulder keypoints are present, one more proposal turns and moves the
     torso onto them (:func:`torso_on_shoulders`: a heading from a shoulder line seen nearly
     face-on is ill-conditioned, hence a proposal of its own) with every arm on its branch
-    nearest the leader's arm.
+    nearest the leader's arm. Proposals whose joints are on average within
+    :data:`~mocap.track.config.MERGE_DISTANCE_M` of the leader's are left out (the leader's
+    registration covers them; the tracker refines the lowest-F of the rest).
     """
 
     origin = "keypoints"
@@ -287,27 +400,29 @@ class KeypointArmSource:
         out = []
         for side in SIDES:
             out += self._arm_branches(leader, side, k, present, model, camera)
-        r_s, l_s = _JOINT["r_shoulder"], _JOINT["l_shoulder"]
+        r_s, l_s = JOINT_INDEX["r_shoulder"], JOINT_INDEX["l_shoulder"]
         if present[r_s] and present[l_s] and np.all(model.joint_positions(leader)[[r_s, l_s], 2] > 0):
             torso = torso_on_shoulders(leader, model, camera, k.uv[r_s], k.uv[l_s])
             lead_joints = model.joint_positions(leader)
             for side in SIDES:
                 branches = self._arm_branches(torso, side, k, present, model, camera)
                 if branches:
-                    rows = [_JOINT[f"{side}_elbow"], _JOINT[f"{side}_wrist"]]
+                    rows = [JOINT_INDEX[f"{side}_elbow"], JOINT_INDEX[f"{side}_wrist"]]
                     best = min(branches, key=lambda q: float(np.linalg.norm(model.joint_positions(q)[rows]
                                                                             - lead_joints[rows])))
                     arm = [PARAMETER_INDEX[n] for n in PARAMETER_NAMES if n.startswith(f"{side}_")]
                     torso[arm] = best[arm]
             out.append(torso)
-        return [Proposal(q, self.origin) for q in out]
+        lead_joints = model.joint_positions(leader)
+        return [Proposal(q, self.origin) for q in out
+                if np.linalg.norm(model.joint_positions(q) - lead_joints, axis=1).mean() >= MERGE_DISTANCE_M]
 
     @staticmethod
     def _arm_branches(pose, side, k, present, model: BodyModel, camera: Camera) -> list[np.ndarray]:
-        e, w = _JOINT[f"{side}_elbow"], _JOINT[f"{side}_wrist"]
+        e, w = JOINT_INDEX[f"{side}_elbow"], JOINT_INDEX[f"{side}_wrist"]
         if not (present[e] and present[w]):
             return []
-        branches = list(arm_poses_on_rays(pose, model.skeleton, side, camera_ray(camera, k.uv[e]),
-                                          camera_ray(camera, k.uv[w])).values())
+        branches = list(arm_poses_on_rays(pose, model.skeleton, side, pixel_ray(camera, k.uv[e]),
+                                          pixel_ray(camera, k.uv[w])).values())
         inside = [q for q in branches if within_limits(q)]
         return inside or [clamp_to_limits(q) for q in branches]

@@ -16,7 +16,7 @@ import numpy as np
 from mocap.body.pose import JOINT_LIMITS, check_pose, clamp_to_limits
 from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.optimize import SimplexResult, initial_simplex, minimize_cost
-from mocap.track.config import TrackerConfig, split_budget
+from mocap.track.config import FRESH_STEP_SCALE, TrackerConfig, split_budget
 
 
 @dataclass(frozen=True)
@@ -102,7 +102,7 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
         if region is not None and config.edge_start == "region_simplex":
             simplex = region.simplex
         else:
-            simplex = initial_simplex(pose, steps * config.fresh_step_scale, lower, upper)
+            simplex = initial_simplex(pose, steps * FRESH_STEP_SCALE, lower, upper)
         edge = minimize_cost(edge_cost, simplex, lower, upper, budget=n_edge, ftol=config.ftol,
                              keypoint_cost=keypoint_cost, keypoint_weight=edge_kw)
         if edge.evaluations > 0:

@@ -4,11 +4,11 @@ Every frame, each hypothesis kept from the previous frame is extended by the two
 registration (:func:`~mocap.track.registration.register`; the leading one with the full
 budget, the others with ``hypothesis_evaluations``). Proposals compete with them: a recovery
 from the last good pose when the leader fails, hand re-acquisition when a skin region is left
-unexplained, and the leader's kinematic jumps (:mod:`mocap.body.jumps`), each refined by a short
-registration, and, given 2D keypoints, each arm posed on them by inverse kinematics
-(:class:`~mocap.track.proposals.KeypointArmSource`). Every candidate gets a **unary score**
-(``region_weight * F + edge_weight * edge distance + prior_weight * pose-prior energy``, plus
-``keypoint_weight * keypoint distance`` given keypoints, which the registrations also add); between consecutive frames a **motion term**
+unexplained, the leader's kinematic jumps (:mod:`mocap.body.jumps`), and the proposal stage's
+poses read from the current image (:class:`~mocap.track.proposals.ProposalSource`: hand blobs,
+exemplars, keypoints), each refined by a short registration. Every candidate gets a **unary score** (``region_weight * F + edge_weight * edge
+distance + prior_weight * pose-prior energy``, plus ``keypoint_weight * keypoint distance`` on
+frames with 2D keypoints, which every registration of the frame then also adds); between consecutive frames a **motion term**
 (half the mean squared joint displacement over ``motion_sigma_m**2``) links them. The forward
 Viterbi recursion (:func:`~mocap.track.decode.viterbi_step`) gives each candidate the cost of
 the best path to it; near-duplicates are merged and the ``beam`` cheapest survive.
@@ -30,6 +30,7 @@ import math
 import time
 from collections import deque
 from dataclasses import dataclass, field
+from typing import Sequence
 
 import numpy as np
 
@@ -38,10 +39,11 @@ from mocap.body.pose import check_pose, clamp_to_limits
 from mocap.body.prior import PosePrior, default_prior
 from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.render.camera import Camera
-from mocap.track.config import TrackerConfig
+from mocap.track.config import (JUMPS_REFINED, MERGE_DISTANCE_M, MIN_SKIN_BLOB_PIXELS, RECOVERY_STEP_SCALE,
+                                TrackerConfig)
 from mocap.track.decode import backtrack, viterbi_step
-from mocap.track.proposals import (KeypointArmSource, ProposalContext, jump_proposals, reach_proposals,
-                                   unexplained_hands)
+from mocap.track.proposals import (BlobArmSource, KeypointArmSource, ProposalContext, ProposalSource, jump_proposals,
+                                   reach_proposals, unexplained_hands)
 from mocap.track.registration import Registration, register
 
 
@@ -50,10 +52,12 @@ class FrameResult:
     """What the tracker decided for one frame (one row of ``poses.csv``).
 
     ``timings_ms`` has ``prepare``, ``region`` and ``edge`` (the leading hypothesis's two
-    steps), ``recovery`` (every other hypothesis and proposal) and ``total`` (milliseconds;
-    plus the image side's parts ``prepare_*``). ``hypothesis`` is the chosen hypothesis's rank
-    in its frame's beam when that frame was tracked (0: it led), ``score`` its unary score and
-    ``recovery`` what produced it.
+    steps), ``beam`` (everything after them: the other hypotheses, recovery, re-acquisition,
+    jumps, the proposal stage and the decoder's step), ``proposals`` (the proposal stage alone,
+    part of ``beam``) and ``total`` (milliseconds; plus the image side's parts ``prepare_*``).
+    ``hypothesis`` is the chosen hypothesis's rank in its frame's beam when that frame was
+    tracked (0: it led), ``score`` its unary score and ``origin`` what produced it in that
+    frame (:data:`ORIGINS` or a proposal source's ``origin``).
     """
 
     frame: int
@@ -64,7 +68,7 @@ class FrameResult:
     edge_residual_after_region: float
     failed: bool
     empty: bool
-    recovery: str
+    origin: str
     evaluations: int
     region_iterations: int
     edge_iterations: int
@@ -81,7 +85,7 @@ class _Hypothesis:
     edge_residual: float
     edge_residual_after_region: float
     failed: bool
-    note: str
+    origin: str
     unary: float
     region_iterations: int
     edge_iterations: int
@@ -112,16 +116,21 @@ class Tracker:
         Pose in the first frame (from calibration), metres and radians.
     prior : PosePrior, optional
         Pose prior of the score (default: the shipped one, when ``config.prior_weight > 0``).
+    sources : sequence of ProposalSource, optional
+        The proposal stage's sources (default: :func:`proposal_sources` of ``config``);
+        experiments add others (an oracle) this way.
     """
 
     def __init__(self, model: BodyModel, camera: Camera, config: TrackerConfig, initial_pose,
-                 prior: PosePrior | None = None) -> None:
+                 prior: PosePrior | None = None, sources: Sequence[ProposalSource] | None = None) -> None:
         if config.mesh_resolution and model.mesh.resolution != config.mesh_resolution:
             model = model.with_resolution(config.mesh_resolution)
         self.model, self.camera, self.config = model, camera, config
         self.prior = prior if prior is not None else (default_prior() if config.prior_weight > 0 else None)
+        self.sources: tuple[ProposalSource, ...] = tuple(proposal_sources(config) if sources is None else sources)
+        self.candidates: list[tuple[str, np.ndarray]] = []
         q = clamp_to_limits(check_pose(initial_pose, name="initial pose"))
-        start = _Hypothesis(q, model.joint_positions(q), math.nan, math.nan, math.nan, False, "initial pose",
+        start = _Hypothesis(q, model.joint_positions(q), math.nan, math.nan, math.nan, False, "initial",
                             0.0, 0, 0)
         self._beam: list[_Hypothesis] = [start]
         self._cost = np.zeros(1)
@@ -130,11 +139,9 @@ class Tracker:
 
     # -- streaming ---------------------------------------------------------------------------
     def push(self, frame_index: int, prepared, keypoints=None) -> list[FrameResult]:
-        """Take one prepared frame (:class:`mocap.imaging.PreparedFrame`); return the frames
+        """Take one prepared frame (:class:`mocap.imaging.PreparedFrame`) and, where a detector
+        gave them, its 2D keypoints (for the proposal sources that read them); return the frames
         whose pose is now final, oldest first.
-
-        ``keypoints`` (:class:`mocap.io.keypoints.Keypoints` in the working camera's pixels,
-        optional) are the frame's 2D keypoints: a cost term, a score term and proposals.
 
         Online with ``lag`` L, the first L calls return nothing and each later call one frame;
         offline, nothing comes out before :meth:`finish`. Every frame pushed comes out once,
@@ -179,12 +186,11 @@ class Tracker:
     def costs(self, prepared) -> tuple[RegionCost, EdgeCost]:
         """Region and edge costs of one prepared frame, for this tracker's model, camera and config."""
         return (RegionCost(prepared.labels, self.model, self.camera),
-                EdgeCost(prepared.distance, self.model, self.camera, edge_gap=self.config.edge_gap_m))
+                EdgeCost(prepared.distance, self.model, self.camera))
 
     def keypoint_cost(self, keypoints) -> KeypointCost | None:
         """The keypoint distance of a frame's :class:`~mocap.io.keypoints.Keypoints` (working
-        camera pixels) for this tracker; None when there are none or the config's
-        ``keypoint_weight`` is 0."""
+        camera pixels) for this tracker; None when there are none or ``keypoint_weight`` is 0."""
         if keypoints is None or self.config.keypoint_weight == 0:
             return None
         cost = KeypointCost(keypoints.uv, keypoints.confidence, self.model, self.camera)
@@ -196,14 +202,15 @@ class Tracker:
         timings = {f"prepare_{k}": 1e3 * v for k, v in prepared.timings.items()}
         timings["prepare"] = sum(timings.values())
         if prepared.is_empty:
-            kept = [_Hypothesis(h.pose, h.joints, math.nan, math.nan, math.nan, False, "empty frame: pose kept",
+            kept = [_Hypothesis(h.pose, h.joints, math.nan, math.nan, math.nan, False, "empty",
                                 0.0, 0, 0) for h in self._beam]
-            timings.update(region=0.0, edge=0.0, recovery=0.0)
+            timings.update(region=0.0, edge=0.0, beam=0.0, proposals=0.0)
             timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)
             return _Frame(index, True, kept, self._cost - self._cost.min(), np.arange(len(kept)), 0, timings)
         region_cost, edge_cost = self.costs(prepared)
-        keypoint_cost = self.keypoint_cost(keypoints)
-        fit = functools.partial(register, region_cost, edge_cost, config=cfg, keypoint_cost=keypoint_cost)
+        # every registration of the frame, with the keypoint distance when keypoints are given
+        fit = functools.partial(register, region_cost, edge_cost, config=cfg,
+                                keypoint_cost=self.keypoint_cost(keypoints))
         candidates: list[tuple[Registration, str]] = []
         evaluations = 0
         t1 = time.perf_counter()
@@ -212,7 +219,7 @@ class Tracker:
             if budget > 0 or rank == 0:                 # the leader always (0: its pose kept)
                 reg = fit(h.pose, evaluations=budget)
                 evaluations += reg.evaluations
-                candidates.append((reg, "tracked" if rank == 0 else f"hypothesis {rank} tracked"))
+                candidates.append((reg, "tracked"))
             if rank == 0:
                 t2 = time.perf_counter()
                 lead = candidates[0][0]
@@ -221,26 +228,31 @@ class Tracker:
                 timings["edge"] = 1e3 * (t2 - t1) - timings["region"]
         leader = candidates[0][0]
         if cfg.recovery and leader.failed(cfg):
-            retry = fit(self.last_good, step_scale=cfg.recovery_step_scale)
+            retry = fit(self.last_good, step_scale=RECOVERY_STEP_SCALE)
             evaluations += retry.evaluations
-            candidates.append((retry, "recovered from last good pose"))
+            candidates.append((retry, "recovery"))
         if cfg.hand_reacquisition:
             evaluations += self._reacquire(prepared, region_cost, fit, leader, candidates)
-        if cfg.jumps and cfg.jumps_refined > 0:
+        if cfg.jumps:
             evaluations += self._jump(region_cost, fit, leader, candidates)
-        if keypoint_cost is not None:
-            evaluations += self._keypoint_arms(keypoints, region_cost, keypoint_cost, fit, leader, candidates)
-        hypotheses = [self._hypothesis(reg, note) for reg, note in candidates]
+        t3 = time.perf_counter()
+        if self.sources and cfg.proposals_refined > 0:
+            context = ProposalContext(self.model, self.camera, leader.pose, keypoints)
+            for source in self.sources:
+                evaluations += self._propose(source, prepared, context, region_cost, fit, candidates)
+        timings["proposals"] = 1e3 * (time.perf_counter() - t3)
+        hypotheses = [self._hypothesis(reg, origin) for reg, origin in candidates]
+        self.candidates = [(h.origin, h.pose) for h in hypotheses]
         transition = self._motion(self._beam, hypotheses)
         cost, back = viterbi_step(self._cost, transition, np.array([h.unary for h in hypotheses]))
         keep = self._select(hypotheses, cost)
-        timings["recovery"] = 1e3 * (time.perf_counter() - t2)
+        timings["beam"] = 1e3 * (time.perf_counter() - t2)
         timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)
         kept_cost = cost[keep]
         return _Frame(index, False, [hypotheses[k] for k in keep], kept_cost - kept_cost[0], back[keep], evaluations,
                       timings)
 
-    def _hypothesis(self, reg: Registration, note: str) -> _Hypothesis:
+    def _hypothesis(self, reg: Registration, origin: str) -> _Hypothesis:
         cfg = self.config
         unary = cfg.region_weight * reg.region_residual + cfg.edge_weight * reg.edge_residual
         if not math.isnan(reg.keypoint_residual):
@@ -248,7 +260,7 @@ class Tracker:
         if self.prior is not None and cfg.prior_weight > 0:
             unary += cfg.prior_weight * self.prior.energy(reg.pose)
         return _Hypothesis(reg.pose, self.model.joint_positions(reg.pose), reg.region_residual, reg.edge_residual,
-                           reg.edge_residual_after_region, reg.failed(cfg), note, float(unary),
+                           reg.edge_residual_after_region, reg.failed(cfg), origin, float(unary),
                            reg.region.iterations if reg.region else 0, reg.edge.iterations if reg.edge else 0)
 
     def _motion(self, previous: list[_Hypothesis], current: list[_Hypothesis]) -> np.ndarray:
@@ -263,7 +275,7 @@ class Tracker:
         keep: list[int] = []
         for i in np.argsort(cost, kind="stable"):
             joints = hypotheses[i].joints
-            if any(np.linalg.norm(joints - hypotheses[k].joints, axis=1).mean() < self.config.merge_distance_m
+            if any(np.linalg.norm(joints - hypotheses[k].joints, axis=1).mean() < MERGE_DISTANCE_M
                    for k in keep):
                 continue
             keep.append(int(i))
@@ -282,7 +294,7 @@ class Tracker:
             return 0
         values = [region_cost.evaluate_unchecked(q) for q in proposals]
         retry = fit(proposals[int(np.argmin(values))], evaluations=self.config.hypothesis_evaluations)
-        candidates.append((retry, "hand re-acquired"))
+        candidates.append((retry, "reacquisition"))
         return len(proposals) + retry.evaluations
 
     def _jump(self, region_cost, fit, leader: Registration, candidates: list) -> int:
@@ -290,35 +302,26 @@ class Tracker:
         jumps = jump_proposals(leader.pose, self.model)
         values = np.array([region_cost.evaluate_unchecked(q) for _, q in jumps])
         used = len(jumps)
-        for i in np.argsort(values, kind="stable")[: self.config.jumps_refined]:
+        for i in np.argsort(values, kind="stable")[:JUMPS_REFINED]:
             name, q = jumps[int(i)]
             reg = fit(q, evaluations=self.config.jump_evaluations)
             used += reg.evaluations
-            candidates.append((reg, f"jump: {name}"))
+            candidates.append((reg, "jump"))
         return used
 
-    def _keypoint_arms(self, keypoints, region_cost, keypoint_cost, fit, leader: Registration,
-                       candidates: list) -> int:
-        """The keypoint proposals from the leader that move its joints by ``merge_distance_m`` or
-        more on average, the ``jumps_refined`` best-scoring ones (region, keypoint and prior
-        terms) refined like jumps; returns evaluations used."""
-        cfg = self.config
-        context = ProposalContext(self.model, self.camera, leader.pose, keypoints)
-        lead_joints = self.model.joint_positions(leader.pose)
-        proposals = [p for p in KeypointArmSource().propose(None, context)       # new places only
-                     if np.linalg.norm(self.model.joint_positions(p.pose) - lead_joints, axis=1).mean()
-                     >= cfg.merge_distance_m]
+    def _propose(self, source: ProposalSource, prepared, context: ProposalContext, region_cost, fit,
+                 candidates: list) -> int:
+        """One source's proposals: each scored by F, the ``proposals_refined`` lowest refined by a
+        registration of ``proposal_evaluations``; returns evaluations used."""
+        proposals = source.propose(prepared, context)
         if not proposals:
             return 0
-        scores = np.array([cfg.region_weight * region_cost.evaluate_unchecked(p.pose)
-                           + cfg.keypoint_weight * keypoint_cost.evaluate_unchecked(p.pose)
-                           + (cfg.prior_weight * self.prior.energy(p.pose) if self.prior is not None else 0.0)
-                           for p in proposals])
-        used = 2 * len(proposals)
-        for i in np.argsort(scores, kind="stable")[: max(cfg.jumps_refined, 1)]:
-            reg = fit(proposals[int(i)].pose, evaluations=cfg.jump_evaluations)
+        values = np.array([region_cost.evaluate_unchecked(p.pose) for p in proposals])
+        used = len(proposals)
+        for i in np.argsort(values, kind="stable")[: self.config.proposals_refined]:
+            reg = fit(proposals[int(i)].pose, evaluations=self.config.proposal_evaluations)
             used += reg.evaluations
-            candidates.append((reg, f"proposal: {proposals[int(i)].origin}"))
+            candidates.append((reg, proposals[int(i)].origin))
         return used
 
     # -- exact state -------------------------------------------------------------------------
@@ -353,21 +356,36 @@ class Tracker:
 def _hyp_to_dict(h: _Hypothesis) -> dict:
     return {"pose": h.pose.tolist(), "joints": h.joints.tolist(), "region": h.region_residual,
             "edge": h.edge_residual, "edge_after_region": h.edge_residual_after_region, "failed": h.failed,
-            "note": h.note, "unary": h.unary, "region_iterations": h.region_iterations,
+            "origin": h.origin, "unary": h.unary, "region_iterations": h.region_iterations,
             "edge_iterations": h.edge_iterations}
 
 
 def _hyp_from_dict(d: dict) -> _Hypothesis:
     return _Hypothesis(np.array(d["pose"], dtype=np.float64), np.array(d["joints"], dtype=np.float64),
                        float(d["region"]), float(d["edge"]), float(d["edge_after_region"]), bool(d["failed"]),
-                       str(d["note"]), float(d["unary"]), int(d["region_iterations"]), int(d["edge_iterations"]))
+                       str(d["origin"]), float(d["unary"]), int(d["region_iterations"]), int(d["edge_iterations"]))
 
 
 def _result(frame: _Frame, k: int) -> FrameResult:
     h = frame.hypotheses[k]
     return FrameResult(frame.index, h.pose.copy(), h.joints.copy(), h.region_residual, h.edge_residual,
-                       h.edge_residual_after_region, h.failed, frame.empty, h.note, frame.evaluations,
+                       h.edge_residual_after_region, h.failed, frame.empty, h.origin, frame.evaluations,
                        h.region_iterations, h.edge_iterations, dict(frame.timings), k, h.unary)
+
+
+def proposal_sources(config: TrackerConfig) -> list[ProposalSource]:
+    """The proposal stage's sources that ``config`` switches on (``blob_arms``, ``exemplars``; the
+    keypoint source with ``keypoint_weight`` > 0: it proposes nothing on frames without keypoints)."""
+    sources: list[ProposalSource] = []
+    if config.keypoint_weight > 0:
+        sources.append(KeypointArmSource())
+    if config.blob_arms:
+        sources.append(BlobArmSource(min_pixels=MIN_SKIN_BLOB_PIXELS))
+    if config.exemplars:
+        from mocap.track.exemplars import ExemplarSource      # loads the shipped exemplar set
+
+        sources.append(ExemplarSource.default())
+    return sources
 
 
 def track_prepared(prepared_frames, tracker: Tracker, *, first_index: int = 0, progress: bool = False,

@@ -23,8 +23,17 @@ def test_summary_pools_frames_and_takes_medians_over_sequences():
     assert s["worst_mpjpe_mm"] == pytest.approx(110.0)
     assert s["ms_per_frame"] == pytest.approx(25.0)
     text = table({"default": s})
-    assert "| default | 60 | 30 | 20 | 22.2 % | 110 | 0.0 % | 0.0 % | 25.0 (40) |" in text
+    assert "| default | 60 | 30 | 20 | 22.2 % | 110 | 0.0 % | - | - | 0.0 % | 25.0 (40) |" in text
     assert all(line.count("|") == text.splitlines()[0].count("|") for line in text.splitlines())
+
+
+def test_summary_of_the_proposal_stage_weights_rates_by_frames():
+    rows = [row("a", [10, 20, 30]) | {"proposal_oracle_failure_rate": 1 / 3, "proposal_catches_rate": 0.0},
+            row("b", [200, 50, 50, 50, 50, 50]) | {"proposal_oracle_failure_rate": 0.5, "proposal_catches_rate": 0.5}]
+    s = summarise(rows)
+    assert s["proposal_oracle_failure_rate"] == pytest.approx(4 / 9)  # (1 + 3) of nine frames
+    assert s["proposal_catches_rate"] == pytest.approx(3 / 9)
+    assert "| 44.4 % | 33.3 % |" in table({"both": s})
 
 
 def test_named_configurations():
@@ -44,3 +53,12 @@ def test_report_sections_are_replaced_and_kept(tmp_path):
     assert text.index("## new") < text.index("## peers")
     kept = generated_sections(text)
     assert "## new" in kept and "## peers" in kept and "body" not in kept
+
+
+def test_budget_figure_draws_the_configurations_with_an_evaluation_count(tmp_path):
+    from experiments.figures import ext_proposal_budget
+    summaries = {"default": {"evaluations_per_frame": 900.0, "median_mpjpe_mm": 111.0, "failure_rate": 0.52},
+                 "both": {"evaluations_per_frame": 1400.0, "median_mpjpe_mm": 80.0, "failure_rate": 0.3},
+                 "old": {"median_mpjpe_mm": 120.0, "failure_rate": 0.6}}        # no count: left out
+    paths = ext_proposal_budget.main(summaries, tmp_path)
+    assert paths and all(p.is_file() and p.stat().st_size > 1000 for p in paths)

@@ -8,7 +8,7 @@ from mocap.body import JOINT_LIMITS, JOINT_NAMES, PARAMETER_INDEX as P, BodyMode
 from mocap.body.jumps import arm_poses_on_rays
 from mocap.body.pose import within_limits
 from mocap.render import Camera
-from mocap.track.proposals import KeypointArmSource, ProposalContext, camera_ray, torso_on_shoulders
+from mocap.track.proposals import KeypointArmSource, ProposalContext, pixel_ray, torso_on_shoulders
 from mocap.io.keypoints import Keypoints
 
 MODEL = BodyModel.build(resolution=6)
@@ -36,8 +36,8 @@ def test_arm_ik_reproduces_the_keypoints_on_every_branch(side):
         uv = CAMERA.project(truth)
         start = neutral_pose()
         start[P["chest_yaw"]] = q[P["chest_yaw"]]
-        branches = arm_poses_on_rays(start, MODEL.skeleton, side, camera_ray(CAMERA, uv[J[f"{side}_elbow"]]),
-                                     camera_ray(CAMERA, uv[J[f"{side}_wrist"]]))
+        branches = arm_poses_on_rays(start, MODEL.skeleton, side, pixel_ray(CAMERA, uv[J[f"{side}_elbow"]]),
+                                     pixel_ray(CAMERA, uv[J[f"{side}_wrist"]]))
         rows = [J[f"{side}_{j}"] for j in ("shoulder", "elbow", "wrist")]
         exact = {name: b for name, b in branches.items() if "closest" not in name}   # both rays hit
         inside = [name for name, b in exact.items() if within_limits(b)]

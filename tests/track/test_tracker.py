@@ -71,8 +71,8 @@ def test_state_restores_bit_identically():
     assert [r.frame for r in part] == [r.frame for r in whole]
     for a, b in zip(part, whole):
         np.testing.assert_array_equal(a.pose, b.pose)
-        assert (a.region_residual, a.edge_residual, a.hypothesis, a.score, a.recovery) == \
-               (b.region_residual, b.edge_residual, b.hypothesis, b.score, b.recovery)
+        assert (a.region_residual, a.edge_residual, a.hypothesis, a.score, a.origin) == \
+               (b.region_residual, b.edge_residual, b.hypothesis, b.score, b.origin)
     with pytest.raises(ValueError, match="tracker state"):
         second.restore({"tracker_json": np.array("{}")})
 
