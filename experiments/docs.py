@@ -57,11 +57,12 @@ def _git_commit(root: Path) -> str:
 
 def _track(seq, calibration, out: Path, evaluations: int | None, frames: int | None) -> dict:
     """Track one sequence folder; the ``run.json`` metrics (resumes a finished or partial run)."""
-    from mocap.pipeline import track_video
+    from mocap.pipeline import RunSetup, track_video
     from mocap.track import TrackerConfig
 
     config = TrackerConfig() if evaluations is None else TrackerConfig(evaluations=evaluations)
-    summary = track_video(seq.frames, seq.background, calibration, out, config, ground_truth=seq.ground_truth,
+    summary = track_video(seq.frames, RunSetup.from_files(calibration, seq.background), out, config,
+                          ground_truth=seq.ground_truth,
                           fps=seq.fps(), max_frames=frames, progress=False, write_overlay=False)
     return dict(summary.metrics)
 

@@ -67,8 +67,7 @@ def main(argv=None) -> int:
     if args.frames <= args.first or args.first < 1 or args.iterations < 1:
         p.error("need 1 <= --from < --frames and --iterations >= 1")
 
-    from mocap.calibrate import Calibration
-    from mocap.pipeline import track_video
+    from mocap.pipeline import RunSetup, track_video
     from mocap.synth import generate_sequence
     from mocap.track import TrackerConfig
 
@@ -86,7 +85,7 @@ def main(argv=None) -> int:
         sampler = _Sampler(out / "poses.csv")
         sampler.start()
         try:
-            summary = track_video(loop, seq / "background.png", Calibration.from_json(seq / "calibration.json"), out,
+            summary = track_video(loop, RunSetup.from_files(seq / "calibration.json", seq / "background.png"), out,
                                   TrackerConfig(evaluations=args.iterations), overwrite=True, write_overlay=False)
         finally:
             sampler.stop()

@@ -100,13 +100,13 @@ def run_mediapipe(frames, upscale: int = 1) -> dict:
     return {"uv": np.asarray(uv, float), "world": np.asarray(world, float), "ms": np.asarray(ms)}
 
 
-def _track(video: Path, out: Path, extra: list[str]) -> "PoseTable":  # noqa: F821
-    from mocap.cli import main
+def _track(video: Path, out: Path, *, overlay: bool) -> "PoseTable":  # noqa: F821
+    """``python -m mocap track VIDEO`` with no other option (``--no-overlay`` unless ``overlay``),
+    through the library entry point the CLI calls."""
     from mocap.io.pose_table import PoseTable
+    from mocap.own_video import OwnVideoOptions, track_own_video
 
-    code = main(["track", str(video), "--out", str(out), "--overwrite", *extra])
-    if code != 0:
-        raise RuntimeError(f"python -m mocap track {video} failed")
+    track_own_video(video, out, OwnVideoOptions(overlay=overlay, overwrite=True))
     return PoseTable.read(out / "poses.csv")
 
 
@@ -121,7 +121,7 @@ def synthetic_row(name: str, work: Path, seed: int) -> dict:
     from mocap.synth import generate_sequence
 
     seq = generate_sequence(name, work / name, frames=SYNTHETIC_FRAMES, seed=seed, size=(160, 120), progress=False)
-    table = _track(seq, work / f"{name}-run", ["--no-overlay"])
+    table = _track(seq, work / f"{name}-run", overlay=False)
     truth = PoseTable.read(seq / "ground_truth.csv").joints[:, arm_indices()]
     mp = run_mediapipe(list(iter_frames(seq / "frames")), upscale=4)
     return {"clip": name, "frames": len(table),
@@ -134,7 +134,7 @@ def synthetic_row(name: str, work: Path, seed: int) -> dict:
 def real_row(video: Path, work: Path, out: Path) -> dict:
     from mocap.io.video import iter_frames
 
-    table = _track(video, work / f"{video.stem}-run", [])
+    table = _track(video, work / f"{video.stem}-run", overlay=True)
     frames = list(iter_frames(video))
     cache = work / f"{video.stem}-mediapipe.npz"       # MediaPipe's landmarks do not change between our runs
     if cache.exists():

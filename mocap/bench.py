@@ -216,22 +216,24 @@ def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, mi
 
 
 def video_rows(*, frames: int) -> list[BenchRow]:
-    """Row ``video_640x480``: ``track_video`` end to end on a 640x480 MP4 (the synthetic
+    """Row ``video_640x480``: :func:`mocap.own_video.track_own_video` (what ``python -m mocap track``
+    calls) end to end on a 640x480 MP4 (the synthetic
     ``gestures-1`` clip rendered at 160x120 and enlarged 4x, so that the working resolution
     sees the benchmark's own frames), with its true calibration and background."""
     import resource
     import tempfile
     from pathlib import Path
 
+    import dataclasses
+
+    import imageio.v3 as iio
+
     from mocap.calibrate import Calibration
-    from mocap.imaging.resample import working_factor
     from mocap.io.frames import VideoSource
     from mocap.io.pose_table import PoseTable
     from mocap.io.video import VideoWriter, iter_frames, read_image
-    from mocap.own_video import setup_own_video
-    from mocap.pipeline import track_video
+    from mocap.own_video import OwnVideoOptions, track_own_video
     from mocap.synth import generate_sequence
-    from mocap.track import TrackerConfig
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
@@ -240,14 +242,13 @@ def video_rows(*, frames: int) -> list[BenchRow]:
         with VideoWriter(video, 25) as writer:
             for frame in iter_frames(seq / "frames"):
                 writer.write(np.repeat(np.repeat(frame, 4, 0), 4, 1))
-        background = np.repeat(np.repeat(read_image(seq / "background.png"), 4, 0), 4, 1)
+        background = tmp / "background.png"
+        iio.imwrite(background, np.repeat(np.repeat(read_image(seq / "background.png"), 4, 0), 4, 1))
         source = VideoSource(video)
-        factor = working_factor(source.width, source.height)
-        setup, _ = setup_own_video(source, factor, background_mode="image", background_image=background,
-                                   calibration=Calibration.from_json(seq / "calibration.json"), progress=False)
-        run = lambda out, n: track_video(source, setup.background, setup.calibration, out, TrackerConfig(),
-                                         imaging=setup.imaging, colour_model=setup.colour_model, work_factor=factor, max_frames=n,
-                                         progress=False, setup_record=setup.record)
+        calibration = Calibration.from_json(seq / "calibration.json")     # at the working size, 160x120
+        options = OwnVideoOptions(background=str(background), calibration=str(seq / "calibration.json"),
+                                  overwrite=True)
+        run = lambda out, n: track_own_video(video, out, dataclasses.replace(options, max_frames=n), progress=False)
         run(tmp / "warm-up", 2)                     # compile and load every kernel first
         children = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0, c0 = time.perf_counter(), time.process_time()
@@ -259,7 +260,7 @@ def video_rows(*, frames: int) -> list[BenchRow]:
         n = source.count
         p10, p90 = np.percentile(per_frame, [10, 90])
         from mocap.body.mesh import resolution_for_image
-        triangles = setup.calibration.body_model(resolution_for_image(*setup.calibration.camera.shape[::-1])).mesh.n_triangles
+        triangles = calibration.body_model(resolution_for_image(*calibration.camera.shape[::-1])).mesh.n_triangles
         return [BenchRow("video_640x480", source.width, source.height, int(triangles), 1e6 * wall / n,
                          float(p10), float(p90), int(n)),
                 BenchRow("video_640x480_cpu", source.width, source.height, int(triangles), 1e6 * cpu / n,

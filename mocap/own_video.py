@@ -19,22 +19,33 @@ the video itself, at the tracker's working resolution (:mod:`mocap.imaging.resam
    view ``hfov_deg`` (default a typical webcam's); ``height_m`` fixes the absolute scale.
 
 What was chosen and why goes into ``run.json`` (``settings.own_video``).
+
+:func:`track_own_video` is the one entry point of "track my own video" (``python -m mocap
+track``, ``bench``, experiments): it composes the set-up above (or a given background and
+calibration, rescaled to the working resolution) with the run (:func:`mocap.pipeline.track_video`)
+from an :class:`OwnVideoOptions`.
 """
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from mocap.calibrate import AutoCalibrationConfig, Calibration, calibrate_person
+from mocap.config import JsonConfig
 from mocap.imaging import Box, ColourModel, ImagingConfig, detect_face, median_background, rgb_to_hsv
 from mocap.imaging.background import PERSON_MIN_SHARE, estimate_background, person_against_background, \
     subtract_background
 from mocap.imaging.resample import downscale, working_factor
+from mocap.pipeline import COLOUR_SOURCES, RunSetup, RunSummary, track_video
 from mocap.render.camera import DEFAULT_HFOV_DEG, Camera
+from mocap.track import TrackerConfig
 
-__all__ = ["BACKGROUND_MODES", "OwnVideoSetup", "choose_background", "setup_own_video", "working_camera"]
+__all__ = ["BACKGROUND_MODES", "OwnVideoOptions", "choose_background", "setup_own_video", "track_own_video",
+           "working_camera"]
 
 #: How the background is found: ``auto`` (estimate, use if the person moves enough), ``image``
 #: (a file), ``frames`` (median of frames A:B), ``none`` (colour-only foreground).
@@ -58,49 +69,15 @@ MIN_FACE_FOREGROUND = 0.5
 
 def working_camera(width: int, height: int, factor: int, hfov_deg: float = DEFAULT_HFOV_DEG) -> Camera:
     """Pinhole camera of an input ``width`` x ``height`` with field of view ``hfov_deg``, at
-    the working resolution ``(width // factor, height // factor)`` (intrinsics divided by
-    ``factor``, so that working pixel coordinates times ``factor`` are input pixels)."""
-    full = Camera.default(width, height, hfov_deg)
-    return Camera(width // factor, height // factor, full.fx / factor, full.fy / factor, full.cx / factor,
-                  full.cy / factor)
+    the working resolution (:meth:`mocap.render.Camera.working`)."""
+    return Camera.default(width, height, hfov_deg).working(width, height, factor)
 
 
-@dataclass(frozen=True, eq=False)
-class OwnVideoSetup:
-    """What :func:`setup_own_video` found (everything at the working resolution).
-
-    Attributes
-    ----------
-    factor : int
-        Input pixels per working pixel.
-    background : ndarray of uint8, shape (h, w, 3), or None
-    calibration : Calibration
-    colour_model : ColourModel
-    scene : SceneColours or None
-    imaging : ImagingConfig
-        The image side's settings for the run: with a found (not given) background, parts
-        smaller than :data:`MIN_PERSON_FRACTION` of the image are not a person.
-    record : dict
-        JSON-ready account of the choices (background mode and evidence, calibration frame,
-        face, field of view, height).
-    """
-
-    factor: int
-    background: np.ndarray | None
-    calibration: Calibration
-    colour_model: ColourModel
-    scene: object
-    imaging: ImagingConfig
-    record: dict
-
-
-def _sample(frames, count: int, limit: int) -> list[tuple[int, np.ndarray]]:
-    """Up to ``count`` frames spread evenly over the first ``limit`` (index, frame) pairs."""
-    frames = list(frames)[:limit]
-    if len(frames) <= count:
-        return frames
-    picks = np.unique(np.linspace(0, len(frames) - 1, count).round().astype(int))
-    return [frames[i] for i in picks]
+def spread(start: int, stop: int, count: int) -> list[int]:
+    """Up to ``count`` frame numbers spread evenly over ``start`` to ``stop - 1`` (sorted, unique)."""
+    if stop <= start:
+        return []
+    return sorted({int(i) for i in np.linspace(start, stop - 1, min(count, stop - start)).round()})
 
 
 def _scene_around_model(frame: np.ndarray, model, calibration: Calibration):
@@ -188,7 +165,7 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
                     hfov_deg: float = DEFAULT_HFOV_DEG, height_m: float | None = None,
                     imaging: ImagingConfig | None = None, auto: AutoCalibrationConfig | None = None,
                     sample_frames: int = 60, sample_limit: int = 1500, search_frames: int = 90,
-                    progress: bool = True) -> tuple[OwnVideoSetup, list[np.ndarray]]:
+                    progress: bool = True) -> tuple[RunSetup, list[np.ndarray]]:
     """Background and calibration of a video of a person, found from the video itself.
 
     Parameters
@@ -217,13 +194,19 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
     auto : AutoCalibrationConfig, optional
     sample_frames, sample_limit : int
         Background estimation uses ``sample_frames`` frames spread over the first
-        ``sample_limit``.
+        ``sample_limit`` (chosen by number first, each reduced to the working resolution as it
+        is read: the set-up holds at most ``sample_frames`` working-size frames and one
+        input-size frame of a file); ``--background-frames A:B`` likewise.
     search_frames : int
         Calibration looks at most this many frames into the video for a usable frame.
 
     Returns
     -------
-    setup : OwnVideoSetup
+    setup : mocap.pipeline.RunSetup
+        Everything at the working resolution; with a found (not given) background, parts of
+        the foreground smaller than :data:`MIN_PERSON_FRACTION` of the image are not a person
+        (``setup.imaging``); ``setup.record`` is the JSON-ready account of the choices
+        (background mode and evidence, calibration frame, face, field of view, height).
     consumed : list of ndarray
         For a live source, the input frames read so far (the run tracks them first); empty
         for a file.
@@ -248,38 +231,49 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
                                                                        MIN_PERSON_FRACTION))
     record: dict = {"hfov_deg": hfov_deg, "height_m": height_m}
     consumed: list[np.ndarray] = []
-    # frames the setup may look at: a file is read again later, a camera is not
+    # frames the setup looks at, by index: a file is read again later (only the chosen frames
+    # are converted, and only one input-size frame is held at a time); a camera is not, so
+    # what it delivered is kept to be tracked (at most ``search_frames`` frames)
     if source.live:
-        def early(limit):
-            while len(consumed) < limit:
-                frame = next(stream, None)
-                if frame is None:
-                    break
-                consumed.append(frame)
-            return list(enumerate(consumed[:limit]))
         stream = iter(source.frames())
+
+        def frames_at(indices):
+            for index in indices:
+                while len(consumed) <= index:
+                    frame = next(stream, None)
+                    if frame is None:
+                        return
+                    consumed.append(frame)
+                yield index, consumed[index]
+        count = search_frames
     else:
-        def early(limit):
-            return list(enumerate(source.frames(0, limit)))
+        def frames_at(indices):
+            indices = list(indices)
+            return zip(indices, source.frames(indices=indices))
+        count = source.count
 
     # 1. the first usable frame: a face (or, with a background, a person-sized foreground)
-    face = None
+    face = face_frame_full = None
     calib_index = None
-    candidates = early(search_frames)
-    if not candidates:
+    searched = range(0, min(search_frames, count), 3)
+    first = next(iter(frames_at([0])), (0, None))[1]
+    if first is None:
         raise ValueError(f"{source.name} has no frames")
     if calibration is None:
-        for index, frame in tqdm(candidates[::3], desc="looking for a face", unit="frame", disable=not progress):
+        for index, frame in tqdm(frames_at(searched), total=len(searched), desc="looking for a face", unit="frame",
+                                 disable=not progress):
             found = detect_face(frame, min_size=max(24, MIN_FACE_WORKING_PX * factor))
             if found is not None and _plausible_face(frame, found):
-                face_full, calib_index = found, index
+                face_full, calib_index, face_frame_full = found, index, frame
                 if auto_factor:
                     factor = max(factor, int(found.width // FACE_WORKING_PX))
                 face = Box(*(int(round(v / factor)) for v in found))
                 break
 
-    # 2. background (at the working resolution now settled)
+    # 2. background (at the working resolution now settled), from frames reduced as they are read
     camera = working_camera(source.width, source.height, factor, hfov_deg)
+    face_frame = downscale(face_frame_full, factor) if face is not None else None
+    del face_frame_full
     background = None
     if background_mode == "image":
         if background_image.shape[:2] != (source.height, source.width):
@@ -289,10 +283,10 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
         record["background"] = {"mode": "image", "reason": "given"}
     elif background_mode == "frames":
         a, b = background_frames
-        empty = [f for i, f in early(b) if i >= a]
+        empty = [downscale(f, factor) for _, f in frames_at(spread(a, min(b, count), sample_frames))]
         if not empty:
             raise ValueError(f"background frames {a}:{b}: the video has no such frames")
-        background = downscale(median_background(empty), factor)
+        background = median_background(empty)
         record["background"] = {"mode": "frames", "frames": [a, b], "reason": "median of the given empty frames"}
     elif background_mode == "none":
         record["background"] = {"mode": "none", "reason": "asked for: colour-only foreground"}
@@ -300,13 +294,12 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
         record["background"] = {"mode": "none", "reason": "live camera without --background: colour-only foreground"}
 
     if background_mode == "auto" and not source.live:
-        sample = _sample(enumerate(source.frames(0, sample_limit)), sample_frames, sample_limit)
-        face_frame = downscale(candidates[calib_index][1], factor) if face is not None else None
-        background, record["background"] = choose_background([downscale(f, factor) for _, f in sample], imaging,
-                                                             face=face, face_frame=face_frame)
+        sample = [downscale(f, factor) for _, f in frames_at(spread(0, min(sample_limit, count), sample_frames))]
+        background, record["background"] = choose_background(sample, imaging, face=face, face_frame=face_frame)
+        del sample
 
     if calibration is not None:
-        first = downscale(candidates[0][1], factor)
+        first = downscale(first, factor)
         if calibration.camera.shape != first.shape[:2]:
             raise ValueError(f"the calibration's camera is {calibration.camera.width}x{calibration.camera.height}, "
                              f"the working frames {first.shape[1]}x{first.shape[0]}")
@@ -320,21 +313,17 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
                                             imaging, foreground=foreground)
         record["working_factor"] = factor
         record["calibration"] = {"from": "given"}
-        return OwnVideoSetup(factor, background, calibration, colour, scene, imaging, record), consumed
+        return RunSetup(calibration, background, factor, imaging, colour, scene=scene, record=record), consumed
 
     if face is not None:
-        frame = downscale(candidates[calib_index][1], factor)
-        person = calibrate_person(frame, camera, background=background, face=face, height_m=height_m,
+        person = calibrate_person(face_frame, camera, background=background, face=face, height_m=height_m,
                                   imaging=imaging, config=auto)
     else:
         if background is None:
-            raise ValueError(f"no face found in the first {len(candidates)} frames and no background to find the "
+            raise ValueError(f"no face found in the first {searched.stop} frames and no background to find the "
                              "person by: pass --background IMG or --background-frames A:B, or --calibration JSON")
         person = None
-        stream = candidates if source.live else enumerate(source.frames(0, sample_limit))
-        for index, full in stream:
-            if index % 3:
-                continue
+        for index, full in frames_at(range(0, min(sample_limit, count), 3)):
             frame = downscale(full, factor)
             if not _whole_person(subtract_background(frame, background, imaging)):
                 continue
@@ -352,5 +341,179 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
     record["calibration"] = {"from": "automatic", "frame": int(calib_index),
                              "face_input_px": [int(v) for v in face_full] if face is not None else None,
                              "depth_m": round(float(person.calibration.initial_pose[2]), 3)}
-    return OwnVideoSetup(factor, background, person.calibration, person.colour_model, person.scene, imaging,
-                         record), consumed
+    return RunSetup(person.calibration, background, factor, imaging, person.colour_model, scene=person.scene,
+                    record=record), consumed
+
+
+@dataclass(frozen=True)
+class OwnVideoOptions(JsonConfig):
+    """What ``python -m mocap track`` lets a person set, as one JSON-backed record
+    (:func:`track_own_video`). Paths are strings (JSON); every field has the CLI's default.
+
+    Attributes
+    ----------
+    background : str or None
+        Image of the empty scene (input size).
+    background_frames : (int, int) or None
+        Frames ``A`` to ``B - 1`` of the video show the empty scene: their median.
+    no_background : bool
+        Colour-only foreground (no empty view).
+    calibration : str or None
+        ``calibration.json`` (:mod:`mocap.calibrate`), its camera at the input or the working size.
+    hfov_deg : float, degrees
+        Camera's horizontal field of view without a calibration.
+    height_m : float or None, metres
+        The person's stature (fixes the absolute scale).
+    work_width : int or None, pixels
+        Wanted working width (:func:`mocap.imaging.resample.working_factor`); None: chosen.
+    colour : {"calibration", "face"}
+        Where the colour classes are learnt (:class:`mocap.pipeline.RunSetup` ``colour_from``).
+    ground_truth : str or None
+        ``ground_truth.csv`` for accuracy metrics.
+    start : int
+        First frame to track.
+    max_frames : int or None
+        Track at most this many frames.
+    allow_damaged : bool
+        Track the frames of a damaged video that decode instead of stopping.
+    overlay : bool
+        Write ``overlay.mp4``.
+    show : bool
+        Show the overlay live in a window.
+    overwrite : bool
+        Start afresh instead of resuming a run in the output folder.
+    tracker : TrackerConfig
+    """
+
+    background: str | None = None
+    background_frames: tuple[int, int] | None = None
+    no_background: bool = False
+    calibration: str | None = None
+    hfov_deg: float = DEFAULT_HFOV_DEG
+    height_m: float | None = None
+    work_width: int | None = None
+    colour: str = "calibration"
+    ground_truth: str | None = None
+    start: int = 0
+    max_frames: int | None = None
+    allow_damaged: bool = False
+    overlay: bool = True
+    show: bool = False
+    overwrite: bool = False
+    tracker: TrackerConfig = field(default_factory=TrackerConfig)
+
+    def __post_init__(self) -> None:
+        for key in ("background", "calibration", "ground_truth"):
+            value = getattr(self, key)
+            if isinstance(value, Path):
+                object.__setattr__(self, key, str(value))
+        if isinstance(self.tracker, dict):
+            object.__setattr__(self, "tracker", TrackerConfig.from_dict(self.tracker))
+        given = [name for name, on in (("background", self.background is not None),
+                                       ("background_frames", self.background_frames is not None),
+                                       ("no_background", self.no_background)) if on]
+        if len(given) > 1:
+            raise ValueError(f"give one of background, background_frames and no_background, not {' and '.join(given)}")
+        if self.background_frames is not None:
+            a, b = self.background_frames
+            if a < 0 or b <= a:
+                raise ValueError(f"background frames must be A:B with 0 <= A < B, got {a}:{b}")
+        if self.colour not in COLOUR_SOURCES:
+            raise ValueError(f"colour must be one of {COLOUR_SOURCES}, got {self.colour!r}")
+        if isinstance(self.start, bool) or not isinstance(self.start, int) or self.start < 0:
+            raise ValueError(f"the start frame must be a non-negative integer, got {self.start!r}")
+        if self.max_frames is not None and self.max_frames < 1:
+            raise ValueError(f"max_frames must be at least 1, got {self.max_frames}")
+        if self.work_width is not None and self.work_width < 16:
+            raise ValueError(f"the working width must be at least 16 pixels, got {self.work_width}")
+
+    def background_mode(self, sequence_background: bool = False) -> str:
+        """One of :data:`BACKGROUND_MODES` (``sequence_background``: a sequence folder's own
+        ``background.png`` is used unless told otherwise)."""
+        if self.background is not None or sequence_background:
+            return "image"
+        if self.background_frames is not None:
+            return "frames"
+        return "none" if self.no_background else "auto"
+
+
+def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *, progress: bool = True,
+                    on_setup: Callable[[dict], None] | None = None) -> RunSummary:
+    """Track a person's own video: set-up from the video (or as given), then the run.
+
+    Parameters
+    ----------
+    source : str, Path or CameraSource
+        A video file, a folder of images, a sequence folder (its ``background.png``,
+        ``calibration.json``, ``ground_truth.csv`` and ``meta.json`` frame rate are used when
+        ``options`` give none), or a live :class:`mocap.io.frames.CameraSource`.
+    out_dir : str or Path
+        Output folder (:func:`mocap.pipeline.track_video`).
+    options : OwnVideoOptions, optional
+    progress : bool
+        Progress bars.
+    on_setup : callable, optional
+        Called with the set-up's account (``run.json`` ``settings.own_video``, plus
+        ``input_width``, ``input_height``, ``working_width``, ``working_height``) before the
+        first frame is tracked (the CLI prints it).
+
+    Returns
+    -------
+    RunSummary
+        ``setup`` is the account given to ``on_setup``.
+
+    Raises
+    ------
+    ValueError, FileNotFoundError
+        Bad options, missing files, a damaged video, no usable frame (one sentence each).
+    """
+    from mocap.imaging.resample import working_factor
+    from mocap.io.frames import VideoSource
+    from mocap.io.sequence import find_sequence
+    from mocap.io.video import read_image
+
+    options = OwnVideoOptions() if options is None else options
+    live = bool(getattr(source, "live", False))
+    if live:
+        if options.background_frames is not None:
+            raise ValueError("background frames need a video file, not a live camera")
+        seq, frames_in = None, source
+    else:
+        seq = find_sequence(source)
+        frames_in = VideoSource(seq.frames, fps=seq.fps() if seq.meta is not None else None)
+        frames_in.damaged_frames(options.allow_damaged)     # refused before anything is read
+    seq_background = seq.background if seq is not None and not options.no_background and \
+        options.background_frames is None else None
+    background = options.background or seq_background
+    calibration = options.calibration or (seq.calibration if seq is not None else None)
+    for what, path in (("background", background), ("calibration", calibration)):
+        if path is not None and not Path(path).is_file():
+            raise FileNotFoundError(f"{what} file not found: {path}")
+    width, height = frames_in.width, frames_in.height
+    factor = None if options.work_width is None else working_factor(width, height, options.work_width)
+    given = None
+    if calibration is not None:
+        given = Calibration.from_json(calibration)
+        factor = factor or working_factor(width, height)
+        given = dataclasses.replace(given, camera=given.camera.working(width, height, factor))
+    setup, consumed = setup_own_video(
+        frames_in, factor, background_mode=options.background_mode(seq_background is not None),
+        background_image=read_image(background) if background else None,
+        background_frames=options.background_frames, calibration=given, hfov_deg=options.hfov_deg,
+        height_m=options.height_m, progress=progress)
+    if live:
+        frames_in.hold(consumed)
+    setup = dataclasses.replace(setup, colour_from=options.colour,
+                                background_file=Path(background) if background else None)
+    account = {**setup.record, "input_width": width, "input_height": height,
+               "working_width": setup.calibration.camera.width, "working_height": setup.calibration.camera.height}
+    if on_setup is not None:
+        on_setup(account)
+    fps = (seq.fps(frames_in.fps or 25.0) if seq is not None and seq.meta is not None else frames_in.fps) or 25.0
+    ground_truth = options.ground_truth or (seq.ground_truth if seq is not None else None)
+    summary = track_video(frames_in, setup, out_dir, options.tracker, ground_truth=ground_truth, fps=fps,
+                          max_frames=options.max_frames, overwrite=options.overwrite, progress=progress,
+                          write_overlay=options.overlay, allow_damaged=options.allow_damaged,
+                          start_frame=options.start, show=options.show)
+    summary.setup = account
+    return summary

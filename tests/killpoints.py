@@ -11,6 +11,9 @@ this process) does what ``MODE`` says:
 ``pause``        after the checkpoint, create the file ``$KILLPOINTS_PAUSED`` and wait until
                  it has been removed (another run can then meet the held lock)
 
+The checkpoint interval is :data:`CHECKPOINT_EVERY` frames (instead of the run's default), so
+that the kill points of a short clip fall on every position inside an interval.
+
 SIGKILL cannot be caught: nothing of the run's own clean-up happens, as with ``kill -9``.
 """
 from __future__ import annotations
@@ -20,6 +23,10 @@ import signal
 import sys
 import time
 from pathlib import Path
+
+
+#: Frames between checkpoints in the killed runs.
+CHECKPOINT_EVERY = 3
 
 
 def main(argv: list[str]) -> int:
@@ -38,7 +45,7 @@ def main(argv: list[str]) -> int:
     def die() -> None:
         os.kill(os.getpid(), signal.SIGKILL)
 
-    def append_and_maybe_die(self, path) -> None:
+    def append_and_maybe_die(self, path, *, sync: bool = True) -> None:
         counts["row"] += 1
         if mode == "mid-row" and counts["row"] == n:
             line = self.to_csv_text().split("\n")[1]
@@ -47,7 +54,7 @@ def main(argv: list[str]) -> int:
                 fh.flush()
                 os.fsync(fh.fileno())
             die()
-        append_to(self, path)
+        append_to(self, path, sync=sync)
         if mode == "after-row" and counts["row"] == n:
             die()
 
@@ -64,6 +71,7 @@ def main(argv: list[str]) -> int:
 
     PoseTable.append_to = append_and_maybe_die
     run.write_checkpoint = checkpoint_and_maybe_die
+    run.CHECKPOINT_EVERY = CHECKPOINT_EVERY
     return cli_main(cli_args)
 
 

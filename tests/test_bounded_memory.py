@@ -62,3 +62,41 @@ def test_long_run_keeps_a_constant_state_and_flat_memory():
     assert tracker.pending == config.lag
     assert abs(states[N_FRAMES] - states[WARM_UP]) < 0.1 * states[WARM_UP]
     assert abs(memory_end - memory_start) < FLAT_BYTES, (memory_start, memory_end)
+
+
+#: Peak memory (resident set, MB) ``track`` may reach on the large clip below: the program with
+#: its libraries (about 300 MB) and a fixed number of working-size frames. Holding the clip's
+#: frames at input size, as the set-up did before (up to 1,500 of them for the background
+#: estimate), would take more than this for the frames alone.
+TRACK_PEAK_MB = 450
+
+
+def test_track_peak_memory_does_not_grow_with_the_clip(tmp_path):
+    """``python -m mocap track`` with a calibration on a 640x480, 520-frame clip (a synthetic actor
+    enlarged 4x, looped): peak RSS measured by the OS (``getrusage`` of a wrapper's children)."""
+    import subprocess
+    import sys
+
+    import imageio_ffmpeg
+
+    from mocap.synth import generate_sequence
+
+    seq = generate_sequence("gestures-1", tmp_path / "seq", frames=12, seed=0, progress=False)
+    clip, frames, size = tmp_path / "clip.mp4", 520, (640, 480)
+    subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-y", "-stream_loop", "-1", "-framerate", "25",
+                    "-i", str(seq / "frames" / "%06d.png"), "-frames:v", str(frames), "-vf",
+                    f"scale={size[0]}:{size[1]}:flags=neighbor", "-c:v", "libx264", "-preset", "ultrafast",
+                    "-pix_fmt", "yuv420p", str(clip)], check=True)
+    assert frames * size[0] * size[1] * 3 > TRACK_PEAK_MB * 2 ** 20      # the clip's frames alone would not fit
+    wrapper = ("import resource, subprocess, sys; "
+               "code = subprocess.run([sys.executable, '-m', 'mocap', 'track', *sys.argv[1:]]).returncode; "
+               "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss); sys.exit(code)")
+    # the calibration given (no face search, at the working size 160x120); the background found
+    # from the clip, as with no option at all: frames sampled over the whole clip
+    done = subprocess.run([sys.executable, "-c", wrapper, str(clip), "--calibration", str(seq / "calibration.json"),
+                           "--out", str(tmp_path / "run"), "--max-frames", "2", "--iterations", "20", "--no-overlay"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+    peak_mb = int(done.stdout.split()[-1]) / 1024                  # ru_maxrss: kilobytes on Linux
+    print(f"peak RSS {peak_mb:.0f} MB")
+    assert peak_mb < TRACK_PEAK_MB, peak_mb

@@ -100,10 +100,10 @@ def test_fake_camera_gives_the_same_poses_as_the_file(sequence, tmp_path):
         setup, consumed = setup_own_video(source, 1, background_mode="image", background_image=background,
                                           calibration=calibration, progress=False)
         if source.live:
-            assert len(consumed) == N_FRAMES
+            assert 1 <= len(consumed) <= N_FRAMES          # read by the set-up, tracked first
             source.hold(consumed)
-        track_video(source, setup.background, setup.calibration, tmp_path / name, TrackerConfig(evaluations=60),
-                    colour_model=setup.colour_model, setup_record=setup.record, progress=False, write_overlay=False)
+        track_video(source, setup, tmp_path / name, TrackerConfig(evaluations=60), progress=False,
+                    write_overlay=False)
         poses.append(PoseTable.read(tmp_path / name / "poses.csv").poses)
     assert poses[0].shape == (N_FRAMES, 23)
     np.testing.assert_array_equal(poses[0], poses[1])

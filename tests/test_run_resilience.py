@@ -55,51 +55,62 @@ def journal_rows(out) -> int:
 
 @pytest.mark.slow
 def test_resume_after_kill_9_anywhere_is_bit_identical(sequence, uninterrupted, tmp_path):
+    """Killed runs checkpoint every 3 frames (:data:`tests.killpoints.CHECKPOINT_EVERY`): kills
+    after the 1st, 2nd and 3rd row of an interval (before its checkpoint), after a checkpoint,
+    half-way through a row, and after the last frame's checkpoint all resume to the
+    uninterrupted run's poses, bit for bit."""
+    from tests.killpoints import CHECKPOINT_EVERY
+
+    assert CHECKPOINT_EVERY == 3
     out = tmp_path / "run"
-    # 1. killed between the first row and its checkpoint: nothing exact to resume from yet
-    proc = killed_run("after-row", 1, sequence, out)
-    assert proc.returncode == -9, proc.stderr
-    assert journal_rows(out) == 1 and not (out / STATE_FILE).exists()
+    # 1.-3. killed after rows 1, 2 and 3 of the first interval, before its checkpoint: nothing
+    #       exact to resume from yet, every run starts afresh
+    for n in (1, 2, 3):
+        proc = killed_run("after-row", n, sequence, out)
+        assert proc.returncode == -9, proc.stderr
+        assert journal_rows(out) == n and not (out / STATE_FILE).exists()
     assert (out / LOCK_FILE).exists()                     # the dead process's lock file stays behind
-    # 2. starts afresh (the lock of the dead process is no obstacle), killed after 3 checkpoints
-    proc = killed_run("after-state", 3, sequence, out)
+    # 4. killed right after the first checkpoint (frames 0-2)
+    proc = killed_run("after-state", 1, sequence, out)
     assert proc.returncode == -9, proc.stderr
     assert journal_rows(out) == 3
-    # 3. resumes at frame 3, killed half-way through writing its second row (frame 4)
+    # 5. resumes at frame 3, killed half-way through writing its second row (frame 4)
     proc = killed_run("mid-row", 2, sequence, out)
     assert proc.returncode == -9, proc.stderr
     assert not (out / "poses.csv").read_text().endswith("\n")
-    # 4. resumes at frame 4, killed between the row of frame 6 and its checkpoint
+    # 6. resumes at frame 3 (the partial row cut off), killed after the rows of frames 3-5, before
+    #    their checkpoint: the third row of an interval
     proc = killed_run("after-row", 3, sequence, out)
     assert proc.returncode == -9, proc.stderr
-    assert journal_rows(out) == 7
-    # 5. resumes at frame 6 (the row of frame 6 is done again), killed after the last frame's checkpoint,
-    #    before any final output is written
+    assert journal_rows(out) == 6
+    # 7. resumes at frame 3 again (rows 3-5 done again), killed after its second checkpoint: the
+    #    last frame's, before any final output is written
     proc = killed_run("after-state", 2, sequence, out)
     assert proc.returncode == -9, proc.stderr
     assert journal_rows(out) == N_FRAMES and not (out / "poses.bvh").exists()
-    # 6. has no frame left to track: writes the outputs
+    # 8. has no frame left to track: writes the outputs
     assert main(["track", str(sequence), "--out", str(out), *TRACK_ARGS]) == 0
     assert json.loads((out / "run.json").read_text())["resumed_from_frame"] == N_FRAMES
     resumed = PoseTable.read(out / "poses.csv")
     np.testing.assert_array_equal(resumed.frames, np.arange(N_FRAMES))
     np.testing.assert_array_equal(resumed.poses, uninterrupted.poses)
     np.testing.assert_array_equal(resumed.joints, uninterrupted.joints)
-    for name in ("region_residual", "edge_residual", "failed", "evaluations"):
+    for name in ("region_residual", "edge_residual", "failed", "evaluations", "time_s"):
         np.testing.assert_array_equal(resumed.extra[name], uninterrupted.extra[name])
 
 
 @pytest.mark.slow
 def test_resume_with_a_decoding_lag_is_bit_identical(sequence, tmp_path):
     """With a lag of 3 the first rows come out at the fourth frame: kills after a checkpoint
-    (frames still undecided inside it), after a row, and after the last push (the held-back rows
-    written by ``finish`` but no outputs yet) all resume to the uninterrupted run's poses."""
+    (frames still undecided inside it), after a row, and after the last push's checkpoint (the
+    held-back rows not written yet) all resume to the uninterrupted run's poses."""
     whole = tmp_path / "whole"
     assert main(["track", str(sequence), "--out", str(whole), *LAGGED_ARGS]) == 0
     out = tmp_path / "run"
     cmd = lambda mode, n: [sys.executable, "-m", "tests.killpoints", mode, str(n), "--", "track", str(sequence),
                            "--out", str(out), *LAGGED_ARGS]
-    for mode, n in (("after-state", 2), ("after-row", 2), ("after-state", 4)):
+    # checkpoints every 3 frames: after frames 2, 5 and 7
+    for mode, n in (("after-state", 2), ("after-row", 2), ("after-state", 1)):
         proc = subprocess.run(cmd(mode, n), cwd=REPO_ROOT, capture_output=True, text=True, timeout=300)
         assert proc.returncode == -9, proc.stderr
     assert journal_rows(out) < N_FRAMES                      # frames still held back at the kill

@@ -31,6 +31,8 @@ def add_parser(subparsers) -> None:
                    help=f"camera horizontal field of view, degrees (default {DEFAULT_HFOV_DEG:g}, a webcam)")
     p.add_argument("--height", type=float, default=None, metavar="M",
                    help="the person's height in metres: fixes the absolute scale")
+    p.add_argument("--allow-damaged", action="store_true",
+                   help="calibrate on a video whose frames do not all decode instead of stopping")
     p.set_defaults(run=run)
 
 
@@ -38,16 +40,18 @@ def run(args: argparse.Namespace) -> int:
     from mocap.calibrate import Calibration, auto_calibrate
     from mocap.io.frames import VideoSource
     from mocap.io.sequence import find_sequence
-    from mocap.io.video import iter_frames, read_image
+    from mocap.io.video import read_image
     from mocap.own_video import setup_own_video
     from mocap.render import Camera
 
     seq = find_sequence(args.video)
+    source = VideoSource(seq.frames)
+    source.damaged_frames(args.allow_damaged)
     background = args.background or (seq.background if not args.no_background and args.background_frames is None
                                      else None)
     if background is not None and args.height is None:
         index = args.frame or 0
-        frame = next(iter_frames(seq.frames, index, index + 1), None)
+        frame = next(source.frames(index, index + 1), None)
         if frame is None:
             raise ValueError(f"{seq.frames} has no frame {index}")
         camera = Camera.default(frame.shape[1], frame.shape[0], hfov_deg=args.hfov)
@@ -56,15 +60,13 @@ def run(args: argparse.Namespace) -> int:
     else:
         if args.frame is not None:
             raise ValueError("--frame needs --background IMG (without one the first usable frame is found)")
-        source = VideoSource(seq.frames)
         mode = "image" if background is not None else ("frames" if args.background_frames else
                                                        ("none" if args.no_background else "auto"))
         setup, _ = setup_own_video(source, background_mode=mode,
                                    background_image=read_image(background) if background is not None else None,
                                    background_frames=args.background_frames, hfov_deg=args.hfov,
                                    height_m=args.height)
-        k, small = setup.factor, setup.calibration.camera
-        camera = Camera(source.width, source.height, small.fx * k, small.fy * k, small.cx * k, small.cy * k)
+        camera = setup.calibration.camera.enlarged(setup.factor, source.width, source.height)
         calibration = Calibration(setup.calibration.dims, setup.calibration.initial_pose, camera)
         note = setup.record
         how = (f"frame {note['calibration']['frame']}, background {note['background']['mode']} "

@@ -22,7 +22,7 @@ def run(args: argparse.Namespace) -> int:
     from mocap.calibrate import Calibration, auto_calibrate
     from mocap.io.sequence import find_sequence
     from mocap.io.video import iter_frames, read_image
-    from mocap.pipeline import track_video
+    from mocap.pipeline import RunSetup, track_video
     from mocap.synth.datasets import default_sequence
 
     root = default_sequence(args.out / "sequence")
@@ -34,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
         args.out.mkdir(parents=True, exist_ok=True)
         calibration.to_json(args.out / "calibration.json")
     print(f"tracking {root} ({'automatic' if args.auto_calibrate else 'true'} calibration)")
-    summary = track_video(seq.frames, seq.background, calibration, args.out, tracker_config(args),
+    summary = track_video(seq.frames, RunSetup.from_files(calibration, seq.background), args.out, tracker_config(args),
                           ground_truth=seq.ground_truth, fps=seq.fps(), max_frames=args.max_frames,
                           overwrite=args.overwrite, write_overlay=not args.no_overlay)
     print_summary(summary)

@@ -1,6 +1,8 @@
 """``python -m mocap segment VIDEO --background IMG [--out DIR]``: what the image side sees.
 
-Writes, per frame, the label image (coloured: black background, skin tone = skin, blue =
+Frames are reduced to the working resolution ``track`` uses (``--work-width``, default near
+160 pixels wide: :func:`mocap.imaging.resample.working_factor`), so the pictures are the images
+the tracker compares its model against; sample boxes are given in input pixels. Writes, per frame, the label image (coloured: black background, skin tone = skin, blue =
 clothes, brown = hair, green = lower body, grey = unknown foreground; hair and lower body only
 when the first frame supports them), the edge mask (white on black) and the truncated
 distance map (viridis: dark on edges), as PNG in ``labels/``, ``edges/`` and ``distance/``,
@@ -27,7 +29,9 @@ from mocap.imaging import ColourModel, ImagingConfig, learn_colour_model, median
 from mocap.imaging.visual import colour_distance, colour_labels, label_palette, overlay_edges, tile
 from mocap.io.atomic import write_bytes_atomic
 from mocap.io.jsonfile import read_json, write_json
-from mocap.io.video import VideoWriter, count_frames, frame_rate, iter_frames, read_image
+from mocap.imaging.resample import working_factor
+from mocap.io.frames import VideoSource
+from mocap.io.video import VideoWriter, read_image
 
 
 def _box(text: str) -> tuple[int, int, int, int]:
@@ -59,6 +63,11 @@ def add_parser(subparsers) -> None:
     p.add_argument("--lower-body-box", type=_box, metavar="R,C,H,W",
                    help="lower-body (trousers, skirt) sample box; without it there is no lower-body class")
     p.add_argument("--config", type=Path, metavar="JSON", help="imaging parameters (ImagingConfig)")
+    p.add_argument("--work-width", type=int, default=None, metavar="PX",
+                   help="working width: frames are reduced by the integer factor that brings them nearest to it "
+                        "(default: as track, near 160 pixels)")
+    p.add_argument("--allow-damaged", action="store_true",
+                   help="segment a video whose frames do not all decode instead of stopping")
     p.add_argument("--start", type=int, default=0, metavar="N", help="first frame (default 0)")
     p.add_argument("--max-frames", type=int, metavar="N", help="process at most N frames")
     p.set_defaults(run=run)
@@ -75,16 +84,19 @@ def run(args: argparse.Namespace) -> int:
     if args.max_frames is not None and args.max_frames < 1:
         raise ValueError(f"--max-frames must be >= 1, got {args.max_frames}")
     config = ImagingConfig.from_json(args.config) if args.config else ImagingConfig()
-    total = count_frames(args.video)
+    source = VideoSource(args.video)
+    source.damaged_frames(args.allow_damaged)
+    total = source.count
     if args.start >= total:
         raise ValueError(f"--start {args.start} is past the end of {args.video} ({total} frames)")
     stop = total if args.max_frames is None else min(total, args.start + args.max_frames)
+    factor = working_factor(source.width, source.height, *(() if args.work_width is None else (args.work_width,)))
     out = args.out if args.out is not None else Path(f"{args.video.stem}_segment")
     with FolderLock(out):
-        return _segment(args, out, config, stop)
+        return _segment(args, source, factor, out, config, stop)
 
 
-def _settings(args: argparse.Namespace, config: ImagingConfig, stop: int) -> dict:
+def _settings(args: argparse.Namespace, config: ImagingConfig, stop: int, factor: int) -> dict:
     """What the output folder's images depend on (``segment.json``): a resume needs the same."""
     path = lambda p: None if p is None else str(Path(p).resolve())
     return {"video": path(args.video), "background": path(args.background),
@@ -94,17 +106,28 @@ def _settings(args: argparse.Namespace, config: ImagingConfig, stop: int) -> dic
             "clothes_box": list(args.clothes_box) if args.clothes_box else None,
             "hair_box": list(args.hair_box) if args.hair_box else None,
             "lower_body_box": list(args.lower_body_box) if args.lower_body_box else None,
-            "start": args.start, "stop": stop, "imaging": config.to_dict()}
+            "start": args.start, "stop": stop, "working_factor": factor, "imaging": config.to_dict()}
 
 
-def _learn(frames, background, args, config) -> tuple[ColourModel, int]:
+def _working_box(box, factor: int):
+    """An input-pixel box ``(row, col, height, width)`` at the working resolution (None stays None)."""
+    if box is None:
+        return None
+    row, col, height, width = box
+    return row // factor, col // factor, max(1, height // factor), max(1, width // factor)
+
+
+def _learn(frames, background, args, config, factor: int) -> tuple[ColourModel, int]:
     """Colour model learned on the first frame that shows the person (a face, or the sample
     boxes on foreground), and that frame's number."""
     reason = "no frame"
+    boxes = {name: _working_box(getattr(args, name), factor)
+             for name in ("skin_box", "clothes_box", "hair_box", "lower_body_box")}
     for index, frame in frames:
         try:
-            return learn_colour_model(frame, background, args.skin_box, args.clothes_box, hair_box=args.hair_box,
-                                      lower_body_box=args.lower_body_box, config=config), index
+            return learn_colour_model(frame, background, boxes["skin_box"], boxes["clothes_box"],
+                                      hair_box=boxes["hair_box"], lower_body_box=boxes["lower_body_box"],
+                                      config=config), index
         except ValueError as exc:
             reason = f"frame {index}: {exc}"
     raise ValueError(f"no frame of {args.video} shows the person to learn the colours from; last: {reason}")
@@ -114,8 +137,10 @@ def _write_png(path: Path, image: np.ndarray) -> None:
     write_bytes_atomic(path, iio.imwrite("<bytes>", image, extension=".png"))
 
 
-def _segment(args: argparse.Namespace, out: Path, config: ImagingConfig, stop: int) -> int:
-    settings = _settings(args, config, stop)
+def _segment(args: argparse.Namespace, source, factor: int, out: Path, config: ImagingConfig, stop: int) -> int:
+    from mocap.imaging.resample import downscale
+
+    settings = _settings(args, config, stop, factor)
     settings_file = out / "segment.json"
     if settings_file.is_file():
         if read_json(settings_file) != json.loads(json.dumps(settings)):
@@ -125,44 +150,45 @@ def _segment(args: argparse.Namespace, out: Path, config: ImagingConfig, stop: i
         (out / sub).mkdir(parents=True, exist_ok=True)
     write_json(settings_file, settings)
 
+    frames = lambda: ((i, downscale(f, factor)) for i, f in enumerate(source.frames(args.start, stop),
+                                                                       start=args.start))
     if args.background is not None:
         background = read_image(args.background)
+        if background.shape[:2] != (source.height, source.width):
+            raise ValueError(f"background is {background.shape[1]}x{background.shape[0]} but the "
+                             f"video is {source.width}x{source.height}")
+        background = downscale(background, factor)
     elif args.background_frames is not None:
         a, b = args.background_frames
-        empty = list(iter_frames(args.video, a, b))
+        empty = [downscale(f, factor) for f in source.frames(a, b)]
         if not empty:
-            raise ValueError(f"--background-frames {a}:{b}: {args.video} has only {count_frames(args.video)} frames")
+            raise ValueError(f"--background-frames {a}:{b}: {args.video} has only {source.count} frames")
         background = median_background(empty)
     else:
         background = None
-
-    first = next(iter_frames(args.video, args.start, stop))
-    if background is not None and background.shape != first.shape:
-        raise ValueError(f"background is {background.shape[1]}x{background.shape[0]} but the "
-                         f"video is {first.shape[1]}x{first.shape[0]}")
+    if factor > 1:
+        print(f"working resolution {source.width // factor}x{source.height // factor} (input "
+              f"{source.width}x{source.height} reduced {factor}x, as track sees it)")
     learned = out / "colour_model.json"
     if args.colour_model is not None:
         model = ColourModel.from_json(args.colour_model)
     elif learned.is_file():                   # a resumed run: the model its first images were made with
         model = ColourModel.from_json(learned)
     else:
-        model, index = _learn(enumerate(iter_frames(args.video, args.start, stop), start=args.start),
-                              background, args, config)
+        model, index = _learn(frames(), background, args, config, factor)
         if index != args.start:
             print(f"colours learned on frame {index}, the first that shows the person")
     model.to_json(learned)
     config.to_json(out / "imaging.json")
 
-    fps = frame_rate(args.video) or 10.0
+    fps = source.fps or 10.0
     timings: dict[str, list[float]] = {}
     empty_frames = resumed = 0
     started = time.perf_counter()
     video_path = out / "segment.mp4"
     partial = out / f".{video_path.stem}.partial{video_path.suffix}"
     with VideoWriter(partial, fps) as video:
-        progress = tqdm(iter_frames(args.video, args.start, stop), total=stop - args.start, unit="frame",
-                        desc="segment")
-        for index, frame in enumerate(progress, start=args.start):
+        for index, frame in tqdm(frames(), total=stop - args.start, unit="frame", desc="segment"):
             name = f"{index:06d}.png"
             paths = [out / sub / name for sub in ("labels", "edges", "distance")]
             if all(p.is_file() for p in paths):           # written by an interrupted run: kept

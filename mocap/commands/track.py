@@ -55,78 +55,48 @@ def add_parser(subparsers) -> None:
     p.set_defaults(run=run)
 
 
-def _background_mode(args, sequence_background) -> str:
-    if args.background is not None or sequence_background is not None:
-        return "image"
-    if args.background_frames is not None:
-        return "frames"
-    return "none" if args.no_background else "auto"
+def options(args: argparse.Namespace):
+    """The :class:`mocap.own_video.OwnVideoOptions` the command line describes."""
+    from mocap.own_video import OwnVideoOptions
+
+    path = lambda p: None if p is None else str(p)
+    return OwnVideoOptions(
+        background=path(args.background), background_frames=args.background_frames,
+        no_background=args.no_background, calibration=path(args.calibration), hfov_deg=args.hfov,
+        height_m=args.height, work_width=args.work_width, colour=args.colour, ground_truth=path(args.ground_truth),
+        start=args.start, max_frames=args.max_frames, allow_damaged=args.allow_damaged, overlay=not args.no_overlay,
+        show=args.show, overwrite=args.overwrite, tracker=tracker_config(args))
+
+
+def print_setup(account: dict) -> None:
+    """What the set-up found (:func:`mocap.own_video.track_own_video`'s ``on_setup``)."""
+    factor = account["working_factor"]
+    print(f"working resolution {account['working_width']}x{account['working_height']} "
+          f"(input {account['input_width']}x{account['input_height']} reduced {factor}x)")
+    background, calibration = account["background"], account["calibration"]
+    print(f"background: {background['mode']} ({background['reason']})")
+    if calibration["from"] == "automatic":
+        height = account["height_m"]
+        print(f"calibration: automatic on frame {calibration['frame']}, person at {calibration['depth_m']:.2f} m "
+              f"(hfov {account['hfov_deg']:g} deg" + (f", height {height:g} m)" if height else
+                                                      ", default adult size: scale unknown)"))
 
 
 def run(args: argparse.Namespace) -> int:
-    from mocap.calibrate import Calibration
-    from mocap.imaging.resample import working_factor
-    from mocap.io.frames import CameraSource, VideoSource
-    from mocap.io.sequence import find_sequence
-    from mocap.io.video import read_image
-    from mocap.own_video import setup_own_video
-    from mocap.pipeline import track_video
+    from mocap.io.frames import CameraSource
+    from mocap.own_video import track_own_video
 
     live = args.camera is not None or args.camera_device is not None
     if (args.video is None) == (not live):
         raise ValueError("give a VIDEO or --camera N (not both)")
+    chosen = options(args)
     if live:
         if args.background_frames is not None:
             raise ValueError("--background-frames needs a video file")
-        seq = None
         source = CameraSource.open(args.camera) if args.camera is not None else \
             CameraSource.from_device(args.camera_device)
     else:
-        seq = find_sequence(args.video)
-        source = VideoSource(seq.frames)
-    seq_background = seq.background if seq is not None and not args.no_background and \
-        args.background_frames is None else None
-    background = args.background or seq_background
-    calibration = args.calibration or (seq.calibration if seq is not None else None)
-    for what, path in (("background", background), ("calibration", calibration)):
-        if path is not None and not Path(path).is_file():
-            raise FileNotFoundError(f"{what} file not found: {path}")
-    factor = None if args.work_width is None else working_factor(source.width, source.height, args.work_width)
-    given = None
-    if calibration is not None:
-        given = Calibration.from_json(calibration)
-        cam = given.camera
-        factor = factor or working_factor(source.width, source.height)
-        if cam.shape == (source.height, source.width) and factor > 1:
-            from dataclasses import replace
-            given = replace(given, camera=type(cam)(source.width // factor, source.height // factor, cam.fx / factor,
-                                                    cam.fy / factor, cam.cx / factor, cam.cy / factor))
-        elif cam.shape != (source.height // factor, source.width // factor):
-            raise ValueError(f"frames are {source.width}x{source.height} but the calibration's camera is "
-                             f"{cam.width}x{cam.height}: calibrate for this video (python -m mocap calibrate)")
-    mode = _background_mode(args, seq_background)
-    setup, consumed = setup_own_video(
-        source, factor, background_mode=mode, background_image=read_image(background) if background else None,
-        background_frames=args.background_frames, calibration=given, hfov_deg=args.hfov, height_m=args.height)
-    if source.live:
-        source.hold(consumed)
-    bg_note = setup.record["background"]
-    cal_note = setup.record["calibration"]
-    factor = setup.factor
-    print(f"working resolution {setup.calibration.camera.width}x{setup.calibration.camera.height} "
-          f"(input {source.width}x{source.height} reduced {factor}x)")
-    print(f"background: {bg_note['mode']} ({bg_note['reason']})")
-    if cal_note["from"] == "automatic":
-        print(f"calibration: automatic on frame {cal_note['frame']}, person at {cal_note['depth_m']:.2f} m "
-              f"(hfov {args.hfov:g} deg" + (f", height {args.height:g} m)" if args.height else
-                                             ", default adult size: scale unknown)"))
-    fps = (seq.fps(source.fps or 25.0) if seq is not None and seq.meta is not None else source.fps) or 25.0
-    summary = track_video(source, setup.background, setup.calibration, args.out, tracker_config(args),
-                          colour=args.colour, ground_truth=args.ground_truth or (seq.ground_truth if seq else None),
-                          fps=fps, max_frames=args.max_frames, overwrite=args.overwrite,
-                          imaging=setup.imaging, write_overlay=not args.no_overlay, work_factor=factor,
-                          colour_model=setup.colour_model,
-                          scene=setup.scene, setup_record=setup.record, show=args.show,
-                          allow_damaged=args.allow_damaged, start_frame=args.start)
+        source = args.video
+    summary = track_own_video(source, args.out, chosen, on_setup=print_setup)
     print_summary(summary)
     return 0

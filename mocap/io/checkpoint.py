@@ -45,9 +45,16 @@ class Checkpoint:
 
 
 def write_checkpoint(path: str | Path, state: dict[str, np.ndarray], next_index: int, journal: str | Path) -> None:
-    """Save ``state`` with the current length of ``journal`` (0 if it does not exist), atomically."""
+    """Save ``state`` with the current length of ``journal`` (0 if it does not exist), atomically,
+    after syncing the journal to disk (so the checkpoint never describes rows a power cut loses)."""
+    import os
+
     journal = Path(journal)
-    size = journal.stat().st_size if journal.exists() else 0
+    size = 0
+    if journal.exists():
+        with journal.open("rb") as fh:
+            os.fsync(fh.fileno())
+            size = os.fstat(fh.fileno()).st_size
     if any(k.startswith(_META) for k in state):
         raise ValueError(f"state names must not start with {_META!r}")
     buf = io.BytesIO()

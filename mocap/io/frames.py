@@ -19,7 +19,8 @@ from pathlib import Path
 import imageio_ffmpeg
 import numpy as np
 
-from mocap.io.video import count_frames, frame_rate, iter_frames
+from mocap.io.video import count_frames, iter_frames
+from mocap.io.video_check import check_video
 
 __all__ = ["VideoSource", "CameraSource", "camera_device"]
 
@@ -27,10 +28,16 @@ __all__ = ["VideoSource", "CameraSource", "camera_device"]
 class VideoSource:
     """Frames of a video file or image folder.
 
+    A video file is decoded once on opening (:func:`mocap.io.video_check.check_video`): its
+    frame count, every frame's timestamp and its damage are known before the first frame is
+    read.
+
     Parameters
     ----------
     path : str or Path
         Video file (anything ffmpeg decodes) or folder of images.
+    fps : float, optional
+        Frame rate of an image folder (its frame times are ``index / fps``); default 25.
 
     Attributes
     ----------
@@ -38,33 +45,66 @@ class VideoSource:
     width, height : int, pixels
         Input frame size (of the first frame).
     fps : float or None
-        Frame rate of a video file (None for an image folder or an unknown rate).
+        Announced frame rate of a video file (None for an image folder or an unknown rate).
     count : int
         Number of frames.
+    check : VideoCheck or None
+        What decoding the video found (None for an image folder).
     live : bool
         False: the frames can be read again (the run re-reads them for the overlay video).
     """
 
     live = False
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, fps: float | None = None) -> None:
         self.path = Path(path)
-        self.count = count_frames(self.path)
+        if self.path.is_dir() or not self.path.exists():
+            self.check = None
+            self.count = count_frames(self.path)
+            self.fps = None
+        else:
+            self.check = check_video(self.path)
+            self.count = self.check.decoded
+            self.fps = self.check.fps
         if self.count == 0:
             raise ValueError(f"{self.path} has no frames")
         first = next(iter_frames(self.path, 0, 1), None)
         if first is None:
             raise ValueError(f"{self.path} has no decodable frame")
         self.height, self.width = first.shape[:2]
-        self.fps = frame_rate(self.path)
+        self._folder_fps = fps or 25.0
 
     @property
     def name(self) -> str:
         return str(self.path)
 
-    def frames(self, start: int = 0, stop: int | None = None) -> Iterator[np.ndarray]:
-        """Frames ``start`` to ``stop`` (exclusive), uint8 RGB, shape (height, width, 3)."""
-        return iter_frames(self.path, start, stop)
+    def frames(self, start: int = 0, stop: int | None = None, *, indices=None) -> Iterator[np.ndarray]:
+        """Frames ``start`` to ``stop`` (exclusive), or only the sorted ``indices`` among them,
+        uint8 RGB, shape (height, width, 3) (:func:`mocap.io.video.iter_frames`)."""
+        return iter_frames(self.path, start, stop, indices=indices)
+
+    def damaged_frames(self, allow: bool = False) -> list[int]:
+        """The frame numbers of a damaged video (:class:`mocap.io.video_check.VideoCheck`),
+        empty for an intact one or an image folder.
+
+        Raises
+        ------
+        ValueError
+            The video is damaged and ``allow`` is false (one sentence with the frame numbers).
+        """
+        if self.check is None or not self.check.damaged:
+            return []
+        if not allow:
+            raise ValueError(f"{self.check.describe(self.path)}; to use the frames that decode anyway, "
+                             "add --allow-damaged")
+        return self.check.damaged_frames
+
+    def time_s(self, index: int) -> float:
+        """Time of frame ``index``, seconds from the first frame: a video frame's own timestamp,
+        an image folder's ``index / fps``."""
+        if self.check is None:
+            return index / self._folder_fps
+        return self.check.times[index]
 
 
 def camera_device(index: int) -> tuple[str, list[str]]:

@@ -85,8 +85,10 @@ class PoseTable:
         """Write the table as CSV, atomically."""
         write_text_atomic(path, self.to_csv_text())
 
-    def append_to(self, path: str | Path) -> None:
-        """Append the rows to a CSV journal (header first if the file is new), flushed to disk.
+    def append_to(self, path: str | Path, *, sync: bool = True) -> None:
+        """Append the rows to a CSV journal (header first if the file is new), flushed to the
+        operating system and, with ``sync``, to disk (else the caller syncs it, as
+        :func:`mocap.io.checkpoint.write_checkpoint` does).
 
         A run that is killed leaves at most a partial last line, which :meth:`read` with
         ``tolerate_partial`` drops.
@@ -100,7 +102,8 @@ class PoseTable:
         with path.open("a", newline="") as fh:
             fh.write(text)
             fh.flush()
-            os.fsync(fh.fileno())
+            if sync:
+                os.fsync(fh.fileno())
 
     @classmethod
     def read(cls, path: str | Path, *, tolerate_partial: bool = False) -> "PoseTable":

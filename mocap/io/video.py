@@ -1,7 +1,8 @@
 """Frames in and out: images, video files and folders of images, as uint8 RGB.
 
-Reading goes through imageio v3 (its Pillow plugin for images, the ffmpeg plugin for videos); writing a
-video streams frames to ffmpeg through imageio-ffmpeg. Every failure on bad input is a
+Reading goes through imageio v3 (its Pillow plugin for images) and imageio-ffmpeg (videos:
+every decoded frame once, ``-fps_mode passthrough``); writing a video streams frames to ffmpeg
+through imageio-ffmpeg. Every failure on bad input is a
 ``FileNotFoundError`` (missing path) or a ``ValueError`` with a one-line reason (corrupt file,
 unsupported channels or dtype, frames of different sizes), never a crash deep in a decoder.
 """
@@ -119,8 +120,12 @@ def _check_range(start: int, stop: int | None) -> None:
         raise ValueError(f"stop must be an integer >= start ({start}) or None, got {stop!r}")
 
 
-def iter_frames(source: str | Path, start: int = 0, stop: int | None = None) -> Iterator[np.ndarray]:
+def iter_frames(source: str | Path, start: int = 0, stop: int | None = None, *,
+                indices=None) -> Iterator[np.ndarray]:
     """Frames ``start`` (inclusive) to ``stop`` (exclusive) of a video or a folder of images.
+
+    A video's frames are every frame it decodes to, once each, in decoding order (a variable
+    frame rate, gaps and repeated timestamps as recorded: :mod:`mocap.io.video_check`).
 
     Parameters
     ----------
@@ -129,6 +134,9 @@ def iter_frames(source: str | Path, start: int = 0, stop: int | None = None) -> 
         :data:`IMAGE_SUFFIXES`).
     start, stop : int
         Frame range, 0-based; ``stop=None`` reads to the end. Past the end yields nothing.
+    indices : sequence of int, optional
+        Only these frames (sorted, unique, within the range): a video's other frames are
+        dropped inside ffmpeg (``select``), never converted or copied.
 
     Yields
     ------
@@ -146,27 +154,51 @@ def iter_frames(source: str | Path, start: int = 0, stop: int | None = None) -> 
     source = Path(source)
     _check_range(start, stop)
     _check_exists(source)
+    wanted = None
+    if indices is not None:
+        wanted = sorted({int(i) for i in indices if i >= start and (stop is None or i < stop)})
+        if not wanted:
+            return
+        start, stop = wanted[0], wanted[-1] + 1
     if source.is_dir():
-        files = image_files(source)[start:stop]
+        files = image_files(source)
+        numbers = range(start, min(len(files), stop if stop is not None else len(files))) if wanted is None \
+            else [i for i in wanted if i < len(files)]
         first_shape = None
-        for f in files:
-            frame = read_image(f)
+        for i in numbers:
+            frame = read_image(files[i])
             if first_shape is None:
                 first_shape = frame.shape
             elif frame.shape != first_shape:
-                raise ValueError(f"{f} is {frame.shape[1]}x{frame.shape[0]} but the first frame "
+                raise ValueError(f"{files[i]} is {frame.shape[1]}x{frame.shape[0]} but the first frame "
                                  f"is {first_shape[1]}x{first_shape[0]}")
             yield frame
         return
+    output = ["-map", "0:v:0", "-fps_mode", "passthrough"]
+    if wanted is not None:
+        output += ["-vf", "select='" + "+".join(f"eq(n,{i})" for i in wanted) + "'", "-frames:v", str(len(wanted))]
+    elif start > 0 or stop is not None:
+        output += ["-vf", f"select='between(n,{start},{(stop if stop is not None else 2 ** 62) - 1})'"]
+        if stop is not None:
+            output += ["-frames:v", str(stop - start)]      # ffmpeg stops there instead of decoding on
+    numbers = iter(wanted if wanted is not None else range(start, stop if stop is not None else 2 ** 62))
+    reader = None
     try:
-        frames = iio.imiter(source, plugin="FFMPEG")
-        for index, frame in enumerate(frames):
-            if stop is not None and index >= stop:
+        reader = imageio_ffmpeg.read_frames(str(source), output_params=output)
+        meta = next(reader)
+        width, height = (int(v) for v in meta["size"])
+        for data, index in zip(reader, numbers):
+            frame = np.frombuffer(data, np.uint8)
+            if frame.size != width * height * 3:
+                raise ValueError(f"frame {index} has {frame.size} bytes, not {width}x{height}x3")
+            yield frame.reshape(height, width, 3)
+            if stop is not None and index >= stop - 1:
                 break
-            if index >= start:
-                yield _to_rgb_uint8(np.asarray(frame), f"{source} frame {index}", True)
     except _DECODE_ERRORS as exc:
         raise ValueError(ffmpeg_failure(source, str(exc))) from None
+    finally:
+        if reader is not None:
+            reader.close()
 
 
 def count_frames(source: str | Path) -> int:

@@ -1,11 +1,15 @@
-"""Is a video whole? What its container announces against what actually decodes.
+"""Is a video whole? Every frame it holds, with its own timestamp, and the damage found.
 
-A cut or damaged file often decodes without any error from the reading library: ffmpeg stops
-early, or conceals broken frames, or skips them. :func:`check_video` decodes the video once
-with ffmpeg (``showinfo``: the timestamp of every decoded frame) and compares with the
-duration and frame rate the container announces; frames that never decode (a gap in the
-timestamps, or a file that ends early) and frames the decoder reported errors on (concealed)
-come out by number. :func:`ffmpeg_failure` turns ffmpeg's failure output into one sentence.
+Cameras record with a variable frame rate, leave gaps in the timestamps and sometimes give
+two frames one timestamp: none of that is damage, every decoded frame is a frame (the readers
+of :mod:`mocap.io.video` deliver each decoded frame once, ``-fps_mode passthrough``).
+Damage is what does not decode: packets the demuxer or the decoder reports as broken, and a
+file that ends before the end its container announces (a cut or unfinished copy).
+
+:func:`check_video` decodes the video once with ffmpeg (``showinfo``: the timestamp of every
+decoded frame) and reports, by frame number in decoding order, the frames that decoded with
+errors or after lost data, and the frames lost after an early end.
+:func:`ffmpeg_failure` turns ffmpeg's failure output into one sentence.
 """
 from __future__ import annotations
 
@@ -22,9 +26,12 @@ _DURATION = re.compile(r"Duration: (\d+):(\d\d):(\d\d(?:\.\d+)?)")
 _FPS = re.compile(r"Stream #\d+:\d+.*?: Video: .*?(\d+(?:\.\d+)?)(k?) fps")
 _PREFIX = re.compile(r"(?=\[[^\]\n]* @ 0x[0-9a-f]+\])")
 _SHOWINFO = re.compile(r"\[Parsed_showinfo[^\]]*\] n:\s*(\d+) pts:\s*(-?\d+) pts_time:(-?[\d.e+-]+)")
+#: Prefixes of the log lines of ffmpeg's output side (the null muxer's complaints about repeated
+#: timestamps are about the input's timing, not damage).
+_OUTPUT_SIDE = ("[null @", "[out#", "[vost#", "[enc:", "[vf#", "[Parsed_", "[fc#")
 #: Log lines of demuxers and decoders that mean the data is damaged (matched lower-cased).
 _DAMAGE_WORDS = ("error", "invalid", "corrupt", "concealing", "missing picture", "ended prematurely",
-                 "truncat", "exceeds containing")
+                 "truncat", "exceeds containing", "partial file")
 
 
 @dataclass
@@ -34,31 +41,34 @@ class VideoCheck:
     Attributes
     ----------
     announced_frames : int or None
-        Frames the container announces (duration times frame rate, rounded), or None when it
-        announces no duration.
+        Frames the container's duration at its announced frame rate stands for (rounded), or
+        None when it announces no duration or rate.
     fps : float or None
-        Announced frame rate (frames per second).
-    decoded : int
-        Frames that decoded.
-    readable : int
-        Frames a reader at the announced rate delivers: up to the last decoded one (gaps are
-        filled with the frame before, as :func:`mocap.io.video.iter_frames` does).
-    missing : list of int
-        Frame numbers (0-based, on the announced frame grid) that did not decode: gaps and the
-        frames after an early end.
+        Announced (average) frame rate, frames per second.
+    times : list of float, seconds
+        Timestamp of every decoded frame, in decoding order, from the first frame's (0.0): a
+        variable frame rate, gaps and repeated timestamps kept as they are.
     corrupt : list of int
-        Frame numbers that decoded with errors (the decoder concealed damage in them).
+        Frame numbers (0-based, decoding order) that decoded with errors or right after data
+        the demuxer or decoder could not read (a frame lost before them).
+    missing : list of int
+        Frames lost after an early end: from the first frame that never came to the end the
+        container announces (numbered at the announced frame rate).
     messages : list of str
-        The decoder's own error lines, for a log.
+        The demuxer's and decoder's own error lines, for a log.
     """
 
     announced_frames: int | None
     fps: float | None
-    decoded: int
-    readable: int
-    missing: list[int] = field(default_factory=list)
+    times: list[float] = field(default_factory=list)
     corrupt: list[int] = field(default_factory=list)
+    missing: list[int] = field(default_factory=list)
     messages: list[str] = field(default_factory=list)
+
+    @property
+    def decoded(self) -> int:
+        """Frames that decoded (and that a reader delivers)."""
+        return len(self.times)
 
     @property
     def damaged(self) -> bool:
@@ -74,9 +84,10 @@ class VideoCheck:
         """One sentence on the damage, with the frame numbers."""
         parts = []
         if self.missing:
-            parts.append(f"{len(self.missing)} frame(s) do not decode ({format_frames(self.missing)})")
+            parts.append(f"it ends early: {len(self.missing)} frame(s) do not decode ({format_frames(self.missing)})")
         if self.corrupt:
-            parts.append(f"{len(self.corrupt)} frame(s) decode with errors ({format_frames(self.corrupt)})")
+            parts.append(f"{len(self.corrupt)} frame(s) decode with errors or after lost data "
+                         f"({format_frames(self.corrupt)})")
         announced = f"{self.announced_frames} announced, " if self.announced_frames is not None else ""
         return f"{path} is damaged: {announced}{self.decoded} decodable; " + "; ".join(parts)
 
@@ -127,14 +138,33 @@ def ffmpeg_failure(path: str | Path, log: str) -> str:
     return f"{path} could not be decoded as a video"
 
 
-#: Frames the decoded video may end short of the container's announced duration times rate
-#: without being reported: the duration is rounded (to 10 ms in ffmpeg's report) and may include
-#: the last frame's display time (seen: an 87-frame clip at 30 fps announcing 2.93 s, 88 frames).
-END_TOLERANCE_FRAMES = 1
+#: How much earlier than its container announces a video may end without being taken as cut
+#: (seconds, and frame intervals at the announced rate; the larger counts): durations are
+#: rounded, and include the other streams (a phone's sound often outlasts its pictures).
+END_TOLERANCE_S = 0.5
+END_TOLERANCE_FRAMES = 3
+#: Demuxer words that mean the file ends before its data does (matched lower-cased).
+_EARLY_END_WORDS = ("ended prematurely", "truncat", "partial file", "end of file")
+
+
+#: A gap between timestamps this many times the typical interval (the median) is where a frame
+#: was lost, when the demuxer or decoder reported damage (and only then: cameras leave gaps).
+LOST_FRAME_GAP = 1.5
+
+
+def _after_gaps(times: list[float]) -> list[int]:
+    """Frame numbers that follow a gap in ``times`` (seconds) longer than :data:`LOST_FRAME_GAP`
+    typical intervals."""
+    steps = [b - a for a, b in zip(times, times[1:])]
+    positive = sorted(d for d in steps if d > 0)
+    if not positive:
+        return []
+    typical = positive[len(positive) // 2]
+    return [k + 1 for k, d in enumerate(steps) if d > LOST_FRAME_GAP * typical]
 
 
 def check_video(path: str | Path) -> VideoCheck:
-    """Decode a video file once and compare it with what its container announces.
+    """Decode a video file once: every frame's timestamp, and the damage.
 
     Parameters
     ----------
@@ -158,8 +188,8 @@ def check_video(path: str | Path) -> VideoCheck:
         raise FileNotFoundError(f"no such file: {path}")
     if path.is_file() and path.stat().st_size == 0:
         raise ValueError(ffmpeg_failure(path, ""))
-    cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-nostats", "-nostdin", "-v", "info", "-threads", "1", "-i", str(path),
-           "-map", "0:v:0", "-vf", "showinfo", "-f", "null", "-"]
+    cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-nostats", "-nostdin", "-v", "info",
+           "-i", str(path), "-map", "0:v:0", "-vf", "showinfo", "-fps_mode", "passthrough", "-f", "null", "-"]
     proc = subprocess.run(cmd, capture_output=True, text=True, errors="replace")
     log = proc.stderr
     duration = _DURATION.search(log)
@@ -168,38 +198,42 @@ def check_video(path: str | Path) -> VideoCheck:
     if fps_match:
         fps = float(fps_match.group(1)) * (1000.0 if fps_match.group(2) else 1.0)
     times, corrupt, messages = [], [], []
-    pending_damage = False
+    pending_damage = ended_early = False
     # ffmpeg's threads may interleave messages on one line: split at every "[name @ 0x...]" prefix
     for message in _PREFIX.split(log):
         shown = _SHOWINFO.match(message)
         if shown:
             times.append(float(shown.group(3)))
             if pending_damage:
-                corrupt.append(len(times) - 1)          # provisional: renumbered on the grid below
+                corrupt.append(len(times) - 1)
                 pending_damage = False
-        elif any(w in message.lower() for w in _DAMAGE_WORDS):
-            messages.append(message.strip().splitlines()[0])
-            # a decoder's complaint belongs to the next frame it puts out (the demuxer's to none)
-            pending_damage = pending_damage or not message.startswith("[in#")
+        elif any(w in message.lower() for w in _DAMAGE_WORDS) and not message.startswith(_OUTPUT_SIDE):
+            messages.append(next(line.strip() for line in message.splitlines()
+                                 if any(w in line.lower() for w in _DAMAGE_WORDS)))
+            if any(w in message.lower() for w in _EARLY_END_WORDS):
+                ended_early = True
+            else:
+                pending_damage = True       # belongs to the next frame put out (data lost before it)
     if not times:
         if proc.returncode != 0 or not fps:
             raise ValueError(ffmpeg_failure(path, log))
         raise ValueError(f"{path} has no video frames")
-    start = min(times)          # frame 0 (containers may start their clock elsewhere, e.g. AVI with B-frames)
+    start = times[0]            # frame 0 (containers may start their clock elsewhere, e.g. AVI with B-frames)
+    times = [t - start for t in times]
     announced = None
     if duration and fps:
         seconds = int(duration.group(1)) * 3600 + int(duration.group(2)) * 60 + float(duration.group(3))
         announced = int(round(seconds * fps))
-    if fps:
-        numbers = [int(round((t - start) * fps)) for t in times]
-    else:
-        numbers = list(range(len(times)))
-    corrupt = sorted({numbers[i] for i in corrupt})
-    decoded_end = max(numbers) + 1
-    if announced is not None and announced - decoded_end <= END_TOLERANCE_FRAMES:
-        announced_end = decoded_end         # a container's duration rounds up by up to a frame (its clock
-    else:                                   # in 10 ms steps, the last frame's display time): not a lost frame
-        announced_end = announced
-    grid = decoded_end if announced_end is None else max(announced_end, decoded_end)
-    missing = sorted(set(range(grid)) - set(numbers))
-    return VideoCheck(announced, fps, len(set(numbers)), max(numbers) + 1, missing, corrupt, messages)
+        interval = 1.0 / fps
+        end = max(times) + interval
+        if seconds - end > max(END_TOLERANCE_S, END_TOLERANCE_FRAMES * interval):
+            ended_early = True
+    if pending_damage and not ended_early:
+        corrupt.append(len(times) - 1)          # damage after the last frame put out
+    lost_before = _after_gaps(times) if (corrupt and len(times) > 2) else []
+    if lost_before:
+        # ffmpeg demuxes and decodes on threads of their own: its complaints come out of order
+        # with the frames; the frames that follow a gap in the timestamps are where data was lost
+        corrupt = lost_before
+    missing = list(range(len(times), max(announced or 0, len(times) + 1))) if ended_early else []
+    return VideoCheck(announced, fps, times, sorted(set(corrupt)), missing, messages)

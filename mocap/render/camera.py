@@ -72,6 +72,39 @@ class Camera:
         sx, sy = width / self.width, height / self.height
         return Camera(width, height, self.fx * sx, self.fy * sy, self.cx * sx, self.cy * sy)
 
+    def working(self, input_width: int, input_height: int, factor: int) -> "Camera":
+        """This camera at the working resolution of ``input_width`` x ``input_height`` frames
+        reduced by the integer ``factor`` (:func:`mocap.imaging.resample.downscale`: the size is
+        ``(input_width // factor, input_height // factor)``, the intrinsics divided by ``factor``,
+        so that working pixel coordinates times ``factor`` are input pixels).
+
+        The one size check of a camera against the frames: a camera of the input size is
+        reduced, a camera already of the working size is returned as it is.
+
+        Raises
+        ------
+        ValueError
+            A camera of neither size (a calibration made for another video), or a bad factor.
+        """
+        if isinstance(factor, bool) or not isinstance(factor, (int, np.integer)) or factor < 1:
+            raise ValueError(f"the working factor must be a positive integer, got {factor!r}")
+        work = (input_height // factor, input_width // factor)
+        if self.shape == work:
+            return self
+        if self.shape == (input_height, input_width):
+            return Camera(work[1], work[0], self.fx / factor, self.fy / factor, self.cx / factor, self.cy / factor)
+        raise ValueError(f"frames are {input_width}x{input_height} (working size {work[1]}x{work[0]}) but the "
+                         f"camera is {self.width}x{self.height}: calibrate for this video (python -m mocap calibrate)")
+
+    def enlarged(self, factor: int, input_width: int, input_height: int) -> "Camera":
+        """The inverse of :meth:`working`: this working-resolution camera at the input size
+        ``input_width`` x ``input_height`` (intrinsics times ``factor``)."""
+        if self.working(input_width, input_height, factor) is not self:
+            raise ValueError(f"a {self.width}x{self.height} camera is not the working camera of "
+                             f"{input_width}x{input_height} frames reduced {factor}x")
+        return Camera(input_width, input_height, self.fx * factor, self.fy * factor, self.cx * factor,
+                      self.cy * factor)
+
     def intrinsics(self) -> np.ndarray:
         """The 3x3 intrinsic matrix K, float64, pixels."""
         return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])

@@ -1,0 +1,105 @@
+"""One entry point for "track my own video": the CLI, ``bench`` and ``experiments.peers`` all
+call :func:`mocap.own_video.track_own_video` (none calls the CLI's ``main``); its options are a
+JSON record; ``Camera.working`` is the one reduction to the working resolution."""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+from mocap.own_video import OwnVideoOptions
+from mocap.render import Camera
+from mocap.track import TrackerConfig
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+class _Called(Exception):
+    pass
+
+
+@pytest.fixture
+def recorder(monkeypatch):
+    """``track_own_video`` replaced by one that records its arguments and stops the caller."""
+    import mocap.own_video
+
+    calls = []
+
+    def record(source, out_dir, options=None, *, progress=True, on_setup=None):
+        calls.append((source, Path(out_dir), options))
+        raise _Called
+
+    monkeypatch.setattr(mocap.own_video, "track_own_video", record)
+    return calls
+
+
+def test_cli_track_calls_the_library_with_its_options(recorder, tmp_path):
+    from mocap.cli import main
+
+    video = tmp_path / "clip.mp4"
+    video.touch()
+    with pytest.raises(_Called):
+        main(["track", str(video), "--out", str(tmp_path / "run"), "--hfov", "70", "--height", "1.6",
+              "--max-frames", "5", "--no-overlay", "--iterations", "123", "--start", "2", "--no-background"])
+    (source, out, options), = recorder
+    assert Path(source) == video and out == tmp_path / "run"
+    assert options == OwnVideoOptions(hfov_deg=70.0, height_m=1.6, max_frames=5, overlay=False, start=2,
+                                      no_background=True, tracker=TrackerConfig(evaluations=123))
+
+
+def test_bench_video_stage_calls_the_library(recorder):
+    from mocap.bench import video_rows
+
+    with pytest.raises(_Called):
+        video_rows(frames=1)
+    (source, out, options), = recorder
+    assert str(source).endswith(".mp4") and options.max_frames == 2 and options.background is not None
+
+
+def test_peers_experiment_calls_the_library(recorder, tmp_path):
+    from experiments.peers import _track
+
+    with pytest.raises(_Called):
+        _track(tmp_path / "clip.mp4", tmp_path / "run", overlay=False)
+    (source, out, options), = recorder
+    assert options == OwnVideoOptions(overlay=False, overwrite=True)
+
+
+def test_no_library_or_experiment_module_calls_the_cli():
+    offenders = []
+    for folder in ("mocap", "experiments"):
+        for path in (ROOT / folder).glob("**/*.py"):
+            if path.parts[-2] == "commands" or path.name in ("cli.py", "__main__.py"):
+                continue
+            tree = ast.parse(path.read_text(), str(path))
+            for node in ast.walk(tree):
+                if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith(("mocap.cli",
+                                                                                                 "mocap.commands")):
+                    offenders.append(f"{path.relative_to(ROOT)}:{node.lineno}")
+    assert offenders == []
+
+
+def test_options_round_trip_through_json(tmp_path):
+    options = OwnVideoOptions(background_frames=(0, 10), hfov_deg=75.0, max_frames=3, calibration=Path("c.json"),
+                              tracker=TrackerConfig(evaluations=200, beam=1))
+    assert options.calibration == "c.json"
+    options.to_json(tmp_path / "options.json")
+    assert OwnVideoOptions.from_json(tmp_path / "options.json") == options
+    with pytest.raises(ValueError, match="unknown OwnVideoOptions option"):
+        OwnVideoOptions.from_dict({"hfvo_deg": 70})
+    with pytest.raises(ValueError, match="one of background"):
+        OwnVideoOptions(background="bg.png", no_background=True)
+    with pytest.raises(ValueError, match="max_frames"):
+        OwnVideoOptions(max_frames=0)
+
+
+def test_camera_working_reduces_once_with_one_size_check():
+    full = Camera(642, 481, 500.0, 510.0, 321.0, 240.5)
+    work = full.working(642, 481, 4)
+    # hand-computed: floor sizes of the reduced image, intrinsics divided by the factor
+    assert (work.width, work.height, work.fx, work.fy, work.cx, work.cy) == (160, 120, 125.0, 127.5, 80.25, 60.125)
+    assert work.working(642, 481, 4) is work                 # already at the working size
+    assert work.enlarged(4, 642, 481) == Camera(642, 481, 500.0, 510.0, 321.0, 240.5)
+    with pytest.raises(ValueError, match="calibrate for this video"):
+        Camera(320, 240, 300.0, 300.0, 160.0, 120.0).working(642, 481, 4)
