@@ -382,6 +382,10 @@ class OwnVideoOptions(JsonConfig):
         Show the overlay live in a window.
     overwrite : bool
         Start afresh instead of resuming a run in the output folder.
+    keypoints : str or None
+        2D keypoints: ``"mediapipe"`` (MediaPipe Pose, the optional extra ``keypoints``) or a
+        keypoint file (:mod:`mocap.io.keypoints`); the tracker adds them as a cue
+        (``tracker.keypoint_weight``).
     tracker : TrackerConfig
     """
 
@@ -400,10 +404,11 @@ class OwnVideoOptions(JsonConfig):
     overlay: bool = True
     show: bool = False
     overwrite: bool = False
+    keypoints: str | None = None
     tracker: TrackerConfig = field(default_factory=TrackerConfig)
 
     def __post_init__(self) -> None:
-        for key in ("background", "calibration", "ground_truth"):
+        for key in ("background", "calibration", "ground_truth", "keypoints"):
             value = getattr(self, key)
             if isinstance(value, Path):
                 object.__setattr__(self, key, str(value))
@@ -424,6 +429,8 @@ class OwnVideoOptions(JsonConfig):
             raise ValueError(f"the start frame must be a non-negative integer, got {self.start!r}")
         if self.max_frames is not None and self.max_frames < 1:
             raise ValueError(f"max_frames must be at least 1, got {self.max_frames}")
+        if self.keypoints is not None and self.keypoints != "mediapipe" and not Path(self.keypoints).is_file():
+            raise FileNotFoundError(f"keypoint file not found: {self.keypoints} (or give --keypoints mediapipe)")
         if self.work_width is not None and self.work_width < 16:
             raise ValueError(f"the working width must be at least 16 pixels, got {self.work_width}")
 
@@ -435,6 +442,19 @@ class OwnVideoOptions(JsonConfig):
         if self.background_frames is not None:
             return "frames"
         return "none" if self.no_background else "auto"
+
+
+def keypoint_source(name: str | None):
+    """The :class:`~mocap.io.keypoints.KeypointSource` of ``OwnVideoOptions.keypoints``: None,
+    MediaPipe Pose for ``"mediapipe"`` (ValueError in one line without the extra), else a
+    keypoint file (FileNotFoundError, ValueError naming the line of a malformed one)."""
+    if name is None:
+        return None
+    if name == "mediapipe":
+        from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
+        return MediaPipeKeypoints()
+    from mocap.io.keypoints import KeypointFile
+    return KeypointFile(name)
 
 
 def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *, progress: bool = True,
@@ -473,6 +493,7 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
     from mocap.io.video import read_image
 
     options = OwnVideoOptions() if options is None else options
+    keypoints = keypoint_source(options.keypoints)          # a bad keypoint file stops the run first
     live = bool(getattr(source, "live", False))
     if live:
         if options.background_frames is not None:
@@ -514,6 +535,6 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
     summary = track_video(frames_in, setup, out_dir, options.tracker, ground_truth=ground_truth, fps=fps,
                           max_frames=options.max_frames, overwrite=options.overwrite, progress=progress,
                           write_overlay=options.overlay, allow_damaged=options.allow_damaged,
-                          start_frame=options.start, show=options.show)
+                          start_frame=options.start, show=options.show, keypoints=keypoints)
     summary.setup = account
     return summary

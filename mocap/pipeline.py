@@ -105,7 +105,8 @@ def _settings(source: str, background: Path | None, calibration: Calibration, co
 def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerConfig | None = None, *,
                 ground_truth: str | Path | None = None, fps: float = 25.0, max_frames: int | None = None,
                 overwrite: bool = False, progress: bool = True, write_overlay: bool = True,
-                allow_damaged: bool = False, start_frame: int = 0, show: bool = False) -> RunSummary:
+                allow_damaged: bool = False, start_frame: int = 0, show: bool = False,
+                keypoints=None) -> RunSummary:
     """Track every frame of a video or image folder and write the outputs.
 
     Parameters
@@ -142,6 +143,10 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
         silhouette, or where a face is detected (``run.json``: ``colour_model_frame``).
     show : bool
         Show the overlay live in a window (needs a display).
+    keypoints : KeypointSource, optional
+        2D keypoints of each frame (:mod:`mocap.io.keypoints`: a file, MediaPipe), asked on the
+        input-resolution frame and given to the tracker in working pixels (``config``'s
+        ``keypoint_weight``); ``run.json`` records the source and its time per frame.
 
     Returns
     -------
@@ -201,6 +206,9 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
     if setup.record is not None:
         settings["own_video"] = setup.record
     settings["start_frame"] = start_frame
+    if keypoints is not None:
+        settings["keypoints"] = getattr(keypoints, "description", type(keypoints).__name__)
+    to_working = (camera.width / frames_in.width, camera.height / frames_in.height)
     out_dir.mkdir(parents=True, exist_ok=True)
     journal, run_json = out_dir / "poses.csv", out_dir / "run.json"
     checkpoint = _previous_run(journal, run_json, settings, overwrite)
@@ -252,8 +260,9 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
             # a live source's frame time is when it came; a file's its own timestamp
             when = time.perf_counter() - clock if frames_in.live else frames_in.time_s(index)
             small = downscale(frame, work_factor)
+            found = None if keypoints is None else keypoints.keypoints(index, frame).scaled(*to_working)
             yield index, when, bool(small.mean() < DARK_MEAN), small, \
-                prepare_frame(small, bg_image, colour_model, imaging, scene=setup.scene)
+                prepare_frame(small, bg_image, colour_model, imaging, scene=setup.scene), found
 
     times: dict[int, float] = {}         # a live source's frame times, until the frames are decided
 
@@ -269,13 +278,13 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
                             D=f"{result.edge_residual:.1f}")
 
     try:
-        for index, when, is_dark, small, prepared in prefetch(read, READ_AHEAD, name="mocap-reader"):
+        for index, when, is_dark, small, prepared, found in prefetch(read, READ_AHEAD, name="mocap-reader"):
             dark[index] = is_dark
             if frames_in.live:
                 times[index] = when
             if live is not None:
                 pending[index] = small
-            emit(tracker.push(index, prepared))
+            emit(tracker.push(index, prepared, found))
             if (index + 1) % every == 0 or index + 1 == total:
                 write_checkpoint(state_path, {**tracker.state(), PENDING_DARK: np.array(sorted(dark.items()),
                                                                                          np.int64).reshape(-1, 2)},
@@ -300,9 +309,14 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
     redraw = write_overlay and not overlay_now
     overlay_frames = ((i, downscale(f, work_factor)) for i, f in
                       enumerate(frames_in.frames(0, int(table.frames.max()) + 1))) if redraw else None
-    return finish_run(out_dir, table, settings, calibration=calibration, camera=camera, ground_truth=gt, fps=fps,
-                      start=start, wall_s=time.perf_counter() - started, damaged=damaged, colour_frame=colour_frame,
-                      overlay_frames=overlay_frames, model=model)
+    summary = finish_run(out_dir, table, settings, calibration=calibration, camera=camera, ground_truth=gt, fps=fps,
+                         start=start, wall_s=time.perf_counter() - started, damaged=damaged,
+                         colour_frame=colour_frame, overlay_frames=overlay_frames, model=model)
+    detector_ms = getattr(keypoints, "milliseconds", None)
+    if detector_ms:         # the detector's own time per frame, beside the tracker's ms_total
+        from mocap.io.jsonfile import read_json, write_json
+        write_json(run_json, {**read_json(run_json), "keypoints_ms_per_frame": float(np.median(detector_ms))})
+    return summary
 
 
 #: Fraction of the calibrated model's silhouette (pixels) the foreground must cover for a frame to

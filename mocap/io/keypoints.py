@@ -141,6 +141,7 @@ class KeypointFile:
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
         self.frames = read_keypoints(self.path)
+        self.description = f"file {self.path.resolve()}"
 
     def keypoints(self, frame_index: int, image: np.ndarray | None = None) -> Keypoints:
         return self.frames.get(int(frame_index)) or Keypoints.empty()

@@ -54,8 +54,11 @@ class MediaPipeKeypoints:
             from mediapipe.python.solutions import pose as mp_pose
         except ImportError:
             raise ValueError(MISSING_EXTRA) from None
+        from mediapipe import __version__
+
         self._pose = mp_pose.Pose(static_image_mode=False, model_complexity=1)
         self.milliseconds: list[float] = []
+        self.description = f"mediapipe {__version__} pose, model complexity 1"
 
     def keypoints(self, frame_index: int, image: np.ndarray | None) -> Keypoints:
         """Keypoints of one frame.
