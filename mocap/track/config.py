@@ -69,7 +69,9 @@ class TrackerConfig(JsonConfig):
         further hypothesis.
     reacquisition_distance_px : float, pixels
         A skin region (of at least :data:`MIN_SKIN_BLOB_PIXELS`) whose centroid is farther than
-        this from both projected hands triggers it.
+        this from both projected hands triggers it; likewise an arm (or the shoulders) whose
+        projected joints are on average this far from their 2D keypoints triggers the keypoint
+        proposals (:class:`mocap.track.proposals.KeypointArmSource`).
     beam : int
         Hypotheses kept per frame (1: a single-hypothesis tracker, as the paper's).
     hypothesis_evaluations : int

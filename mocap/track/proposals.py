@@ -374,8 +374,14 @@ def torso_on_shoulders(pose: np.ndarray, model: BodyModel, camera: Camera, r_sho
     return placed(float(best.x) if miss(float(best.x)) < miss(start) else start)
 
 
+@dataclass(frozen=True)
 class KeypointArmSource:
     """Proposals from 2D keypoints: each arm on every depth branch, the torso on the shoulders.
+
+    Only where the leader has lost its keypoints: an arm whose projected elbow and wrist are on
+    average within ``min_offset_px`` of their keypoints, or shoulders within it of theirs, is
+    not re-posed (every depth branch fits the keypoints equally, so proposing them there only
+    offers the beam branches the keypoints cannot tell apart).
 
     For each arm whose elbow and wrist keypoints are present, every depth branch of
     :func:`mocap.body.jumps.arm_poses_on_rays` from the leader's torso that lies inside the
@@ -388,7 +394,8 @@ class KeypointArmSource:
     registration covers them; the tracker refines the lowest-F of the rest).
     """
 
-    origin = "keypoints"
+    min_offset_px: float = 6.0
+    origin: str = "keypoints"
 
     def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
         k = context.keypoints
@@ -397,13 +404,22 @@ class KeypointArmSource:
         model, camera = context.model, context.camera
         present = np.asarray(k.confidence) > 0
         leader = np.asarray(context.leader, dtype=np.float64)
+        lead_joints = model.joint_positions(leader)
+        if np.any(lead_joints[:, 2] <= 0):
+            return []                                   # (a joint at or behind the camera projects nowhere)
+        offset = np.linalg.norm(camera.project(lead_joints) - k.uv, axis=1)          # NaN where absent
+
+        def lost(rows) -> bool:
+            rows = [r for r in rows if present[r]]
+            return bool(rows) and float(np.mean(offset[rows])) >= self.min_offset_px
+
         out = []
         for side in SIDES:
-            out += self._arm_branches(leader, side, k, present, model, camera)
+            if lost([JOINT_INDEX[f"{side}_elbow"], JOINT_INDEX[f"{side}_wrist"]]):
+                out += self._arm_branches(leader, side, k, present, model, camera)
         r_s, l_s = JOINT_INDEX["r_shoulder"], JOINT_INDEX["l_shoulder"]
-        if present[r_s] and present[l_s] and np.all(model.joint_positions(leader)[[r_s, l_s], 2] > 0):
+        if present[r_s] and present[l_s] and lost([r_s, l_s]):
             torso = torso_on_shoulders(leader, model, camera, k.uv[r_s], k.uv[l_s])
-            lead_joints = model.joint_positions(leader)
             for side in SIDES:
                 branches = self._arm_branches(torso, side, k, present, model, camera)
                 if branches:
@@ -413,7 +429,6 @@ class KeypointArmSource:
                     arm = [PARAMETER_INDEX[n] for n in PARAMETER_NAMES if n.startswith(f"{side}_")]
                     torso[arm] = best[arm]
             out.append(torso)
-        lead_joints = model.joint_positions(leader)
         return [Proposal(q, self.origin) for q in out
                 if np.linalg.norm(model.joint_positions(q) - lead_joints, axis=1).mean() >= MERGE_DISTANCE_M]
 

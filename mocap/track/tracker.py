@@ -378,7 +378,7 @@ def proposal_sources(config: TrackerConfig) -> list[ProposalSource]:
     keypoint source with ``keypoint_weight`` > 0: it proposes nothing on frames without keypoints)."""
     sources: list[ProposalSource] = []
     if config.keypoint_weight > 0:
-        sources.append(KeypointArmSource())
+        sources.append(KeypointArmSource(min_offset_px=config.reacquisition_distance_px))
     if config.blob_arms:
         sources.append(BlobArmSource(min_pixels=MIN_SKIN_BLOB_PIXELS))
     if config.exemplars:
