@@ -165,7 +165,7 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
                     hfov_deg: float = DEFAULT_HFOV_DEG, height_m: float | None = None,
                     imaging: ImagingConfig | None = None, auto: AutoCalibrationConfig | None = None,
                     sample_frames: int = 60, sample_limit: int = 1500, search_frames: int = 90,
-                    progress: bool = True) -> tuple[RunSetup, list[np.ndarray]]:
+                    progress: bool = True, keypoints=None) -> tuple[RunSetup, list[np.ndarray]]:
     """Background and calibration of a video of a person, found from the video itself.
 
     Parameters
@@ -199,6 +199,11 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
         input-size frame of a file); ``--background-frames A:B`` likewise.
     search_frames : int
         Calibration looks at most this many frames into the video for a usable frame.
+    progress : bool
+        Progress bars.
+    keypoints : KeypointSource, optional
+        2D keypoints (:mod:`mocap.io.keypoints`): the calibration frame's pull the fitted model's
+        joints onto them (:func:`mocap.calibrate.calibrate_person`).
 
     Returns
     -------
@@ -273,6 +278,14 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
     # 2. background (at the working resolution now settled), from frames reduced as they are read
     camera = working_camera(source.width, source.height, factor, hfov_deg)
     face_frame = downscale(face_frame_full, factor) if face is not None else None
+
+    def keypoints_of(index: int, full: np.ndarray):
+        """The calibration frame's keypoints in working pixels (None without a source)."""
+        if keypoints is None:
+            return None
+        return keypoints.keypoints(index, full).scaled(camera.width / source.width, camera.height / source.height)
+
+    face_keypoints = keypoints_of(calib_index, face_frame_full) if face is not None else None
     del face_frame_full
     background = None
     if background_mode == "image":
@@ -317,7 +330,7 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
 
     if face is not None:
         person = calibrate_person(face_frame, camera, background=background, face=face, height_m=height_m,
-                                  imaging=imaging, config=auto)
+                                  imaging=imaging, config=auto, keypoints=face_keypoints)
     else:
         if background is None:
             raise ValueError(f"no face found in the first {searched.stop} frames and no background to find the "
@@ -329,7 +342,7 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
                 continue
             try:
                 person = calibrate_person(frame, camera, background=background, height_m=height_m,
-                                          imaging=imaging, config=auto)
+                                          imaging=imaging, config=auto, keypoints=keypoints_of(index, full))
             except ValueError:
                 continue            # a person too small or cut off for every colour class: the next frame
             calib_index = index
@@ -521,7 +534,7 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
         frames_in, factor, background_mode=options.background_mode(seq_background is not None),
         background_image=read_image(background) if background else None,
         background_frames=options.background_frames, calibration=given, hfov_deg=options.hfov_deg,
-        height_m=options.height_m, progress=progress)
+        height_m=options.height_m, progress=progress, keypoints=keypoints)
     if live:
         frames_in.hold(consumed)
     setup = dataclasses.replace(setup, colour_from=options.colour,
