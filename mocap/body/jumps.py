@@ -187,16 +187,43 @@ def arm_jumps(pose, skeleton: Skeleton, side: str) -> dict[str, np.ndarray]:
 _MIRRORED_SIGNS = ("chest_roll", "head_tilt", "head_turn")
 
 
+def turned_mirror(pose) -> np.ndarray:
+    """The torso's front/back mirror without re-posing: the body reflected through the plane
+    facing the camera at its root (its silhouette under an orthographic camera is unchanged).
+
+    The chest heading ``yaw`` becomes ``pi - yaw`` (or ``-pi - yaw``, whichever is nearer); the
+    sideways lean and the head's tilt and turn change sign; each arm takes the other arm's angles.
+
+    Parameters
+    ----------
+    pose : array_like, shape (23,)
+
+    Returns
+    -------
+    ndarray, shape (23,), float64
+        Inside the joint limits.
+    """
+    q = check_pose(pose)
+    out = q.copy()
+    yaw = q[PARAMETER_INDEX["chest_yaw"]]
+    out[PARAMETER_INDEX["chest_yaw"]] = min((math.pi - yaw, -math.pi - yaw), key=lambda y: abs(y - yaw))
+    for name in _MIRRORED_SIGNS:
+        out[PARAMETER_INDEX[name]] = -q[PARAMETER_INDEX[name]]
+    for name, i in PARAMETER_INDEX.items():
+        if name.startswith("r_"):
+            j = PARAMETER_INDEX["l_" + name[2:]]
+            out[i], out[j] = q[j], q[i]
+    return clamp_to_limits(out)
+
+
 def torso_flip(pose, skeleton: Skeleton) -> np.ndarray:
     """The torso's front/back mirror: the heading seen the other way round, arms re-posed.
 
-    The chest heading ``yaw`` becomes ``pi - yaw`` (or ``-pi - yaw``, whichever is nearer, within
-    the limits); the sideways lean and the head's tilt and turn change sign; each arm takes the
-    other arm's angles (the mirrored body's right arm stands where the left one was) and is then
-    re-posed (:func:`mocap.body.ik.reach_arm`) towards the camera ray of the hand it replaces, at
-    the depth the mirrored body gives it, when that brings the hand nearer. Under a pinhole camera
-    a turned torso is not the mirror image of the original, so unlike the arm jumps this one
-    keeps the projections only approximately (to a pixel or two at 160x120).
+    :func:`turned_mirror`, then each arm is re-posed (:func:`mocap.body.ik.reach_arm`) towards
+    the camera ray of the hand it replaces, at the depth the mirrored body gives it, when that
+    brings the hand nearer. Under a pinhole camera a turned torso is not the mirror image of the
+    original, so unlike the arm jumps this one keeps the projections only approximately (to a
+    pixel or two at 160x120).
 
     Parameters
     ----------
@@ -210,16 +237,7 @@ def torso_flip(pose, skeleton: Skeleton) -> np.ndarray:
     """
     q = check_pose(pose)
     old_hands = {side: joint_positions(q, skeleton)[JOINT_INDEX[f"{side}_hand"]] for side in SIDES}
-    out = q.copy()
-    yaw = q[PARAMETER_INDEX["chest_yaw"]]
-    out[PARAMETER_INDEX["chest_yaw"]] = min((math.pi - yaw, -math.pi - yaw), key=lambda y: abs(y - yaw))
-    for name in _MIRRORED_SIGNS:
-        out[PARAMETER_INDEX[name]] = -q[PARAMETER_INDEX[name]]
-    for name, i in PARAMETER_INDEX.items():
-        if name.startswith("r_"):
-            j = PARAMETER_INDEX["l_" + name[2:]]
-            out[i], out[j] = q[j], q[i]
-    out = clamp_to_limits(out)
+    out = turned_mirror(q)
     mirrored_hands = joint_positions(out, skeleton)
     for side, other in (("r", "l"), ("l", "r")):
         hand = JOINT_INDEX[f"{side}_hand"]

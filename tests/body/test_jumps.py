@@ -100,3 +100,21 @@ def test_torso_flip_turns_the_chest_round_and_keeps_the_hands_on_their_rays():
     assert np.linalg.norm(after[rs] - before[ls]) < 1.5 and np.linalg.norm(after[ls] - before[rs]) < 1.5
     twice = torso_flip(flipped, SKELETON)
     assert twice[P["chest_yaw"]] == pytest.approx(q[P["chest_yaw"]])
+
+
+def test_turned_mirror_reflects_the_body_through_the_plane_facing_the_camera():
+    """Every joint of the turned mirror is the original's reflection z -> 2 z_root - z (the
+    joints of the other side), so a far camera sees the same silhouette."""
+    from mocap.body.jumps import turned_mirror
+
+    rng = np.random.default_rng(3)
+    swap = [JOINT_NAMES.index(n.replace("r_", "l_") if n.startswith("r_") else n.replace("l_", "r_"))
+            for n in JOINT_NAMES]
+    for _ in range(10):
+        q = random_pose(rng)
+        q[P["chest_roll"]], q[P["head_turn"]] = rng.uniform(-0.3, 0.3, 2)
+        turned = turned_mirror(q)
+        a, b = MODEL.joint_positions(q), MODEL.joint_positions(turned)[swap]
+        root_z = q[P["root_z"]]
+        np.testing.assert_allclose(b, a * [1, 1, -1] + [0, 0, 2 * root_z], atol=1e-9)
+        np.testing.assert_allclose(turned_mirror(turned), q, atol=1e-12)
