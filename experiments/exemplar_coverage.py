@@ -7,8 +7,11 @@ proposals (the M/2 nearest exemplars, each followed by its turn) is within 100 m
 joints about the neck (:func:`mocap.metrics.root_relative_mpjpe`: the posture, wherever the
 placement puts the root). The leading pose handed to the source is the true one (the source
 reads only its depth and heading, which do not change the posture). Also reported: the share
-caught by the exemplars alone (without their turns), and the time of one query (descriptor,
-PCA and neighbour search) and of the whole ``propose`` (with the placements), per frame.
+caught by the exemplars alone (without their turns), the share when the turns are re-posed
+towards the hands' camera rays (:func:`mocap.body.jumps.torso_flip`, 6 ms each, instead of the
+source's :func:`~mocap.body.jumps.turned_mirror`), and the time of one query (descriptor, PCA
+and neighbour search) and of the whole ``propose`` (with the placements), per frame (medians).
+About 10 minutes on one core (the re-posed turns take most of it).
 
 The generated sequences are kept under ``--out`` (default
 ``experiments/results/exemplar_coverage``) and reused.

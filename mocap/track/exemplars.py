@@ -9,7 +9,7 @@ image is described the same way; the exemplars nearest to it (scikit-learn's
 (:func:`mocap.body.jumps.turned_mirror`: the silhouette hardly tells front from back) are the
 proposals, at the leading hypothesis's depth and moved sideways and up or down so that their
 silhouette sits on the frame's foreground
-(:func:`mocap.track.proposals.place_by_silhouette`).
+(:func:`mocap.track.proposals.place_by_silhouette`; a turn keeps its exemplar's root).
 
 The database is built by ``python -m experiments.fit_proposer`` and shipped as
 ``mocap/track/exemplars.npz`` (float16 arrays, the data's attribution, a SHA-256 checksum of
@@ -108,11 +108,16 @@ class ExemplarSource:
             value.setflags(write=False)
             object.__setattr__(self, name, value)
         from sklearn.neighbors import NearestNeighbors
+        from threadpoolctl import ThreadpoolController
 
         object.__setattr__(self, "_mean", arrays["mean"].astype(np.float32))
         object.__setattr__(self, "_axes", np.ascontiguousarray(arrays["components"].astype(np.float32).T))
         object.__setattr__(self, "_index", NearestNeighbors(algorithm="brute").fit(
             arrays["projected"].astype(np.float32)))
+        # one thread: scikit-learn's brute-force search runs on OpenMP threads, which spin-wait on a
+        # busy machine (a query took 0.25-0.4 s instead of milliseconds with the other core loaded);
+        # the controller is made once (threadpool_limits() looks for the libraries at every call)
+        object.__setattr__(self, "_threads", ThreadpoolController())
 
     @classmethod
     def from_descriptors(cls, poses, descriptors, mean, components, attribution: str = "",
@@ -170,13 +175,10 @@ class ExemplarSource:
         -------
         ndarray of int64, shape (k,)
         """
-        from threadpoolctl import threadpool_limits
-
         k = self.neighbours if k is None else int(k)
-        # one thread: scikit-learn's brute-force search runs on OpenMP threads, which spin-wait on a
-        # busy machine (a query took 0.4 s instead of milliseconds with the other core loaded)
-        with threadpool_limits(1, user_api="openmp"):
-            _, rows = self._index.kneighbors(self.describe(labels, class_names)[None], n_neighbors=k)
+        query = self.describe(labels, class_names)[None]
+        with self._threads.limit(limits=1, user_api="openmp"):     # the controller found at load
+            _, rows = self._index.kneighbors(query, n_neighbors=k)
         return rows[0]
 
     def propose(self, prepared: PreparedFrame, context) -> list:
@@ -207,10 +209,10 @@ class ExemplarSource:
             pose[z] = leader[z]
             # the heading nearest the leader's (the tracker's chest yaw runs over several turns)
             pose[yaw] = leader[yaw] + (pose[yaw] - leader[yaw] + np.pi) % (2.0 * np.pi) - np.pi
-            for q in (pose, turned_mirror(pose)):
-                q = np.clip(q, JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1])
-                out.append(Proposal(place_by_silhouette(q, prepared.foreground, context.model, context.camera),
-                                    self.origin))
+            placed = place_by_silhouette(np.clip(pose, JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1]), prepared.foreground,
+                                         context.model, context.camera)
+            # the turn keeps the root and (but for perspective) the silhouette: no placement of its own
+            out += [Proposal(placed, self.origin), Proposal(turned_mirror(placed), self.origin)]
         return out
 
     def save(self, path: str | Path) -> str:
