@@ -1,12 +1,11 @@
 """``python -m experiments.peers``: this tracker and MediaPipe Pose side by side.
 
-MediaPipe is what a user with their own video would otherwise pick. It is an optional extra
-(``pip install -e .[peers]``: ``mediapipe==0.10.14``, the last release whose wheel bundles
-the BlazePose models, so it runs offline); install it in a separate virtual environment so
-that the project's numpy/numba stay as they are::
+MediaPipe is what a user with their own video would otherwise pick. It is the optional extra
+``keypoints`` (``pip install -e .[keypoints]``: ``mediapipe==0.10.14``, the last release whose
+wheel bundles the BlazePose models, so it runs offline; it works with the project's numpy 2.4,
+and the test extra includes it)::
 
-    python -m venv ../venv-peers && ../venv-peers/bin/pip install -e .[peers]
-    ../venv-peers/bin/python -m experiments.peers --out experiments/peers
+    python -m experiments.peers --out experiments/peers
 
 Two comparisons, on the same frames:
 
