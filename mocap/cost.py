@@ -470,11 +470,6 @@ class KeypointCost:
         return KeypointKernelArgs(self.model.skeleton.offsets, self._segment, self._local, self._uv, self._weight,
                                   self._camera, self._transforms, self.behind_penalty)
 
-    @classmethod
-    def nothing(cls, model: BodyModel, camera: Camera) -> "KeypointCost":
-        """The cost of no keypoint at all (0 everywhere): a placeholder for compiled loops."""
-        return cls(np.full((len(JOINT_NAMES), 2), np.nan), np.zeros(len(JOINT_NAMES)), model, camera)
-
 
 def non_overlapping_ratio(target_labels: np.ndarray, model_labels: np.ndarray, n_classes: int, *,
                           ignore_unknown: bool = True) -> float:

@@ -181,8 +181,8 @@ def _nm_run_costs(kind, region_args, edge_args, keypoint_args, keypoint_weight, 
         _nm_tell(simplex, values, lower, upper, coef, work, ist, fst, f)
 
 
-from mocap.cost import (EdgeKernelArgs, RegionKernelArgs, edge_cost_kernel,  # noqa: E402  (compiled into the loop above)
-                        keypoint_cost_kernel, region_cost_kernel)
+from mocap.cost import (EdgeKernelArgs, KeypointKernelArgs, RegionKernelArgs,  # noqa: E402  (compiled into the loop above)
+                        edge_cost_kernel, keypoint_cost_kernel, region_cost_kernel)
 
 
 # ----------------------------------------------------------------------------- public API
@@ -376,12 +376,13 @@ def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-
         raise ValueError(f"mocap costs take {N_PARAMETERS} parameters: the simplex has {st.simplex.shape[1]} columns")
     if not (np.isfinite(keypoint_weight) and keypoint_weight >= 0):
         raise ValueError(f"keypoint_weight must be finite and non-negative, got {keypoint_weight!r}")
-    if keypoint_cost is None or keypoint_cost.empty:
-        keypoint_cost, keypoint_weight = KeypointCost.nothing(cost.model, cost.camera), 0.0
+    if keypoint_cost is None or (isinstance(keypoint_cost, KeypointCost) and keypoint_cost.empty):
+        keypoint_args, keypoint_weight = _DummyArgs.keypoint(cost), 0.0
     elif not isinstance(keypoint_cost, KeypointCost):
         raise ValueError(f"keypoint_cost must be a KeypointCost, got {type(keypoint_cost).__name__}")
-    _nm_run_costs(kind, region_args, edge_args, keypoint_cost.kernel_args(), float(keypoint_weight), *st.args(),
-                  budget)
+    else:
+        keypoint_args = keypoint_cost.kernel_args()
+    _nm_run_costs(kind, region_args, edge_args, keypoint_args, float(keypoint_weight), *st.args(), budget)
     return st.result()
 
 
@@ -393,6 +394,13 @@ class _DummyArgs:
         args = cost.kernel_args()
         return RegionKernelArgs(args.scene, args.buffers, np.zeros(0, np.uint8), np.zeros(1, np.int64), 0,
                                 np.zeros(1, np.int64), np.zeros(1, np.int64), True)
+
+    @staticmethod
+    def keypoint(cost) -> KeypointKernelArgs:
+        """No keypoint (the loop never evaluates it: its weight is 0); arrays of the real one's types."""
+        scene = cost.kernel_args().scene
+        return KeypointKernelArgs(scene.offsets, np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 2)),
+                                  np.zeros(0), scene.camera, np.zeros((len(scene.offsets), 3, 4)), 0.0)
 
     @staticmethod
     def edge(cost) -> EdgeKernelArgs:

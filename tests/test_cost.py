@@ -267,7 +267,7 @@ def test_keypoint_cost_is_zero_on_the_models_own_projections_and_grows_with_a_sh
 
 def test_keypoint_cost_without_keypoints_is_zero_and_joints_behind_the_camera_cost_the_diagonal():
     q = neutral_pose()
-    assert KeypointCost.nothing(MODEL, CAMERA)(q) == 0.0
+    assert KeypointCost(np.full((10, 2), np.nan), np.zeros(10), MODEL, CAMERA)(q) == 0.0
     behind = q.copy()
     behind[2] = -1.0
     uv = CAMERA.project(MODEL.joint_positions(q))
