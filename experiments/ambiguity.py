@@ -182,20 +182,25 @@ def lower_region_cost(forward: list, backward: list) -> list:
 
 
 def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two_way: bool = False,
-            without: tuple[str, ...] = ()) -> dict:
+            without: tuple[str, ...] = (), oracle_sigma_px: float | None = None) -> dict:
     """Track one benchmark sequence with ``config`` and measure its errors (see the module);
     ``without``: model extensions left out (:func:`experiments.units.load_sequence`; both: the
-    paper's two-class model)."""
+    paper's two-class model); ``oracle_sigma_px``: give the tracker the oracle keypoints of
+    :func:`experiments.keypoints.oracle_keypoints` with that noise (seeded by ``seed``)."""
+    from experiments.keypoints import oracle_keypoints
+
     loaded, prepared = _benchmark_sequence(sequence, root, seed, without)
     camera = loaded.calibration.camera
     tracker = Tracker(loaded.model, camera, config, loaded.calibration.initial_pose)
     truth_joints = loaded.ground_truth.joints
+    keypoints = ([None] * len(prepared) if oracle_sigma_px is None
+                 else oracle_keypoints(truth_joints[: len(prepared)], camera, oracle_sigma_px, seed))
     results, beam_best, proposal_best, other_best, seconds = [], [], [], [], 0.0
     proposal_origins = {source.origin for source in tracker.sources}
     error = lambda q, i: mpjpe(loaded.model.joint_positions(q)[None], truth_joints[i:i + 1])
     for i, frame in enumerate(prepared):      # track_prepared's loop, timed and with the beam looked at
         started = time.perf_counter()
-        results += tracker.push(i, frame)
+        results += tracker.push(i, frame, keypoints[i])
         seconds += time.perf_counter() - started
         beam_best.append(min(error(q, i) for q in tracker.hypotheses))
         candidates = tracker.candidates if not frame.is_empty else []

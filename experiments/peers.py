@@ -1,12 +1,11 @@
 """``python -m experiments.peers``: this tracker and MediaPipe Pose side by side.
 
-MediaPipe is what a user with their own video would otherwise pick. It is an optional extra
-(``pip install -e .[peers]``: ``mediapipe==0.10.14``, the last release whose wheel bundles
-the BlazePose models, so it runs offline); install it in a separate virtual environment so
-that the project's numpy/numba stay as they are::
+MediaPipe is what a user with their own video would otherwise pick. It is the optional extra
+``keypoints`` (``pip install -e .[keypoints]``: ``mediapipe==0.10.14``, the last release whose
+wheel bundles the BlazePose models, so it runs offline; it works with the project's numpy 2.4,
+and the test extra includes it)::
 
-    python -m venv ../venv-peers && ../venv-peers/bin/pip install -e .[peers]
-    ../venv-peers/bin/python -m experiments.peers --out experiments/peers
+    python -m experiments.peers --out experiments/peers
 
 Two comparisons, on the same frames:
 
@@ -19,6 +18,13 @@ Two comparisons, on the same frames:
   other option on the clips of ``../shared/data/video/``, and the share of our projected
   shoulders, elbows and wrists (``poses.csv``'s ``_u``/``_v``) within half of MediaPipe's
   shoulder width of its 2D landmarks (:func:`mocap.metrics.pck_2d`).
+
+With keypoints (issue 23), ours again given MediaPipe's 2D joints as a cue: on the real clips
+``python -m mocap track CLIP --keypoints mediapipe``, measured by the share of frames whose six
+arm joints are all within a quarter of MediaPipe's shoulder width of its 2D landmarks (and the
+failed frames where MediaPipe found the person); on the synthetic clips (too small for MediaPipe
+at their own size) a keypoint file of MediaPipe's 2D arm joints found on the enlarged frames
+(``--keypoints FILE``), measured by arm PA-MPJPE against MediaPipe's own 3D.
 
 Speed: our ``ms_total`` per frame (image side and registration, as ``run.json``) and
 MediaPipe's ``process`` time per frame, both wall-clock on this machine as loaded.
@@ -33,12 +39,13 @@ from pathlib import Path
 
 import numpy as np
 
+from mocap.io.mediapipe_keypoints import MEDIAPIPE_LANDMARKS
 from mocap.metrics import pa_mpjpe, pck_2d
 
 #: Joints compared (ours), in order.
 ARM_JOINTS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
 #: MediaPipe Pose landmark index of each of :data:`ARM_JOINTS` (its left/right are the person's).
-MEDIAPIPE_INDEX = {"r_shoulder": 12, "r_elbow": 14, "r_wrist": 16, "l_shoulder": 11, "l_elbow": 13, "l_wrist": 15}
+MEDIAPIPE_INDEX = {j: MEDIAPIPE_LANDMARKS[j][0] for j in ARM_JOINTS}
 #: Synthetic clips compared (the issue's four) and their length.
 SYNTHETIC = ("turning", "arms-crossing", "not-facing", "gestures-2")
 SYNTHETIC_FRAMES = 60
@@ -100,19 +107,44 @@ def run_mediapipe(frames, upscale: int = 1) -> dict:
     return {"uv": np.asarray(uv, float), "world": np.asarray(world, float), "ms": np.asarray(ms)}
 
 
-def _track(video: Path, out: Path, *, overlay: bool) -> "PoseTable":  # noqa: F821
-    """``python -m mocap track VIDEO`` with no other option (``--no-overlay`` unless ``overlay``),
-    through the library entry point the CLI calls."""
+def _track(video: Path, out: Path, *, overlay: bool, keypoints: str | None = None) -> "PoseTable":  # noqa: F821
+    """``python -m mocap track VIDEO`` with no other option (``--no-overlay`` unless ``overlay``;
+    ``--keypoints`` when given), through the library entry point the CLI calls."""
     from mocap.io.pose_table import PoseTable
     from mocap.own_video import OwnVideoOptions, track_own_video
 
-    track_own_video(video, out, OwnVideoOptions(overlay=overlay, overwrite=True))
+    track_own_video(video, out, OwnVideoOptions(overlay=overlay, overwrite=True, keypoints=keypoints))
     return PoseTable.read(out / "poses.csv")
 
 
 def ours_uv(table) -> np.ndarray:
     """Our projected arm joints (N, 6, 2) from a ``poses.csv`` table (input pixels)."""
     return np.stack([np.stack([table.extra[f"{j}_u"], table.extra[f"{j}_v"]], axis=1) for j in ARM_JOINTS], axis=1)
+
+
+def keypoint_file(uv: np.ndarray, path: Path) -> Path:
+    """Write MediaPipe's arm joints (N, 6, 2), input pixels, NaN where not found, as a keypoint
+    file (confidence 1) for ``--keypoints FILE``."""
+    from mocap.body.skeleton import JOINT_NAMES
+    from mocap.io.keypoints import Keypoints, write_keypoints
+
+    frames = {}
+    for i, frame_uv in enumerate(uv):
+        full = np.full((len(JOINT_NAMES), 2), np.nan)
+        full[arm_indices()] = frame_uv
+        frames[i] = Keypoints(full, np.where(np.isfinite(full).all(axis=1), 1.0, 0.0))
+    write_keypoints(path, frames)
+    return path
+
+
+def within_quarter(ours: np.ndarray, ref: np.ndarray) -> dict:
+    """PCK at a quarter of MediaPipe's shoulder width, and the share of frames (of those where
+    MediaPipe found the person) whose six arm joints are all that close."""
+    width = shoulder_width(ref)
+    found = np.isfinite(ref).all(axis=(1, 2))
+    close = np.linalg.norm(ours - ref, axis=2) < 0.25 * width[:, None]
+    return {"pck_quarter": pck_2d(ours, ref, width, 0.25),
+            "frames_all_within_quarter": float(close[found].all(axis=1).mean()) if found.any() else float("nan")}
 
 
 def synthetic_row(name: str, work: Path, seed: int) -> dict:
@@ -124,8 +156,11 @@ def synthetic_row(name: str, work: Path, seed: int) -> dict:
     table = _track(seq, work / f"{name}-run", overlay=False)
     truth = PoseTable.read(seq / "ground_truth.csv").joints[:, arm_indices()]
     mp = run_mediapipe(list(iter_frames(seq / "frames")), upscale=4)
+    keyed = _track(seq, work / f"{name}-keypoints-run", overlay=False,
+                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv")))
     return {"clip": name, "frames": len(table),
             "ours_pa_mpjpe_mm": arm_pa_mpjpe(table.joints[:, arm_indices()], truth),
+            "ours_keypoints_pa_mpjpe_mm": arm_pa_mpjpe(keyed.joints[:, arm_indices()], truth),
             "mediapipe_pa_mpjpe_mm": arm_pa_mpjpe(mp["world"], truth),
             "mediapipe_found": float(np.isfinite(mp["world"]).all(axis=(1, 2)).mean()),
             "ours_ms": float(np.median(table.extra["ms_total"][1:])), "mediapipe_ms": float(np.median(mp["ms"][1:]))}
@@ -150,7 +185,15 @@ def real_row(video: Path, work: Path, out: Path) -> dict:
     per_joint = {j: pck_2d(ours[:, [k]], ref[:, [k]], width) for k, j in enumerate(ARM_JOINTS)}
     run = json.loads((work / f"{video.stem}-run" / "run.json").read_text())
     _still(frames[n // 2], ours[n // 2], ref[n // 2], out / f"still_{video.stem}.png")
-    return {"clip": video.name, "frames": n, "pck": pck_2d(ours, ref, width), "pck_per_joint": per_joint,
+    keyed = _track(video, work / f"{video.stem}-keypoints-run", overlay=False, keypoints="mediapipe")
+    keyed_run = json.loads((work / f"{video.stem}-keypoints-run" / "run.json").read_text())
+    found = np.isfinite(ref).all(axis=(1, 2))
+    quarter = {f"ours_{k}": v for k, v in within_quarter(ours, ref).items()}
+    quarter |= {f"ours_keypoints_{k}": v for k, v in within_quarter(ours_uv(keyed)[:n], ref).items()}
+    return {"clip": video.name, "frames": n, "pck": pck_2d(ours, ref, width), "pck_per_joint": per_joint, **quarter,
+            "ours_keypoints_failed_where_found": float(keyed.extra["failed"][:n][found].mean()),
+            "ours_keypoints_ms": float(np.median(keyed.extra["ms_total"][1:])),
+            "ours_keypoints_detector_ms": keyed_run.get("keypoints_ms_per_frame", float("nan")),
             "mediapipe_found": float(np.isfinite(ref).all(axis=(1, 2)).mean()),
             "background": run["settings"]["own_video"]["background"]["mode"],
             "ours_ms": float(np.median(table.extra["ms_total"][1:])), "ours_fps_run": run["fps"],
@@ -191,6 +234,21 @@ def markdown(results: dict) -> str:
                             (("r_shoulder", "l_shoulder"), ("r_elbow", "l_elbow"), ("r_wrist", "l_wrist")))
         lines.append(f"| {r['clip']} | {r['frames']} | {r['background']} | **{100 * r['pck']:.1f} %** | {joints} | "
                      f"{r['ours_ms']:.1f} | {r['mediapipe_ms']:.1f} |")
+    keyed_synthetic = [r for r in results["synthetic"] if "ours_keypoints_pa_mpjpe_mm" in r]
+    keyed_real = [r for r in results["real"] if "ours_keypoints_frames_all_within_quarter" in r]
+    if keyed_synthetic:
+        lines += ["", "| synthetic clip, with MediaPipe's 2D as keypoints | ours PA-MPJPE arms (mm) | ratio to "
+                  "MediaPipe's 3D |", "|---|---|---|"]
+        lines += [f"| {r['clip']} | {r['ours_keypoints_pa_mpjpe_mm']:.0f} | "
+                  f"{r['ours_keypoints_pa_mpjpe_mm'] / r['mediapipe_pa_mpjpe_mm']:.2f} |" for r in keyed_synthetic]
+    if keyed_real:
+        lines += ["", "| real clip | frames with all six arm joints within 1/4 shoulder width of MediaPipe: ours | "
+                  "ours with `--keypoints mediapipe` | failed frames where MediaPipe found the person | "
+                  "ours with keypoints ms/frame | its MediaPipe ms/frame |", "|---|---|---|---|---|---|"]
+        lines += [f"| {r['clip']} | {100 * r['ours_frames_all_within_quarter']:.0f} % | "
+                  f"**{100 * r['ours_keypoints_frames_all_within_quarter']:.0f} %** | "
+                  f"{100 * r['ours_keypoints_failed_where_found']:.0f} % | {r['ours_keypoints_ms']:.1f} | "
+                  f"{r['ours_keypoints_detector_ms']:.1f} |" for r in keyed_real]
     return "\n".join(lines) + "\n"
 
 
@@ -240,7 +298,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         import mediapipe  # noqa: F401
     except ImportError:
-        print("error: mediapipe is not installed: pip install -e .[peers] (in a separate venv)")
+        print("error: mediapipe is not installed: pip install -e .[keypoints]")
         return 2
     work = args.work or args.out / "work"
     work.mkdir(parents=True, exist_ok=True)

@@ -56,10 +56,14 @@ CONFIGS = MappingProxyType({
     "both-P4": {"blob_arms": True, "exemplars": True, "proposals_refined": 4},
     "both-E50": {"blob_arms": True, "exemplars": True, "proposal_evaluations": 50},
     "both-E200": {"blob_arms": True, "exemplars": True, "proposal_evaluations": 200},
+    # the default tracker given the oracle's 2D keypoints (ORACLE_KEYPOINTS)
+    "oracle-keypoints": {},
 })
 #: Configurations tracked with the paper's two-class model (skin and clothes: no hair region, no
 #: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.
 TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
+#: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
+ORACLE_KEYPOINTS = MappingProxyType({"oracle-keypoints": 2.0})
 
 
 def config_of(name: str) -> TrackerConfig:
@@ -71,7 +75,8 @@ def config_of(name: str) -> TrackerConfig:
 def unit_path(out: Path, name: str, sequence: str, seed: int) -> Path:
     from experiments.ambiguity import config_key
     model = "-two-class" if name in TWO_CLASS_MODEL else ""
-    return out / "units" / f"{sequence}-s{seed}-{config_key(config_of(name))}{model}.json"
+    keypoints = f"-oracle{ORACLE_KEYPOINTS[name]:g}px" if name in ORACLE_KEYPOINTS else ""
+    return out / "units" / f"{sequence}-s{seed}-{config_key(config_of(name))}{model}{keypoints}.json"
 
 
 def run_unit(out: Path, name: str, sequence: str, seed: int) -> dict:
@@ -83,7 +88,8 @@ def run_unit(out: Path, name: str, sequence: str, seed: int) -> dict:
     if path.is_file():
         return read_json(path)["result"]
     config = config_of(name)
-    row = measure(sequence, config, out, seed, without=EXTENSIONS if name in TWO_CLASS_MODEL else ())
+    row = measure(sequence, config, out, seed, without=EXTENSIONS if name in TWO_CLASS_MODEL else (),
+                  oracle_sigma_px=ORACLE_KEYPOINTS.get(name))
     write_json(path, {"config": config.to_dict(), "name": name, "seed": seed, "result": row})
     return row
 

@@ -150,7 +150,7 @@ def _apply_factors(base: BodyDimensions, factors: np.ndarray) -> BodyDimensions:
 
 def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *, imaging=None,
                    base_dims: BodyDimensions | None = None, config: AutoCalibrationConfig | None = None,
-                   progress: bool = False) -> Calibration:
+                   progress: bool = False, keypoints=None) -> Calibration:
     """Fit body proportions and the initial pose to a first frame with a roughly neutral posture.
 
     Beyond the paper's manual adjustment (its section 3.1): (1) the foreground silhouette
@@ -178,6 +178,9 @@ def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *,
         Default adult proportions with a lower body and the default hairline; without a
         hairline (or lower body) there the calibration has no hair region (lower body).
     config : AutoCalibrationConfig, optional
+    keypoints : Keypoints, optional
+        2D keypoints of the frame (:mod:`mocap.io.keypoints`, ``camera`` pixels): both fits
+        also pull the model's joints onto them (:data:`CALIBRATION_KEYPOINT_WEIGHT`).
 
     Returns
     -------
@@ -200,7 +203,8 @@ def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *,
     foreground = subtract_background(frame, background, imaging)
     if np.count_nonzero(foreground) < 50:
         raise ValueError("no actor in the first frame (the foreground is empty): cannot calibrate")
-    calibration, _ = _fit_body(frame, foreground, camera, base, config, imaging, background=background)
+    calibration, _ = _fit_body(frame, foreground, camera, base, config, imaging, background=background,
+                               keypoints=keypoints)
     return calibration
 
 
@@ -223,15 +227,25 @@ def _silhouette_starts(foreground: np.ndarray, camera: Camera, base: BodyDimensi
     return starts
 
 
+#: Weight of the keypoint distance in the calibration's fits, units of F per pixel (the tracker's
+#: default ``keypoint_weight / region_weight``): shoulders, head and arms pulled onto 2D keypoints.
+CALIBRATION_KEYPOINT_WEIGHT = 0.04
+
+
 def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: BodyDimensions,
-              config: AutoCalibrationConfig, imaging, *, background=None, face=None, depths=None, seed_colour=None):
+              config: AutoCalibrationConfig, imaging, *, background=None, face=None, depths=None, seed_colour=None,
+              keypoints=None):
     """Fit pose and proportions to a foreground mask, learn the colours, refine on them.
+
+    With ``keypoints`` (:class:`mocap.io.keypoints.Keypoints`, ``camera`` pixels) both fits add
+    :data:`CALIBRATION_KEYPOINT_WEIGHT` times the keypoint distance (the shoulders' width and
+    place, the head, the arms).
 
     Returns the Calibration and the ColourModel learnt inside the fitted model (``seed_colour``,
     when given, where the fitted model covers too few foreground pixels of a class).
     """
     from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX, neutral_pose
-    from mocap.cost import RegionCost
+    from mocap.cost import KeypointCost, RegionCost
     from mocap.imaging import prepare_frame
     from mocap.optimize import initial_simplex, minimize
 
@@ -259,7 +273,11 @@ def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: B
         def cost(x):
             pose, dims = unpack(x)
             model = BodyModel.build(dims, resolution=config.resolution, part_class=part_class, class_names=class_names)
-            return RegionCost(target, model, camera)(pose)
+            value = RegionCost(target, model, camera)(pose)
+            if keypoints is not None:
+                value += CALIBRATION_KEYPOINT_WEIGHT * KeypointCost(keypoints.uv, keypoints.confidence, model,
+                                                                    camera)(pose)
+            return value
         return cost
 
     # (1) silhouette: depth grid, then simplex
@@ -315,7 +333,7 @@ FACE_BOX_HEAD_WIDTHS = 0.95
 
 def calibrate_person(frame: np.ndarray, camera: Camera, *, background: np.ndarray | None = None, face=None,
                      height_m: float | None = None, imaging=None,
-                     config: AutoCalibrationConfig | None = None):
+                     config: AutoCalibrationConfig | None = None, keypoints=None):
     """Calibrate a real person on one frame: body proportions, initial pose and colours.
 
     The person need not hold a special pose (arms down is the common case) but should face
@@ -344,6 +362,9 @@ def calibrate_person(frame: np.ndarray, camera: Camera, *, background: np.ndarra
         The person's stature in metres (1.0-2.5).
     imaging : ImagingConfig, optional
     config : AutoCalibrationConfig, optional
+    keypoints : Keypoints, optional
+        2D keypoints of the frame (:mod:`mocap.io.keypoints`, ``camera`` pixels): the fits also
+        pull the model's joints onto them (shoulder width and place, head, arms).
 
     Returns
     -------
@@ -399,7 +420,7 @@ def calibrate_person(frame: np.ndarray, camera: Camera, *, background: np.ndarra
         z0 = camera.fx * base["head"].width * FACE_BOX_HEAD_WIDTHS / face.width
         depths = tuple(np.round(z0 * np.linspace(0.7, 1.4, 8), 3))
     calibration, colour = _fit_body(frame, foreground, camera, base, config, imaging, background=background,
-                                    face=face, depths=depths, seed_colour=seed)
+                                    face=face, depths=depths, seed_colour=seed, keypoints=keypoints)
     return PersonCalibration(calibration, colour, scene, foreground)
 
 

@@ -4,6 +4,9 @@
   model's coloured silhouette and the segmented label image, over m colour classes.
 - :class:`EdgeCost`: the mean edge distance D_c of eq. (2): the mean, over the model's
   occluding-edge pixels, of the image's distance-to-nearest-edge map.
+- :class:`KeypointCost`: beyond the paper, the keypoint distance D_k: the confidence-weighted
+  mean, over the joints a 2D detector found, of the pixel distance between the model's
+  projected joint and the keypoint (normalised like eq. 2: a mean distance in pixels).
 
 Each is built once per frame from its target and called as ``cost(pose) -> float``. One call
 is one compiled function that poses the mesh, rasterizes it and accumulates the cost only
@@ -17,6 +20,8 @@ Degenerate cases (documented, finite, never NaN):
   F = 1 (:data:`EMPTY_REGION_COST`).
 - D_c: when the model has no occluding-edge pixel in view, D_c is the ``no_edge_penalty``
   (default: the distance map's truncation value, i.e. its maximum).
+- D_k: a joint nearer than the near plane counts the image's diagonal as its distance; with no
+  keypoint present D_k is 0 (no evidence).
 """
 from __future__ import annotations
 
@@ -25,8 +30,10 @@ from typing import NamedTuple
 import numpy as np
 
 from mocap._numba import jit
+from mocap.body.kinematics import segment_transforms_into
 from mocap.body.model import BodyModel
 from mocap.body.pose import check_pose
+from mocap.body.skeleton import JOINT_NAMES, SEGMENT_NAMES
 from mocap.labels import MAX_CLASSES, UNKNOWN
 from mocap.render.camera import Camera
 from mocap.render.rasterize import (EDGE_DEPTH_GAP_M, Buffers, Scene, check_edge_gap, occluding_edge_sum_and_clear,
@@ -85,6 +92,39 @@ class EdgeKernelArgs(NamedTuple):
     marks: np.ndarray
     edge_gap: float
     no_edge_penalty: float
+
+
+class KeypointKernelArgs(NamedTuple):
+    """Second argument of :func:`keypoint_cost_kernel` (:meth:`KeypointCost.kernel_args`).
+
+    Attributes
+    ----------
+    offsets : ndarray, shape (8, 3), float64, metres
+        Skeleton offsets.
+    joint_segment : ndarray, shape (n,), int64
+        Segment of each present keypoint's joint.
+    joint_local : ndarray, shape (n, 3), float64, metres
+        The joint in its segment's frame.
+    uv : ndarray, shape (n, 2), float64, pixels
+        The keypoints.
+    weight : ndarray, shape (n,), float64
+        Their confidences divided by the confidences' sum.
+    camera : ndarray, shape (5,), float64
+        :meth:`~mocap.render.camera.Camera.as_array`.
+    transforms : ndarray, shape (8, 3, 4), float64
+        Scratch for the segment transforms.
+    behind_penalty : float, pixels
+        Distance counted for a joint nearer than the near plane.
+    """
+
+    offsets: np.ndarray
+    joint_segment: np.ndarray
+    joint_local: np.ndarray
+    uv: np.ndarray
+    weight: np.ndarray
+    camera: np.ndarray
+    transforms: np.ndarray
+    behind_penalty: float
 
 
 # ----------------------------------------------------------------------------- kernels
@@ -189,6 +229,28 @@ def edge_cost_kernel(pose, args):
     if n == 0:
         return args.no_edge_penalty
     return total / n
+
+
+@jit
+def keypoint_cost_kernel(pose, args):
+    """Compiled D_k(pose), pixels, for an unchecked float64 (23,) pose and a
+    :class:`KeypointKernelArgs` (0 with no keypoint)."""
+    segment_transforms_into(pose, args.offsets, args.transforms)
+    t, cam, local = args.transforms, args.camera, args.joint_local
+    total = 0.0
+    for i in range(args.uv.shape[0]):
+        s = args.joint_segment[i]
+        x = t[s, 0, 0] * local[i, 0] + t[s, 0, 1] * local[i, 1] + t[s, 0, 2] * local[i, 2] + t[s, 0, 3]
+        y = t[s, 1, 0] * local[i, 0] + t[s, 1, 1] * local[i, 1] + t[s, 1, 2] * local[i, 2] + t[s, 1, 3]
+        z = t[s, 2, 0] * local[i, 0] + t[s, 2, 1] * local[i, 1] + t[s, 2, 2] * local[i, 2] + t[s, 2, 3]
+        if z < cam[4]:
+            d = args.behind_penalty
+        else:
+            du = cam[0] * x / z + cam[2] - args.uv[i, 0]
+            dv = cam[1] * y / z + cam[3] - args.uv[i, 1]
+            d = np.sqrt(du * du + dv * dv)
+        total += args.weight[i] * d
+    return total
 
 
 @jit
@@ -350,6 +412,63 @@ class EdgeCost:
         """Second argument of :func:`edge_cost_kernel` (for compiled optimiser loops)."""
         return EdgeKernelArgs(self._scene, self._buffers, self._distance, self._marks, self.edge_gap,
                               self.no_edge_penalty)
+
+
+class KeypointCost:
+    """Keypoint distance D_k: confidence-weighted mean pixel distance of the projected joints.
+
+    Parameters
+    ----------
+    uv : ndarray, shape (10, 2), float, pixels
+        A keypoint per joint of :data:`~mocap.body.skeleton.JOINT_NAMES` in the camera's
+        pixels; NaN where absent.
+    confidence : ndarray, shape (10,), float
+        In [0, 1]; 0 (or NaN) where absent.
+    model : BodyModel
+    camera : Camera
+
+    Calling ``cost(pose)`` returns ``sum_j c_j |pi(J_j(pose)) - k_j| / sum_j c_j`` over the
+    present joints j, pixels (>= 0; 0 when no joint is present or the keypoints are the
+    model's own projections). A joint nearer than the camera's near plane counts the image
+    diagonal.
+    """
+
+    def __init__(self, uv: np.ndarray, confidence: np.ndarray, model: BodyModel, camera: Camera) -> None:
+        uv, conf = np.asarray(uv, dtype=np.float64), np.asarray(confidence, dtype=np.float64)
+        if uv.shape != (len(JOINT_NAMES), 2) or conf.shape != (len(JOINT_NAMES),):
+            raise ValueError(f"keypoints need uv of shape ({len(JOINT_NAMES)}, 2) and confidence of shape "
+                             f"({len(JOINT_NAMES)},), got {uv.shape} and {conf.shape}")
+        conf = np.where(np.isnan(conf), 0.0, conf)
+        if np.any(conf < 0) or np.any(conf > 1) or np.any(np.isinf(uv)):
+            raise ValueError("keypoint confidences must be in [0, 1] and positions finite or NaN")
+        present = (conf > 0) & np.isfinite(uv).all(axis=1)
+        self.model, self.camera = model, camera
+        self.present = present
+        self._uv = np.ascontiguousarray(uv[present])
+        total = conf[present].sum()
+        self._weight = conf[present] / total if total > 0 else np.zeros(0)
+        self._segment = np.ascontiguousarray(model.skeleton.joint_segment[present])
+        self._local = np.ascontiguousarray(model.skeleton.joint_local[present])
+        self._transforms = np.zeros((len(SEGMENT_NAMES), 3, 4))
+        self._camera = camera.as_array()
+        self.behind_penalty = float(np.hypot(camera.width, camera.height))
+
+    @property
+    def empty(self) -> bool:
+        """Whether no keypoint is present (the cost is then 0 everywhere)."""
+        return len(self._uv) == 0
+
+    def __call__(self, pose) -> float:
+        return float(self.evaluate_unchecked(check_pose(pose)))
+
+    def evaluate_unchecked(self, pose: np.ndarray) -> float:
+        """As calling, without validating ``pose`` (a float64 (23,) array): for optimiser loops."""
+        return keypoint_cost_kernel(pose, self.kernel_args())
+
+    def kernel_args(self) -> KeypointKernelArgs:
+        """Second argument of :func:`keypoint_cost_kernel` (for compiled optimiser loops)."""
+        return KeypointKernelArgs(self.model.skeleton.offsets, self._segment, self._local, self._uv, self._weight,
+                                  self._camera, self._transforms, self.behind_penalty)
 
 
 def non_overlapping_ratio(target_labels: np.ndarray, model_labels: np.ndarray, n_classes: int, *,

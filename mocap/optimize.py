@@ -167,18 +167,22 @@ def _nm_tell(simplex, values, lower, upper, coef, work, ist, fst, f):
 
 
 @jit
-def _nm_run_costs(kind, region_args, edge_args, simplex, values, lower, upper, coef, work, ist, fst, budget):
-    """Drive the state machine with a mocap cost: kind 0 region (eq. 1), 1 edge (eq. 2)."""
+def _nm_run_costs(kind, region_args, edge_args, keypoint_args, keypoint_weight, simplex, values, lower, upper, coef,
+                  work, ist, fst, budget):
+    """Drive the state machine with a mocap cost: kind 0 region (eq. 1), 1 edge (eq. 2), plus
+    ``keypoint_weight`` times the keypoint distance when that weight is positive."""
     while ist[_EVALS] < budget and ist[_PHASE] != _DONE:
         if kind == 0:
             f = region_cost_kernel(work[_TRIAL], region_args)
         else:
             f = edge_cost_kernel(work[_TRIAL], edge_args)
+        if keypoint_weight > 0.0:
+            f += keypoint_weight * keypoint_cost_kernel(work[_TRIAL], keypoint_args)
         _nm_tell(simplex, values, lower, upper, coef, work, ist, fst, f)
 
 
-from mocap.cost import (EdgeKernelArgs, RegionKernelArgs, edge_cost_kernel,  # noqa: E402  (compiled into the loop above)
-                        region_cost_kernel)
+from mocap.cost import (EdgeKernelArgs, KeypointKernelArgs, RegionKernelArgs,  # noqa: E402  (compiled into the loop above)
+                        edge_cost_kernel, keypoint_cost_kernel, region_cost_kernel)
 
 
 # ----------------------------------------------------------------------------- public API
@@ -334,9 +338,13 @@ def minimize(fun: Callable[[np.ndarray], float], simplex, lower, upper, *, budge
     return st.result()
 
 
-def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-3) -> SimplexResult:
+def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-3, keypoint_cost=None,
+                  keypoint_weight: float = 0.0) -> SimplexResult:
     """As :func:`minimize` for a :class:`~mocap.cost.RegionCost` or :class:`~mocap.cost.EdgeCost`
     over the whole pose vector, with the loop compiled (no Python per evaluation).
+
+    With a :class:`~mocap.cost.KeypointCost` and a positive ``keypoint_weight`` the function
+    minimised is ``cost(q) + keypoint_weight * keypoint_cost(q)``.
 
     Parameters
     ----------
@@ -349,8 +357,11 @@ def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-
         Cost evaluations at most.
     ftol : float
         Stop when the relative spread of the simplex values falls below it.
+    keypoint_cost : KeypointCost, optional
+    keypoint_weight : float
+        Units of ``cost`` per pixel of keypoint distance (>= 0; 0: the term is off).
     """
-    from mocap.cost import EdgeCost, RegionCost
+    from mocap.cost import EdgeCost, KeypointCost, RegionCost
 
     budget = _check_budget(budget)
     st = _State(simplex, lower, upper, ftol, False)
@@ -363,7 +374,15 @@ def minimize_cost(cost, simplex, lower, upper, *, budget: int, ftol: float = 1e-
                          "use minimize() for other callables")
     if st.simplex.shape[1] != N_PARAMETERS:
         raise ValueError(f"mocap costs take {N_PARAMETERS} parameters: the simplex has {st.simplex.shape[1]} columns")
-    _nm_run_costs(kind, region_args, edge_args, *st.args(), budget)
+    if not (np.isfinite(keypoint_weight) and keypoint_weight >= 0):
+        raise ValueError(f"keypoint_weight must be finite and non-negative, got {keypoint_weight!r}")
+    if keypoint_cost is None or (isinstance(keypoint_cost, KeypointCost) and keypoint_cost.empty):
+        keypoint_args, keypoint_weight = _DummyArgs.keypoint(cost), 0.0
+    elif not isinstance(keypoint_cost, KeypointCost):
+        raise ValueError(f"keypoint_cost must be a KeypointCost, got {type(keypoint_cost).__name__}")
+    else:
+        keypoint_args = keypoint_cost.kernel_args()
+    _nm_run_costs(kind, region_args, edge_args, keypoint_args, float(keypoint_weight), *st.args(), budget)
     return st.result()
 
 
@@ -375,6 +394,13 @@ class _DummyArgs:
         args = cost.kernel_args()
         return RegionKernelArgs(args.scene, args.buffers, np.zeros(0, np.uint8), np.zeros(1, np.int64), 0,
                                 np.zeros(1, np.int64), np.zeros(1, np.int64), True)
+
+    @staticmethod
+    def keypoint(cost) -> KeypointKernelArgs:
+        """No keypoint (the loop never evaluates it: its weight is 0); arrays of the real one's types."""
+        scene = cost.kernel_args().scene
+        return KeypointKernelArgs(scene.offsets, np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 2)),
+                                  np.zeros(0), scene.camera, np.zeros((len(scene.offsets), 3, 4)), 0.0)
 
     @staticmethod
     def edge(cost) -> EdgeKernelArgs:

@@ -226,7 +226,7 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
                     hfov_deg: float = DEFAULT_HFOV_DEG, height_m: float | None = None,
                     imaging: ImagingConfig | None = None, auto: AutoCalibrationConfig | None = None,
                     sample_frames: int = 60, sample_limit: int = 1500, search_frames: int = 90,
-                    progress: bool = True) -> tuple[RunSetup, list[np.ndarray]]:
+                    progress: bool = True, keypoints=None) -> tuple[RunSetup, list[np.ndarray]]:
     """Background and calibration of a video of a person, found from the video itself.
 
     Parameters
@@ -260,6 +260,11 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
         input-size frame of a file); ``--background-frames A:B`` likewise.
     search_frames : int
         Calibration looks at most this many frames into the video for a usable frame.
+    progress : bool
+        Progress bars.
+    keypoints : KeypointSource, optional
+        2D keypoints (:mod:`mocap.io.keypoints`): the calibration frame's pull the fitted model's
+        joints onto them (:func:`mocap.calibrate.calibrate_person`).
 
     Returns
     -------
@@ -334,6 +339,14 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
     # 2. background (at the working resolution now settled), from frames reduced as they are read
     camera = working_camera(source.width, source.height, factor, hfov_deg)
     face_frame = downscale(face_frame_full, factor) if face is not None else None
+
+    def keypoints_of(index: int, full: np.ndarray):
+        """The calibration frame's keypoints in working pixels (None without a source)."""
+        if keypoints is None:
+            return None
+        return keypoints.keypoints(index, full).scaled(camera.width / source.width, camera.height / source.height)
+
+    face_keypoints = keypoints_of(calib_index, face_frame_full) if face is not None else None
     del face_frame_full
     background = None
     if background_mode == "image":
@@ -378,7 +391,7 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
 
     if face is not None:
         person = calibrate_person(face_frame, camera, background=background, face=face, height_m=height_m,
-                                  imaging=imaging, config=auto)
+                                  imaging=imaging, config=auto, keypoints=face_keypoints)
     else:
         if background is None:
             raise ValueError(f"no face found in the first {searched.stop} frames and no background to find the "
@@ -390,7 +403,7 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
                 continue
             try:
                 person = calibrate_person(frame, camera, background=background, height_m=height_m,
-                                          imaging=imaging, config=auto)
+                                          imaging=imaging, config=auto, keypoints=keypoints_of(index, full))
             except ValueError:
                 continue            # a person too small or cut off for every colour class: the next frame
             calib_index = index
@@ -443,6 +456,10 @@ class OwnVideoOptions(JsonConfig):
         Show the overlay live in a window.
     overwrite : bool
         Start afresh instead of resuming a run in the output folder.
+    keypoints : str or None
+        2D keypoints: ``"mediapipe"`` (MediaPipe Pose, the optional extra ``keypoints``) or a
+        keypoint file (:mod:`mocap.io.keypoints`); the tracker adds them as a cue
+        (``tracker.keypoint_weight``).
     tracker : TrackerConfig
     """
 
@@ -461,10 +478,11 @@ class OwnVideoOptions(JsonConfig):
     overlay: bool = True
     show: bool = False
     overwrite: bool = False
+    keypoints: str | None = None
     tracker: TrackerConfig = field(default_factory=TrackerConfig)
 
     def __post_init__(self) -> None:
-        for key in ("background", "calibration", "ground_truth"):
+        for key in ("background", "calibration", "ground_truth", "keypoints"):
             value = getattr(self, key)
             if isinstance(value, Path):
                 object.__setattr__(self, key, str(value))
@@ -485,6 +503,8 @@ class OwnVideoOptions(JsonConfig):
             raise ValueError(f"the start frame must be a non-negative integer, got {self.start!r}")
         if self.max_frames is not None and self.max_frames < 1:
             raise ValueError(f"max_frames must be at least 1, got {self.max_frames}")
+        if self.keypoints is not None and self.keypoints != "mediapipe" and not Path(self.keypoints).is_file():
+            raise FileNotFoundError(f"keypoint file not found: {self.keypoints} (or give --keypoints mediapipe)")
         if self.work_width is not None and self.work_width < 16:
             raise ValueError(f"the working width must be at least 16 pixels, got {self.work_width}")
 
@@ -496,6 +516,19 @@ class OwnVideoOptions(JsonConfig):
         if self.background_frames is not None:
             return "frames"
         return "none" if self.no_background else "auto"
+
+
+def keypoint_source(name: str | None):
+    """The :class:`~mocap.io.keypoints.KeypointSource` of ``OwnVideoOptions.keypoints``: None,
+    MediaPipe Pose for ``"mediapipe"`` (ValueError in one line without the extra), else a
+    keypoint file (FileNotFoundError, ValueError naming the line of a malformed one)."""
+    if name is None:
+        return None
+    if name == "mediapipe":
+        from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
+        return MediaPipeKeypoints()
+    from mocap.io.keypoints import KeypointFile
+    return KeypointFile(name)
 
 
 def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *, progress: bool = True,
@@ -534,6 +567,7 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
     from mocap.io.video import read_image
 
     options = OwnVideoOptions() if options is None else options
+    keypoints = keypoint_source(options.keypoints)          # a bad keypoint file stops the run first
     live = bool(getattr(source, "live", False))
     if live:
         if options.background_frames is not None:
@@ -561,7 +595,7 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
         frames_in, factor, background_mode=options.background_mode(seq_background is not None),
         background_image=read_image(background) if background else None,
         background_frames=options.background_frames, calibration=given, hfov_deg=options.hfov_deg,
-        height_m=options.height_m, progress=progress)
+        height_m=options.height_m, progress=progress, keypoints=keypoints)
     if live:
         frames_in.hold(consumed)
     setup = dataclasses.replace(setup, colour_from=options.colour,
@@ -576,6 +610,6 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
     summary = track_video(frames_in, setup, out_dir, options.tracker, ground_truth=ground_truth, fps=fps,
                           max_frames=options.max_frames, overwrite=options.overwrite, progress=progress,
                           write_overlay=options.overlay, allow_damaged=options.allow_damaged,
-                          start_frame=options.start, show=options.show, newcomer=newcomer)
+                          start_frame=options.start, show=options.show, newcomer=newcomer, keypoints=keypoints)
     summary.setup = account
     return summary

@@ -107,7 +107,8 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
                 ground_truth: str | Path | None = None, fps: float = 25.0, max_frames: int | None = None,
                 overwrite: bool = False, progress: bool = True, write_overlay: bool = True,
                 allow_damaged: bool = False, start_frame: int = 0, show: bool = False,
-                newcomer: Callable[[int, np.ndarray], RunSetup | None] | None = None) -> RunSummary:
+                newcomer: Callable[[int, np.ndarray], RunSetup | None] | None = None,
+                keypoints=None) -> RunSummary:
     """Track every frame of a video or image folder and write the outputs.
 
     Parameters
@@ -152,6 +153,10 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
         fresh tracker. Segments go to ``run.json`` (``segments``) and the ``segment`` column
         of ``poses.csv``. It must give the same answer for the same frame (a resumed run asks
         again).
+    keypoints : KeypointSource, optional
+        2D keypoints of each frame (:mod:`mocap.io.keypoints`: a file, MediaPipe), asked on the
+        input-resolution frame and given to the tracker in working pixels (``config``'s
+        ``keypoint_weight``); ``run.json`` records the source and its time per frame.
 
     Returns
     -------
@@ -211,6 +216,9 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
     if setup.record is not None:
         settings["own_video"] = setup.record
     settings["start_frame"] = start_frame
+    if keypoints is not None:
+        settings["keypoints"] = getattr(keypoints, "description", type(keypoints).__name__)
+    to_working = (camera.width / frames_in.width, camera.height / frames_in.height)
     out_dir.mkdir(parents=True, exist_ok=True)
     journal, run_json = out_dir / "poses.csv", out_dir / "run.json"
     checkpoint = _previous_run(journal, run_json, settings, overwrite)
@@ -280,8 +288,9 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
             when = time.perf_counter() - clock if frames_in.live else frames_in.time_s(index)
             small = downscale(frame, work_factor)
             segment, colour, scene = colours[0]
+            found = None if keypoints is None else keypoints.keypoints(index, frame).scaled(*to_working)
             yield index, when, bool(small.mean() < DARK_MEAN), small, segment, \
-                prepare_frame(small, bg_image, colour, imaging, scene=scene), frame if newcomer else None
+                prepare_frame(small, bg_image, colour, imaging, scene=scene), frame if newcomer else None, found
 
     times: dict[int, float] = {}         # a live source's frame times, until the frames are decided
 
@@ -298,8 +307,8 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
                             D=f"{result.edge_residual:.1f}")
 
     try:
-        for index, when, is_dark, small, segment, prepared, frame in prefetch(read, READ_AHEAD,
-                                                                              name="mocap-reader"):
+        for index, when, is_dark, small, segment, prepared, frame, found in prefetch(read, READ_AHEAD,
+                                                                                     name="mocap-reader"):
             dark[index] = is_dark
             if frames_in.live:
                 times[index] = when
@@ -320,7 +329,7 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
                         live.model = person[0]
                     prepared = prepare_frame(small, bg_image, person[1], imaging, scene=person[2])
             del frame
-            emit(tracker.push(index, prepared))
+            emit(tracker.push(index, prepared, found))
             if prepared.is_empty:
                 people["absent"] += 1
                 seen = people["last_seen"] >= people["segments"][-1]["first_frame"]
@@ -357,9 +366,14 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
         people["segments"][-1]["last_frame"] = people["last_seen"]
     models = [Calibration.from_dict(seg["calibration"]).body_model(resolution)
               .with_class_names(tuple(seg["colour_classes"])) for seg in people["segments"]]
-    return finish_run(out_dir, table, settings, calibration=calibration, camera=camera, ground_truth=gt, fps=fps,
-                      start=start, wall_s=time.perf_counter() - started, damaged=damaged, colour_frame=colour_frame,
-                      overlay_frames=overlay_frames, models=models, extra_run={"segments": people["segments"]})
+    summary = finish_run(out_dir, table, settings, calibration=calibration, camera=camera, ground_truth=gt, fps=fps,
+                         start=start, wall_s=time.perf_counter() - started, damaged=damaged, colour_frame=colour_frame,
+                         overlay_frames=overlay_frames, models=models, extra_run={"segments": people["segments"]})
+    detector_ms = getattr(keypoints, "milliseconds", None)
+    if detector_ms:         # the detector's own time per frame, beside the tracker's ms_total
+        from mocap.io.jsonfile import read_json, write_json
+        write_json(run_json, {**read_json(run_json), "keypoints_ms_per_frame": float(np.median(detector_ms))})
+    return summary
 
 
 def _segment_record(first_frame: int, calibration: Calibration, colour_model: ColourModel,

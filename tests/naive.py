@@ -11,6 +11,7 @@ compiled kernel                                            twin                 
 ``optimize`` (ask/tell Nelder–Mead, compiled cost loop)    :func:`naive_nelder_mead`         ``tests/test_optimize.py``
 ``cost`` (region counts, eq. 1; edge mean, eq. 2)          :func:`naive_non_overlapping_ratio`, ``tests/test_cost.py``
                                                            :func:`naive_mean_edge_distance`
+``cost`` (keypoint distance D_k)                           :func:`naive_keypoint_distance`   ``tests/test_cost.py``
 ``synth.shading`` (surface samples)                        :func:`naive_surface_samples`     ``tests/synth/test_sequence.py``
 ``imaging.background`` (change mask)                       :func:`naive_change_mask`         ``tests/imaging/test_background.py``
 ``imaging.colour`` (HSV, classification)                   :func:`naive_hsv`,                ``tests/imaging/test_colour.py``
@@ -169,6 +170,30 @@ def naive_mean_edge_distance(distance, edges, penalty):
     """Eq. (2) by a plain loop."""
     values = [distance[i, j] for i in range(edges.shape[0]) for j in range(edges.shape[1]) if edges[i, j]]
     return float(sum(values) / len(values)) if values else float(penalty)
+
+
+def naive_keypoint_distance(pose, model, camera, uv, confidence):
+    """D_k from the model's joints (scipy forward kinematics above) projected by the pinhole
+    formula: the confidence-weighted mean distance over joints with a finite keypoint and
+    positive confidence (0 if none), the image diagonal for a joint nearer than 5 cm."""
+    transforms = naive_segment_transforms(pose, model.skeleton.offsets)
+    from mocap.body import JOINT_NAMES
+    from mocap.body.skeleton import SEGMENT_NAMES
+
+    total, weight = 0.0, 0.0
+    for j, name in enumerate(JOINT_NAMES):
+        c = confidence[j]
+        if not (c > 0) or not np.all(np.isfinite(uv[j])):
+            continue
+        r, t = transforms[SEGMENT_NAMES[model.skeleton.joint_segment[j]]]
+        x, y, z = r @ model.skeleton.joint_local[j] + t
+        if z < 0.05:
+            d = np.hypot(camera.width, camera.height)
+        else:
+            d = np.hypot(camera.fx * x / z + camera.cx - uv[j, 0], camera.fy * y / z + camera.cy - uv[j, 1])
+        total += c * d
+        weight += c
+    return total / weight if weight else 0.0
 
 
 # --- synth ---

@@ -24,10 +24,9 @@ def _scaled(base: BodyDimensions, factors: dict[str, float]) -> BodyDimensions:
     return BodyDimensions(parts, base.hairline)
 
 
-@pytest.fixture(scope="module")
-def actor():
+def _actor_scene():
     """A frame of a known actor (own proportions, arms raised 35°, elbows bent 20°, 2.2 m away)
-    rendered by our model in flat colours over a noisy background, and the calibration it fits."""
+    rendered by our model in flat colours over a noisy background: dims, pose, labels, frame, background."""
     dims = _scaled(BodyDimensions(), {"torso_width": 1.1, "torso_length": 0.95, "arm_length": 0.92,
                                       "arm_width": 1.1, "head_size": 1.05})
     pose = neutral_pose((0.05, 0.3, 2.2))
@@ -45,8 +44,34 @@ def actor():
     frame[labels == 3] = HAIR_RGB
     frame[labels == 4] = TROUSERS_RGB
     frame = np.clip(frame + rng.normal(0, 2, frame.shape), 0, 255).astype(np.uint8)
+    return dims, pose, labels, frame, background
+
+
+@pytest.fixture(scope="module")
+def actor():
+    """The known actor's frame (:func:`_actor_scene`) and the calibration it fits."""
+    dims, pose, labels, frame, background = _actor_scene()
     fitted = auto_calibrate(frame, background, CAMERA, config=AutoCalibrationConfig(evaluations=600))
     return dims, pose, labels, fitted
+
+
+@pytest.mark.slow
+def test_keypoints_pull_the_calibrated_joints_onto_them(actor):
+    """Given the actor's true 2D joints, the calibration's joints project onto them (shoulder
+    width and place, head, arms), at least as well as from the silhouette alone."""
+    from mocap.io.keypoints import Keypoints
+
+    dims, pose, _, fitted = actor
+    _, _, _, frame, background = _actor_scene()
+    true_uv = CAMERA.project(BodyModel.build(dims).joint_positions(pose))
+    keypoints = Keypoints(true_uv, np.ones(len(true_uv)))
+    with_keypoints = auto_calibrate(frame, background, CAMERA, config=AutoCalibrationConfig(evaluations=600),
+                                    keypoints=keypoints)
+    miss = lambda c: np.linalg.norm(CAMERA.project(c.body_model().joint_positions(c.initial_pose)) - true_uv, axis=1)
+    # on this clean frame the silhouette alone fits well too (measured 0.37 px mean, 0.88 max; with the
+    # keypoints 0.33 and 0.69): the keypoints must keep every joint within a pixel and not do worse
+    assert miss(with_keypoints).max() < 0.8                       # pixels at 160x120
+    assert miss(with_keypoints).mean() <= miss(fitted).mean()
 
 
 @pytest.mark.slow

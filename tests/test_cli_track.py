@@ -127,3 +127,30 @@ def test_tracker_options_set_the_beam_the_lag_and_the_paper_method(tmp_path):
         tracker_config(p.parse_args(["--paper", "--config", str(tmp_path / "c.json")]))
     with pytest.raises(ValueError, match="beam"):
         tracker_config(p.parse_args(["--beam", "0"]))
+
+
+def test_keypoint_file_through_track_and_a_malformed_one_is_one_line(sequence, tmp_path, capsys):
+    from mocap.io.keypoints import Keypoints, write_keypoints
+    from mocap.render.calibration import Calibration
+
+    truth = PoseTable.read(sequence / "ground_truth.csv")
+    camera = Calibration.from_json(sequence / "calibration.json").camera        # the input camera
+    frames = {i: Keypoints(camera.project(j), np.ones(len(j))) for i, j in enumerate(truth.joints[:4])}
+    good = tmp_path / "keypoints.csv"
+    write_keypoints(good, frames)
+    out = tmp_path / "with-keypoints"
+    assert main(["track", str(sequence), "--out", str(out), "--iterations", "100", "--max-frames", "4",
+                 "--no-overlay", "--keypoints", str(good)]) == 0
+    run = json.loads((out / "run.json").read_text())
+    assert run["settings"]["keypoints"].startswith("file ")
+    table = PoseTable.read(out / "poses.csv")
+    # the keypoint cue holds the projected joints near the true ones (2D, input pixels)
+    uv = np.stack([np.stack([table.extra[f"{j}_u"], table.extra[f"{j}_v"]], axis=-1)
+                   for j in ("r_elbow", "r_wrist", "l_elbow", "l_wrist")], axis=1)
+    assert np.nanmax(np.abs(uv - camera.project(truth.joints[:4])[:, [3, 4, 7, 8]])) < 3.0
+    bad = tmp_path / "bad.csv"
+    bad.write_text("frame,joint,u,v,confidence\n0,r_elbow,10,20,0.5\n1,nose,1,2,1\n")
+    capsys.readouterr()
+    assert main(["track", str(sequence), "--out", str(tmp_path / "bad-run"), "--keypoints", str(bad)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error:") and "\n" not in err and "line 3: unknown joint 'nose'" in err

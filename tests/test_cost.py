@@ -5,10 +5,10 @@ from hypothesis.extra import numpy as hnp
 from scipy import ndimage
 
 from mocap.body import JOINT_LIMITS, PARAMETER_INDEX as P, BodyModel, neutral_pose
-from mocap.cost import (EMPTY_REGION_COST, EdgeCost, LabelRenderer, RegionCost, mean_edge_distance,
+from mocap.cost import (EMPTY_REGION_COST, EdgeCost, KeypointCost, LabelRenderer, RegionCost, mean_edge_distance,
                         non_overlapping_ratio)
 from mocap.render import Camera, render
-from tests.naive import naive_mean_edge_distance, naive_non_overlapping_ratio
+from tests.naive import naive_keypoint_distance, naive_mean_edge_distance, naive_non_overlapping_ratio
 
 MODEL = BodyModel.build(resolution=8)
 CAMERA = Camera.default()
@@ -240,3 +240,39 @@ def test_one_class_matched_exactly_does_not_zero_the_product():
     assert non_overlapping_ratio(target, model, 3) == pytest.approx(expect)
     assert naive_non_overlapping_ratio(target, model, 3) == pytest.approx(expect)
     assert non_overlapping_ratio(target, target, 3) == 0.0
+
+
+# ------------------------------------------------------------------ keypoint distance
+def test_keypoint_cost_equals_its_twin_on_random_poses():
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        uv = rng.uniform([0, 0], [CAMERA.width, CAMERA.height], (10, 2))
+        conf = rng.uniform(0, 1, 10)
+        conf[rng.uniform(size=10) < 0.3] = 0.0                    # some absent
+        uv[rng.uniform(size=10) < 0.1] = np.nan                    # some NaN: absent too
+        cost = KeypointCost(uv, conf, MODEL, CAMERA)
+        for _ in range(5):
+            q = random_pose(rng)
+            assert cost(q) == pytest.approx(naive_keypoint_distance(q, MODEL, CAMERA, uv, conf), rel=1e-12, abs=1e-12)
+
+
+def test_keypoint_cost_is_zero_on_the_models_own_projections_and_grows_with_a_shift():
+    rng = np.random.default_rng(3)
+    q = random_pose(rng)
+    uv = CAMERA.project(MODEL.joint_positions(q))
+    conf = rng.uniform(0.1, 1.0, 10)
+    assert KeypointCost(uv, conf, MODEL, CAMERA)(q) == pytest.approx(0.0, abs=1e-9)
+    assert KeypointCost(uv + [3.0, 4.0], conf, MODEL, CAMERA)(q) == pytest.approx(5.0, abs=1e-9)
+
+
+def test_keypoint_cost_without_keypoints_is_zero_and_joints_behind_the_camera_cost_the_diagonal():
+    q = neutral_pose()
+    assert KeypointCost(np.full((10, 2), np.nan), np.zeros(10), MODEL, CAMERA)(q) == 0.0
+    behind = q.copy()
+    behind[2] = -1.0
+    uv = CAMERA.project(MODEL.joint_positions(q))
+    assert KeypointCost(uv, np.ones(10), MODEL, CAMERA)(behind) == pytest.approx(np.hypot(160, 120))
+    with pytest.raises(ValueError, match="shape"):
+        KeypointCost(uv[:3], np.ones(3), MODEL, CAMERA)
+    with pytest.raises(ValueError, match=r"\[0, 1\]"):
+        KeypointCost(uv, np.full(10, 2.0), MODEL, CAMERA)

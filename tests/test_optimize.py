@@ -3,7 +3,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from mocap.body import JOINT_LIMITS, BodyDimensions, BodyModel, clamp_to_limits, neutral_pose
-from mocap.cost import RegionCost
+from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.optimize import coefficients, initial_simplex, minimize, minimize_cost
 from mocap.render import Camera, render
 from tests.naive import naive_nelder_mead
@@ -166,3 +166,33 @@ def test_compiled_cost_loop_equals_python_loop():
     np.testing.assert_array_equal(a.simplex, b.simplex)
     assert a.evaluations == b.evaluations <= 150 and a.iterations == b.iterations
     assert a.fun < cost(start)
+
+
+def test_compiled_loop_with_keypoints_equals_python_loop_on_the_sum():
+    model, camera = PAPER_MODEL, Camera.default(80, 60)
+    q = neutral_pose()
+    rendered = render(q, model, camera)
+    truth_uv = camera.project(model.joint_positions(q))
+    keypoints = KeypointCost(truth_uv + 0.7, np.linspace(0.2, 1.0, 10), model, camera)
+    start = q.copy()
+    start[9:16] += 0.2
+    start = clamp_to_limits(start)
+    simplex = initial_simplex(start, np.r_[np.full(3, 0.02), np.full(20, 0.1)], JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1])
+    for cost in (RegionCost(rendered.labels, model, camera),
+                 EdgeCost(ndimage_distance(rendered.edges), model, camera)):
+        a = minimize_cost(cost, simplex, JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1], budget=120,
+                          keypoint_cost=keypoints, keypoint_weight=0.05)
+        b = minimize(lambda x: cost(x) + 0.05 * keypoints(x), simplex, JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1],
+                     budget=120)
+        np.testing.assert_array_equal(a.x, b.x)
+        assert a.fun == b.fun and a.evaluations == b.evaluations
+        plain = minimize_cost(cost, simplex, JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1], budget=120)
+        zero = minimize_cost(cost, simplex, JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1], budget=120,
+                             keypoint_cost=keypoints, keypoint_weight=0.0)
+        np.testing.assert_array_equal(plain.x, zero.x)
+
+
+def ndimage_distance(edges):
+    from scipy import ndimage
+
+    return ndimage.distance_transform_edt(~edges).astype(np.float32)

@@ -110,6 +110,7 @@ def test_paper_configuration_switches_every_addition_off():
     paper = TrackerConfig.paper(evaluations=100)
     assert (paper.beam, paper.lag, paper.jumps, paper.recovery, paper.hand_reacquisition, paper.prior_weight) \
         == (1, 0, False, False, False, 0.0)
+    assert paper.keypoint_weight == 0.0            # keypoints, given or not, change nothing in it
     assert paper.evaluations == 100 and paper.split == "auto"
     with pytest.raises(TypeError):
         TrackerConfig.paper(evaluatons=100)

@@ -99,8 +99,9 @@ def arm_angles_for_points(pose, skeleton: Skeleton, side: str, elbow, wrist) -> 
     chest frame the upper arm's direction is ``(-sin b, cos b cos f, -cos b sin f)`` for
     flexion ``f`` and (mirrored) abduction ``b``, and the forearm's, in the frame of the upper
     arm before its rotation ``r``, is ``(-sin e sin r, cos e, -sin e cos r)`` for elbow flexion
-    ``e``. Of the two (flexion, abduction) solutions the one inside the joint limits (else the
-    one nearer the current angles) is taken; with a straight elbow the rotation is kept.
+    ``e``. Of the two solutions (flexion, abduction and with them the rotation) the one whose
+    four angles are inside the joint limits (else the one less outside, then the one nearer the
+    current flexion and abduction) is taken; with a straight elbow the rotation is kept.
 
     Parameters
     ----------
@@ -127,29 +128,25 @@ def arm_angles_for_points(pose, skeleton: Skeleton, side: str, elbow, wrist) -> 
     shoulder = transforms[_SEGMENT[f"{side}_upper_arm"], :, 3]
     u = chest.T @ _unit(np.asarray(elbow, dtype=np.float64) - shoulder)
     b1 = math.asin(max(-1.0, min(1.0, -u[0])))
+    lim = JOINT_LIMITS
     candidates = []
     for b in (b1, math.pi - b1 if b1 >= 0 else -math.pi - b1):
         cb = math.cos(b)
         f = math.atan2(-u[2] / cb, u[1] / cb) if abs(cb) > 1e-12 else q[names["shoulder_flex"]]
-        candidates.append((f, mirror * b))
-    lim = JOINT_LIMITS
+        rx = np.array([[1.0, 0.0, 0.0], [0.0, math.cos(-f), -math.sin(-f)], [0.0, math.sin(-f), math.cos(-f)]])
+        rz = np.array([[math.cos(b), -math.sin(b), 0.0], [math.sin(b), math.cos(b), 0.0], [0.0, 0.0, 1.0]])
+        w = (chest @ rx @ rz).T @ _unit(np.asarray(wrist, dtype=np.float64) - np.asarray(elbow, dtype=np.float64))
+        e = math.acos(max(-1.0, min(1.0, w[1])))
+        r = mirror * math.atan2(-w[0], -w[2]) if math.sin(e) > 1e-9 else q[names["shoulder_rot"]]
+        candidates.append({"shoulder_flex": f, "shoulder_abd": mirror * b, "shoulder_rot": r, "elbow_flex": e})
 
-    def badness(fa):
-        f, a = fa
-        outside = (max(0.0, lim[names["shoulder_flex"], 0] - f) + max(0.0, f - lim[names["shoulder_flex"], 1])
-                   + max(0.0, lim[names["shoulder_abd"], 0] - a) + max(0.0, a - lim[names["shoulder_abd"], 1]))
-        return outside, abs(f - q[names["shoulder_flex"]]) + abs(a - q[names["shoulder_abd"]])
+    def badness(angles):
+        outside = sum(max(0.0, lim[names[k], 0] - v) + max(0.0, v - lim[names[k], 1]) for k, v in angles.items())
+        return outside, abs(angles["shoulder_flex"] - q[names["shoulder_flex"]]) + abs(
+            angles["shoulder_abd"] - q[names["shoulder_abd"]])
 
-    f, a = min(candidates, key=badness)
-    q[names["shoulder_flex"]], q[names["shoulder_abd"]] = f, a
-    b = mirror * a
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, math.cos(-f), -math.sin(-f)], [0.0, math.sin(-f), math.cos(-f)]])
-    rz = np.array([[math.cos(b), -math.sin(b), 0.0], [math.sin(b), math.cos(b), 0.0], [0.0, 0.0, 1.0]])
-    w = (chest @ rx @ rz).T @ _unit(np.asarray(wrist, dtype=np.float64) - np.asarray(elbow, dtype=np.float64))
-    e = math.acos(max(-1.0, min(1.0, w[1])))
-    q[names["elbow_flex"]] = e
-    if math.sin(e) > 1e-9:
-        q[names["shoulder_rot"]] = mirror * math.atan2(-w[0], -w[2])
+    for k, v in min(candidates, key=badness).items():
+        q[names[k]] = v
     return q
 
 
@@ -251,3 +248,55 @@ def torso_flip(pose, skeleton: Skeleton) -> np.ndarray:
         if miss(moved) < miss(out):             # the arm's limits may not let it reach the ray
             out = moved
     return out
+
+
+def arm_poses_on_rays(pose, skeleton: Skeleton, side: str, elbow_ray, wrist_ray) -> dict[str, np.ndarray]:
+    """Every pose of one arm whose elbow and wrist lie on two camera rays: the depth branches.
+
+    The elbow is where its ray meets the sphere of the upper arm's length about the shoulder
+    (nearer or farther branch), the wrist where its ray meets the sphere of the forearm's length
+    about that elbow; a ray that misses its sphere gives the point of the sphere nearest to it
+    (one branch, ``closest``: its joint then projects off its keypoint). The four arm angles follow in closed form (:func:`arm_angles_for_points`);
+    the torso, the forearm twist and the wrist are kept.
+
+    Parameters
+    ----------
+    pose : array_like, shape (23,)
+        Metres and radians: the torso that places the shoulder.
+    skeleton : Skeleton
+    side : {"r", "l"}
+    elbow_ray, wrist_ray : array_like, shape (3,)
+        Directions from the camera centre (camera coordinates; normalised here), e.g.
+        ``K^-1 (u, v, 1)`` of the elbow and wrist keypoints.
+
+    Returns
+    -------
+    dict of str to ndarray, shape (23,)
+        Keyed ``"<upper arm branch>-<forearm branch>"`` with branches ``near`` / ``far``
+        (``closest`` alone when the ray misses its sphere). Not clamped to the joint limits.
+    """
+    if side not in SIDES:
+        raise ValueError(f"side must be one of {SIDES}, got {side!r}")
+    q = check_pose(pose)
+    rays = [np.asarray(r, dtype=np.float64) for r in (elbow_ray, wrist_ray)]
+    if any(r.shape != (3,) or not np.all(np.isfinite(r)) or not np.linalg.norm(r) > 0 for r in rays):
+        raise ValueError("elbow_ray and wrist_ray must be 3 finite numbers, not all 0")
+    ray_e, ray_w = (_unit(r) for r in rays)
+    joints = joint_positions(q, skeleton)
+    s, e, w = (joints[JOINT_INDEX[f"{side}_{j}"]] for j in ("shoulder", "elbow", "wrist"))
+    upper, fore = float(np.linalg.norm(e - s)), float(np.linalg.norm(w - e))
+    out = {}
+    for e_name, e_new in _points_on_ray(ray_e, s, upper):
+        for w_name, w_new in _points_on_ray(ray_w, e_new, fore):
+            out[f"{e_name}-{w_name}"] = arm_angles_for_points(q, skeleton, side, e_new, w_new)
+    return out
+
+
+def _points_on_ray(ray: np.ndarray, centre: np.ndarray, radius: float) -> list[tuple[str, np.ndarray]]:
+    """Points of the sphere about ``centre`` on the unit ``ray`` (named near/far), or the sphere's
+    point nearest to the ray (``closest``) when it misses."""
+    depths = ray_sphere_depths(ray, centre, radius)
+    if len(depths):
+        return [(name, t * ray) for name, t in zip(("near", "far"), depths) if t > 0]
+    off = float(ray @ centre) * ray - centre
+    return [("closest", centre + radius * (_unit(off) if np.linalg.norm(off) > 1e-12 else ray))]

@@ -1,6 +1,7 @@
 """``python -m mocap calibrate VIDEO [--background IMG | --background-frames A:B | --no-background]
-[--hfov DEG] [--height M] [--out JSON]``: automatic calibration of body proportions and initial
-pose.
+[--hfov DEG] [--height M] [--keypoints mediapipe|FILE] [--out JSON]``: automatic calibration of
+body proportions and initial pose (with ``--keypoints``, the calibration frame's 2D keypoints
+pull the model's joints onto them: shoulder width and place, head, arms).
 
 With ``--background`` (or a sequence folder's ``background.png``) the paper's set-up: the actor
 stands roughly neutral on frame ``--frame`` (default 0) against the empty scene. Otherwise the
@@ -31,6 +32,9 @@ def add_parser(subparsers) -> None:
                    help=f"camera horizontal field of view, degrees (default {DEFAULT_HFOV_DEG:g}, a webcam)")
     p.add_argument("--height", type=float, default=None, metavar="M",
                    help="the person's height in metres: fixes the absolute scale")
+    p.add_argument("--keypoints", default=None, metavar="mediapipe|FILE",
+                   help="2D keypoints of the calibration frame: 'mediapipe' (optional extra 'keypoints') or a CSV "
+                        "frame,joint,u,v,confidence (docs/design.md section 4)")
     p.add_argument("--allow-damaged", action="store_true",
                    help="calibrate on a video whose frames do not all decode instead of stopping")
     p.set_defaults(run=run)
@@ -41,8 +45,10 @@ def run(args: argparse.Namespace) -> int:
     from mocap.io.frames import VideoSource
     from mocap.io.sequence import find_sequence
     from mocap.io.video import read_image
-    from mocap.own_video import setup_own_video
+    from mocap.own_video import keypoint_source, setup_own_video
     from mocap.render import Camera
+
+    keypoints = keypoint_source(None if args.keypoints is None else str(args.keypoints))
 
     seq = find_sequence(args.video)
     source = VideoSource(seq.frames)
@@ -55,7 +61,8 @@ def run(args: argparse.Namespace) -> int:
         if frame is None:
             raise ValueError(f"{seq.frames} has no frame {index}")
         camera = Camera.default(frame.shape[1], frame.shape[0], hfov_deg=args.hfov)
-        calibration = auto_calibrate(frame, read_image(background), camera)
+        found = None if keypoints is None else keypoints.keypoints(index, frame)    # input size = camera size
+        calibration = auto_calibrate(frame, read_image(background), camera, keypoints=found)
         how = f"frame {index} against the background image"
     else:
         if args.frame is not None:
@@ -65,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
         setup, _ = setup_own_video(source, background_mode=mode,
                                    background_image=read_image(background) if background is not None else None,
                                    background_frames=args.background_frames, hfov_deg=args.hfov,
-                                   height_m=args.height)
+                                   height_m=args.height, keypoints=keypoints)
         camera = setup.calibration.camera.enlarged(setup.factor, source.width, source.height)
         calibration = Calibration(setup.calibration.dims, setup.calibration.initial_pose, camera)
         note = setup.record

@@ -8,7 +8,8 @@ when the first frame supports them), the edge mask (white on black) and the trun
 distance map (viridis: dark on edges), as PNG in ``labels/``, ``edges/`` and ``distance/``,
 plus ``segment.mp4`` (frame | labels / edges | distance), the colour model
 (``colour_model.json``, learned on the first frame that shows the person) and the parameters
-(``imaging.json``) it used. An interrupted run resumes: the same command keeps the frames
+(``imaging.json``) it used. With ``--keypoints mediapipe|FILE`` the 2D keypoints the tracker
+would get are drawn on the frame panel of ``segment.mp4`` (yellow dots, working pixels). An interrupted run resumes: the same command keeps the frames
 already written (``segment.json`` holds the settings they were made with).
 """
 from __future__ import annotations
@@ -68,6 +69,9 @@ def add_parser(subparsers) -> None:
                         "(default: as track, near 160 pixels)")
     p.add_argument("--allow-damaged", action="store_true",
                    help="segment a video whose frames do not all decode instead of stopping")
+    p.add_argument("--keypoints", default=None, metavar="mediapipe|FILE",
+                   help="draw the 2D keypoints the tracker would get: 'mediapipe' (optional extra 'keypoints') or "
+                        "a CSV frame,joint,u,v,confidence (docs/design.md section 4)")
     p.add_argument("--start", type=int, default=0, metavar="N", help="first frame (default 0)")
     p.add_argument("--max-frames", type=int, metavar="N", help="process at most N frames")
     p.set_defaults(run=run)
@@ -106,7 +110,8 @@ def _settings(args: argparse.Namespace, config: ImagingConfig, stop: int, factor
             "clothes_box": list(args.clothes_box) if args.clothes_box else None,
             "hair_box": list(args.hair_box) if args.hair_box else None,
             "lower_body_box": list(args.lower_body_box) if args.lower_body_box else None,
-            "start": args.start, "stop": stop, "working_factor": factor, "imaging": config.to_dict()}
+            "start": args.start, "stop": stop, "working_factor": factor, "imaging": config.to_dict(),
+            "keypoints": args.keypoints if args.keypoints in (None, "mediapipe") else path(args.keypoints)}
 
 
 def _working_box(box, factor: int):
@@ -137,8 +142,22 @@ def _write_png(path: Path, image: np.ndarray) -> None:
     write_bytes_atomic(path, iio.imwrite("<bytes>", image, extension=".png"))
 
 
+def _draw_keypoints(frame: np.ndarray, keypoints) -> np.ndarray:
+    """A copy of ``frame`` (H, W, 3) with the present keypoints (working pixels) as yellow dots."""
+    from skimage.draw import disk
+
+    out = frame.copy()
+    for u, v, _ in keypoints.as_mapping().values():
+        rows, cols = disk((v - 0.5, u - 0.5), 1.5, shape=out.shape[:2])
+        out[rows, cols] = (255, 220, 0)
+    return out
+
+
 def _segment(args: argparse.Namespace, source, factor: int, out: Path, config: ImagingConfig, stop: int) -> int:
     from mocap.imaging.resample import downscale
+    from mocap.own_video import keypoint_source
+
+    keypoints = keypoint_source(args.keypoints)            # a bad keypoint file stops before anything is written
 
     settings = _settings(args, config, stop, factor)
     settings_file = out / "segment.json"
@@ -152,6 +171,7 @@ def _segment(args: argparse.Namespace, source, factor: int, out: Path, config: I
 
     frames = lambda: ((i, downscale(f, factor)) for i, f in enumerate(source.frames(args.start, stop),
                                                                        start=args.start))
+    full_frames = lambda: enumerate(source.frames(args.start, stop), start=args.start)
     if args.background is not None:
         background = read_image(args.background)
         if background.shape[:2] != (source.height, source.width):
@@ -188,7 +208,8 @@ def _segment(args: argparse.Namespace, source, factor: int, out: Path, config: I
     video_path = out / "segment.mp4"
     partial = out / f".{video_path.stem}.partial{video_path.suffix}"
     with VideoWriter(partial, fps) as video:
-        for index, frame in tqdm(frames(), total=stop - args.start, unit="frame", desc="segment"):
+        for index, full in tqdm(full_frames(), total=stop - args.start, unit="frame", desc="segment"):
+            frame = downscale(full, factor)
             name = f"{index:06d}.png"
             paths = [out / sub / name for sub in ("labels", "edges", "distance")]
             if all(p.is_file() for p in paths):           # written by an interrupted run: kept
@@ -207,7 +228,10 @@ def _segment(args: argparse.Namespace, source, factor: int, out: Path, config: I
                 # the distance map last: a frame counts as done when all three are there
                 for path, image in zip(paths, (labels_rgb, edges.astype(np.uint8) * 255, distance_rgb)):
                     _write_png(path, image)
-            video.write(tile([frame, labels_rgb, overlay_edges(frame, edges), distance_rgb]))
+            to_working = (frame.shape[1] / full.shape[1], frame.shape[0] / full.shape[0])
+            shown = frame if keypoints is None else \
+                _draw_keypoints(frame, keypoints.keypoints(index, full).scaled(*to_working))
+            video.write(tile([shown, labels_rgb, overlay_edges(frame, edges), distance_rgb]))
         n = video.frames
     os.replace(partial, video_path)
     elapsed = time.perf_counter() - started

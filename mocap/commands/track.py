@@ -43,6 +43,9 @@ def add_parser(subparsers) -> None:
                         f"(default: the tracker chooses, near {DEFAULT_WORK_WIDTH} or less for a person close to "
                         "the camera; see docs/own-video.md)")
     p.add_argument("--show", action="store_true", help="show the overlay live in a window (needs a display)")
+    p.add_argument("--keypoints", default=None, metavar="mediapipe|FILE",
+                   help="2D keypoints as a further cue: 'mediapipe' (optional extra 'keypoints') or a CSV "
+                        "frame,joint,u,v,confidence in input pixels (docs/design.md section 4)")
     p.add_argument("--out", type=Path, default=Path("mocap-track"), help="output folder (default ./mocap-track)")
     p.add_argument("--colour", choices=("calibration", "face"), default="calibration",
                    help="learn colours inside the calibrated model (default) or from the detected face")
@@ -65,7 +68,7 @@ def options(args: argparse.Namespace):
         no_background=args.no_background, calibration=path(args.calibration), hfov_deg=args.hfov,
         height_m=args.height, work_width=args.work_width, colour=args.colour, ground_truth=path(args.ground_truth),
         start=args.start, max_frames=args.max_frames, allow_damaged=args.allow_damaged, overlay=not args.no_overlay,
-        show=args.show, overwrite=args.overwrite, tracker=tracker_config(args))
+        show=args.show, overwrite=args.overwrite, keypoints=path(args.keypoints), tracker=tracker_config(args))
 
 
 def print_setup(account: dict) -> None:

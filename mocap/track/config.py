@@ -69,7 +69,9 @@ class TrackerConfig(JsonConfig):
         further hypothesis.
     reacquisition_distance_px : float, pixels
         A skin region (of at least :data:`MIN_SKIN_BLOB_PIXELS`) whose centroid is farther than
-        this from both projected hands triggers it.
+        this from both projected hands triggers it; likewise an arm (or the shoulders) whose
+        projected joints are on average this far from their 2D keypoints triggers the keypoint
+        proposals (:class:`mocap.track.proposals.KeypointArmSource`).
     beam : int
         Hypotheses kept per frame (1: a single-hypothesis tracker, as the paper's).
     hypothesis_evaluations : int
@@ -89,6 +91,14 @@ class TrackerConfig(JsonConfig):
         Decode the whole sequence at its end instead (the best path through every frame).
     region_weight, edge_weight : float
         Score of a hypothesis per unit of F and per pixel of mean edge distance.
+    keypoint_weight : float
+        Beyond the paper, only when 2D keypoints are given: score per pixel of keypoint
+        distance D_k (:class:`mocap.cost.KeypointCost`). The registration steps add D_k at the
+        same rate relative to their own cost: the region step minimises
+        ``F + keypoint_weight / region_weight * D_k``, the edge step
+        ``D_c + keypoint_weight / edge_weight * D_k``; and the keypoint source
+        (:class:`mocap.track.proposals.KeypointArmSource`) joins the proposal stage. Without
+        keypoints it changes nothing.
     prior_weight : float
         Score per nat of the pose prior's negative log-density (:mod:`mocap.body.prior`); 0: off.
     motion_sigma_m : float, metres
@@ -129,6 +139,7 @@ class TrackerConfig(JsonConfig):
     offline: bool = False
     region_weight: float = 50.0
     edge_weight: float = 2.0
+    keypoint_weight: float = 2.0
     prior_weight: float = 0.05
     motion_sigma_m: float = 0.05
     motion_cap: float = 8.0
@@ -159,14 +170,18 @@ class TrackerConfig(JsonConfig):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be a finite positive number, got {v!r}")
-        for name in ("ftol", "region_weight", "edge_weight", "prior_weight"):
+        for name in ("ftol", "region_weight", "edge_weight", "keypoint_weight", "prior_weight"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise ValueError(f"{name} must be finite and non-negative, got {v!r}")
+        if self.keypoint_weight > 0 and (self.region_weight == 0 or self.edge_weight == 0):
+            raise ValueError("keypoint_weight > 0 needs positive region_weight and edge_weight (the registration "
+                             "steps weigh the keypoint distance relative to them)")
 
     @classmethod
     def paper(cls, **changes) -> "TrackerConfig":
-        """The paper's method: one hypothesis, no recovery, re-acquisition, jumps, proposals or prior.
+        """The paper's method: one hypothesis, no recovery, re-acquisition, jumps, proposals, prior
+        or keypoints.
 
         Parameters
         ----------
@@ -175,7 +190,14 @@ class TrackerConfig(JsonConfig):
             unknown names raise TypeError.
         """
         return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
-                           prior_weight=0.0, blob_arms=False, exemplars=False), **changes)
+                           prior_weight=0.0, keypoint_weight=0.0, blob_arms=False, exemplars=False), **changes)
+
+    def keypoint_step_weights(self) -> tuple[float, float]:
+        """Weight of the keypoint distance in the region step (units of F per pixel) and in the
+        edge step (pixels per pixel): ``keypoint_weight`` over ``region_weight`` and ``edge_weight``."""
+        if self.keypoint_weight == 0:
+            return 0.0, 0.0
+        return self.keypoint_weight / self.region_weight, self.keypoint_weight / self.edge_weight
 
     def steps(self) -> np.ndarray:
         """Initial simplex steps, shape (23,): metres for the root, radians for the angles."""

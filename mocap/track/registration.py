@@ -4,6 +4,8 @@ The **region step** minimises the non-overlapping ratio F(q) (eq. 1) by bounded 
 simplex from a start pose; the **edge step** minimises the mean edge distance (eq. 2) starting
 from the region step's final simplex (or, for the paper's Fig. 8, from a fresh large simplex).
 The evaluation budget is split between the two by :func:`~mocap.track.config.split_budget`.
+Given 2D keypoints, both steps add the keypoint distance (:class:`~mocap.cost.KeypointCost`) at
+the weights of :meth:`~mocap.track.config.TrackerConfig.keypoint_step_weights`.
 """
 from __future__ import annotations
 
@@ -12,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mocap.body.pose import JOINT_LIMITS, check_pose, clamp_to_limits
-from mocap.cost import EdgeCost, RegionCost
+from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.optimize import SimplexResult, initial_simplex, minimize_cost
 from mocap.track.config import FRESH_STEP_SCALE, TrackerConfig, split_budget
 
@@ -33,6 +35,8 @@ class Registration:
         Mean edge distance at the region step's result (the paper's Fig. 6 grey line).
     region, edge : SimplexResult or None
         The two simplex runs (None when the step had no budget).
+    keypoint_residual : float, pixels
+        Keypoint distance at ``pose`` (NaN without keypoints).
     """
 
     pose: np.ndarray
@@ -41,6 +45,7 @@ class Registration:
     edge_residual_after_region: float
     region: SimplexResult | None
     edge: SimplexResult | None
+    keypoint_residual: float = float("nan")
 
     @property
     def evaluations(self) -> int:
@@ -55,7 +60,7 @@ class Registration:
 
 def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: TrackerConfig, *,
              evaluations: int | None = None, step_scale: float = 1.0,
-             limits: np.ndarray = JOINT_LIMITS) -> Registration:
+             limits: np.ndarray = JOINT_LIMITS, keypoint_cost: KeypointCost | None = None) -> Registration:
     """Two-step registration of one frame: region step, then edge step.
 
     Parameters
@@ -71,6 +76,8 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
     step_scale : float
         Multiplies the initial simplex steps (wider for recovery).
     limits : ndarray, shape (23, 2)
+    keypoint_cost : KeypointCost, optional
+        The frame's keypoint distance, added into both steps (see the module).
 
     Returns
     -------
@@ -81,11 +88,13 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
     total = config.evaluations if evaluations is None else int(evaluations)
     n_region, n_edge = split_budget(total, config.split)
     steps = config.steps() * step_scale
+    region_kw, edge_kw = config.keypoint_step_weights() if keypoint_cost is not None else (0.0, 0.0)
     pose = q0
     region = edge = None
     if n_region > 0:
         region = minimize_cost(region_cost, initial_simplex(q0, steps, lower, upper), lower, upper,
-                               budget=n_region, ftol=config.ftol)
+                               budget=n_region, ftol=config.ftol, keypoint_cost=keypoint_cost,
+                               keypoint_weight=region_kw)
         if region.evaluations > 0:
             pose = region.x.copy()
     edge_after_region = edge_cost(pose)
@@ -94,7 +103,10 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
             simplex = region.simplex
         else:
             simplex = initial_simplex(pose, steps * FRESH_STEP_SCALE, lower, upper)
-        edge = minimize_cost(edge_cost, simplex, lower, upper, budget=n_edge, ftol=config.ftol)
+        edge = minimize_cost(edge_cost, simplex, lower, upper, budget=n_edge, ftol=config.ftol,
+                             keypoint_cost=keypoint_cost, keypoint_weight=edge_kw)
         if edge.evaluations > 0:
             pose = edge.x.copy()
-    return Registration(pose.copy(), region_cost(pose), edge_cost(pose), edge_after_region, region, edge)
+    keypoint_residual = keypoint_cost(pose) if keypoint_cost is not None else float("nan")
+    return Registration(pose.copy(), region_cost(pose), edge_cost(pose), edge_after_region, region, edge,
+                        keypoint_residual)

@@ -7,7 +7,8 @@ from the last good pose when the leader fails, hand re-acquisition when a skin r
 unexplained, the leader's kinematic jumps (:mod:`mocap.body.jumps`), and the proposal stage's
 poses read from the current image (:class:`~mocap.track.proposals.ProposalSource`: hand blobs,
 exemplars, keypoints), each refined by a short registration. Every candidate gets a **unary score** (``region_weight * F + edge_weight * edge
-distance + prior_weight * pose-prior energy``); between consecutive frames a **motion term**
+distance + prior_weight * pose-prior energy``, plus ``keypoint_weight * keypoint distance`` on
+frames with 2D keypoints, which every registration of the frame then also adds); between consecutive frames a **motion term**
 (half the mean squared joint displacement over ``motion_sigma_m**2``) links them. The forward
 Viterbi recursion (:func:`~mocap.track.decode.viterbi_step`) gives each candidate the cost of
 the best path to it; near-duplicates are merged and the ``beam`` cheapest survive.
@@ -23,6 +24,7 @@ pose is now final, :meth:`Tracker.finish` the rest; :meth:`Tracker.state` and
 """
 from __future__ import annotations
 
+import functools
 import json
 import math
 import time
@@ -35,13 +37,13 @@ import numpy as np
 from mocap.body.model import BodyModel
 from mocap.body.pose import check_pose, clamp_to_limits
 from mocap.body.prior import PosePrior, default_prior
-from mocap.cost import EdgeCost, RegionCost
+from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.render.camera import Camera
 from mocap.track.config import (JUMPS_REFINED, MERGE_DISTANCE_M, MIN_SKIN_BLOB_PIXELS, RECOVERY_STEP_SCALE,
                                 TrackerConfig)
 from mocap.track.decode import backtrack, viterbi_step
-from mocap.track.proposals import (BlobArmSource, ProposalContext, ProposalSource, jump_proposals, reach_proposals,
-                                   unexplained_hands)
+from mocap.track.proposals import (BlobArmSource, KeypointArmSource, ProposalContext, ProposalSource, jump_proposals,
+                                   reach_proposals, unexplained_hands)
 from mocap.track.registration import Registration, register
 
 
@@ -186,6 +188,14 @@ class Tracker:
         return (RegionCost(prepared.labels, self.model, self.camera),
                 EdgeCost(prepared.distance, self.model, self.camera))
 
+    def keypoint_cost(self, keypoints) -> KeypointCost | None:
+        """The keypoint distance of a frame's :class:`~mocap.io.keypoints.Keypoints` (working
+        camera pixels) for this tracker; None when there are none or ``keypoint_weight`` is 0."""
+        if keypoints is None or self.config.keypoint_weight == 0:
+            return None
+        cost = KeypointCost(keypoints.uv, keypoints.confidence, self.model, self.camera)
+        return None if cost.empty else cost
+
     def _track(self, index: int, prepared, keypoints=None) -> _Frame:
         cfg = self.config
         t0 = time.perf_counter()
@@ -198,13 +208,16 @@ class Tracker:
             timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)
             return _Frame(index, True, kept, self._cost - self._cost.min(), np.arange(len(kept)), 0, timings)
         region_cost, edge_cost = self.costs(prepared)
+        # every registration of the frame, with the keypoint distance when keypoints are given
+        fit = functools.partial(register, region_cost, edge_cost, config=cfg,
+                                keypoint_cost=self.keypoint_cost(keypoints))
         candidates: list[tuple[Registration, str]] = []
         evaluations = 0
         t1 = time.perf_counter()
         for rank, h in enumerate(self._beam):
             budget = cfg.evaluations if rank == 0 else cfg.hypothesis_evaluations
             if budget > 0 or rank == 0:                 # the leader always (0: its pose kept)
-                reg = register(region_cost, edge_cost, h.pose, cfg, evaluations=budget)
+                reg = fit(h.pose, evaluations=budget)
                 evaluations += reg.evaluations
                 candidates.append((reg, "tracked"))
             if rank == 0:
@@ -215,18 +228,18 @@ class Tracker:
                 timings["edge"] = 1e3 * (t2 - t1) - timings["region"]
         leader = candidates[0][0]
         if cfg.recovery and leader.failed(cfg):
-            retry = register(region_cost, edge_cost, self.last_good, cfg, step_scale=RECOVERY_STEP_SCALE)
+            retry = fit(self.last_good, step_scale=RECOVERY_STEP_SCALE)
             evaluations += retry.evaluations
             candidates.append((retry, "recovery"))
         if cfg.hand_reacquisition:
-            evaluations += self._reacquire(prepared, region_cost, edge_cost, leader, candidates)
+            evaluations += self._reacquire(prepared, region_cost, fit, leader, candidates)
         if cfg.jumps:
-            evaluations += self._jump(region_cost, edge_cost, leader, candidates)
+            evaluations += self._jump(region_cost, fit, leader, candidates)
         t3 = time.perf_counter()
         if self.sources and cfg.proposals_refined > 0:
             context = ProposalContext(self.model, self.camera, leader.pose, keypoints)
             for source in self.sources:
-                evaluations += self._propose(source, prepared, context, region_cost, edge_cost, candidates)
+                evaluations += self._propose(source, prepared, context, region_cost, fit, candidates)
         timings["proposals"] = 1e3 * (time.perf_counter() - t3)
         hypotheses = [self._hypothesis(reg, origin) for reg, origin in candidates]
         self.candidates = [(h.origin, h.pose) for h in hypotheses]
@@ -242,6 +255,8 @@ class Tracker:
     def _hypothesis(self, reg: Registration, origin: str) -> _Hypothesis:
         cfg = self.config
         unary = cfg.region_weight * reg.region_residual + cfg.edge_weight * reg.edge_residual
+        if not math.isnan(reg.keypoint_residual):
+            unary += cfg.keypoint_weight * reg.keypoint_residual
         if self.prior is not None and cfg.prior_weight > 0:
             unary += cfg.prior_weight * self.prior.energy(reg.pose)
         return _Hypothesis(reg.pose, self.model.joint_positions(reg.pose), reg.region_residual, reg.edge_residual,
@@ -268,7 +283,7 @@ class Tracker:
                 break
         return keep
 
-    def _reacquire(self, prepared, region_cost, edge_cost, leader: Registration, candidates: list) -> int:
+    def _reacquire(self, prepared, region_cost, fit, leader: Registration, candidates: list) -> int:
         """Hand re-acquisition from the leader (see :class:`TrackerConfig`); returns evaluations used."""
         joints = self.model.joint_positions(leader.pose)
         targets = unexplained_hands(prepared.labels, joints, self.model, self.camera, self.config)
@@ -278,24 +293,23 @@ class Tracker:
         if not proposals:
             return 0
         values = [region_cost.evaluate_unchecked(q) for q in proposals]
-        retry = register(region_cost, edge_cost, proposals[int(np.argmin(values))], self.config,
-                         evaluations=self.config.hypothesis_evaluations)
+        retry = fit(proposals[int(np.argmin(values))], evaluations=self.config.hypothesis_evaluations)
         candidates.append((retry, "reacquisition"))
         return len(proposals) + retry.evaluations
 
-    def _jump(self, region_cost, edge_cost, leader: Registration, candidates: list) -> int:
+    def _jump(self, region_cost, fit, leader: Registration, candidates: list) -> int:
         """The leader's kinematic jumps, the lowest-F ones refined; returns evaluations used."""
         jumps = jump_proposals(leader.pose, self.model)
         values = np.array([region_cost.evaluate_unchecked(q) for _, q in jumps])
         used = len(jumps)
         for i in np.argsort(values, kind="stable")[:JUMPS_REFINED]:
             name, q = jumps[int(i)]
-            reg = register(region_cost, edge_cost, q, self.config, evaluations=self.config.jump_evaluations)
+            reg = fit(q, evaluations=self.config.jump_evaluations)
             used += reg.evaluations
             candidates.append((reg, "jump"))
         return used
 
-    def _propose(self, source: ProposalSource, prepared, context: ProposalContext, region_cost, edge_cost,
+    def _propose(self, source: ProposalSource, prepared, context: ProposalContext, region_cost, fit,
                  candidates: list) -> int:
         """One source's proposals: each scored by F, the ``proposals_refined`` lowest refined by a
         registration of ``proposal_evaluations``; returns evaluations used."""
@@ -305,8 +319,7 @@ class Tracker:
         values = np.array([region_cost.evaluate_unchecked(p.pose) for p in proposals])
         used = len(proposals)
         for i in np.argsort(values, kind="stable")[: self.config.proposals_refined]:
-            reg = register(region_cost, edge_cost, proposals[int(i)].pose, self.config,
-                           evaluations=self.config.proposal_evaluations)
+            reg = fit(proposals[int(i)].pose, evaluations=self.config.proposal_evaluations)
             used += reg.evaluations
             candidates.append((reg, proposals[int(i)].origin))
         return used
@@ -361,8 +374,11 @@ def _result(frame: _Frame, k: int) -> FrameResult:
 
 
 def proposal_sources(config: TrackerConfig) -> list[ProposalSource]:
-    """The proposal stage's sources that ``config`` switches on (``blob_arms``, ``exemplars``)."""
+    """The proposal stage's sources that ``config`` switches on (``blob_arms``, ``exemplars``; the
+    keypoint source with ``keypoint_weight`` > 0: it proposes nothing on frames without keypoints)."""
     sources: list[ProposalSource] = []
+    if config.keypoint_weight > 0:
+        sources.append(KeypointArmSource(min_offset_px=config.reacquisition_distance_px))
     if config.blob_arms:
         sources.append(BlobArmSource(min_pixels=MIN_SKIN_BLOB_PIXELS))
     if config.exemplars:

@@ -1,0 +1,254 @@
+"""2D keypoints of the body's joints, per frame, and the keypoint file (docs/design.md section 4).
+
+A detector (MediaPipe Pose, OpenPose, a hand annotation, ...) gives, for some frames and some
+joints, a pixel position and a confidence. :class:`Keypoints` holds one frame of them, by the
+joint names of :data:`mocap.body.skeleton.JOINT_NAMES`; a joint the detector did not give (or
+gave as NaN) is absent evidence: confidence 0, position NaN.
+
+The keypoint file is a CSV with the header ``frame,joint,u,v,confidence`` and one row per
+(frame, joint): ``frame`` the 0-based frame index of the input video, ``joint`` a name of
+:data:`~mocap.body.skeleton.JOINT_NAMES`, ``u, v`` pixels of the input frame (u right, v down,
+pixel centres at half-integers as in :class:`~mocap.render.camera.Camera`), ``confidence`` in
+[0, 1]. Frames or joints without a row, empty or NaN fields are absent evidence; anything else
+that does not parse (a wrong header, an unknown joint, a confidence outside [0, 1], a repeated
+(frame, joint)) is a ValueError naming the line.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Mapping, Protocol
+
+import numpy as np
+
+from mocap.body.skeleton import JOINT_NAMES
+from mocap.io.atomic import write_text_atomic
+
+#: Header of the keypoint file.
+KEYPOINT_COLUMNS: tuple[str, ...] = ("frame", "joint", "u", "v", "confidence")
+_JOINT = {name: i for i, name in enumerate(JOINT_NAMES)}
+
+
+@dataclass(frozen=True)
+class Keypoints:
+    """One frame's 2D keypoints, one row per joint of :data:`~mocap.body.skeleton.JOINT_NAMES`.
+
+    Attributes
+    ----------
+    uv : ndarray, shape (10, 2), float64, pixels
+        ``(u, v)`` of each joint; NaN where absent.
+    confidence : ndarray, shape (10,), float64
+        In [0, 1]; 0 where absent (and wherever ``uv`` is NaN).
+    """
+
+    uv: np.ndarray
+    confidence: np.ndarray
+
+    def __post_init__(self) -> None:
+        uv = np.array(self.uv, dtype=np.float64)
+        conf = np.array(self.confidence, dtype=np.float64)
+        if uv.shape != (len(JOINT_NAMES), 2) or conf.shape != (len(JOINT_NAMES),):
+            raise ValueError(f"keypoints need uv of shape ({len(JOINT_NAMES)}, 2) and confidence of shape "
+                             f"({len(JOINT_NAMES)},), got {uv.shape} and {conf.shape}")
+        conf = np.where(np.isnan(conf), 0.0, conf)
+        if np.any(conf < 0.0) or np.any(conf > 1.0):
+            raise ValueError("keypoint confidences must be in [0, 1]")
+        if np.any(np.isinf(uv)):
+            raise ValueError("keypoint positions must be finite or NaN (absent)")
+        absent = np.isnan(uv).any(axis=1) | (conf == 0.0)
+        uv[absent] = np.nan
+        conf[absent] = 0.0
+        for a in (uv, conf):
+            a.setflags(write=False)
+        object.__setattr__(self, "uv", uv)
+        object.__setattr__(self, "confidence", conf)
+
+    @classmethod
+    def empty(cls) -> "Keypoints":
+        """No joint present."""
+        return cls(np.full((len(JOINT_NAMES), 2), np.nan), np.zeros(len(JOINT_NAMES)))
+
+    @classmethod
+    def from_mapping(cls, joints: Mapping[str, tuple[float, float, float]]) -> "Keypoints":
+        """From ``{joint name: (u, v, confidence)}`` (pixels); joints left out are absent.
+
+        Raises
+        ------
+        ValueError
+            On a name not in :data:`~mocap.body.skeleton.JOINT_NAMES`.
+        """
+        uv = np.full((len(JOINT_NAMES), 2), np.nan)
+        conf = np.zeros(len(JOINT_NAMES))
+        for name, (u, v, c) in joints.items():
+            if name not in _JOINT:
+                raise ValueError(f"unknown joint {name!r}; joints are {', '.join(JOINT_NAMES)}")
+            uv[_JOINT[name]] = u, v
+            conf[_JOINT[name]] = c
+        return cls(uv, conf)
+
+    def as_mapping(self) -> dict[str, tuple[float, float, float]]:
+        """``{joint name: (u, v, confidence)}`` of the joints present."""
+        return {name: (float(self.uv[i, 0]), float(self.uv[i, 1]), float(self.confidence[i]))
+                for i, name in enumerate(JOINT_NAMES) if self.confidence[i] > 0.0}
+
+    @property
+    def present(self) -> np.ndarray:
+        """Whether each joint is present, bool (10,)."""
+        return self.confidence > 0.0
+
+    def scaled(self, sx: float, sy: float) -> "Keypoints":
+        """The keypoints of the same frame resampled by ``sx`` horizontally and ``sy`` vertically.
+
+        Positions scale with the image: ``(u, v)`` becomes ``(sx u, sy v)`` (pixel edges, not
+        centres, scale), as :meth:`mocap.render.camera.Camera.scaled` scales the principal point.
+        """
+        if not (math.isfinite(sx) and math.isfinite(sy) and sx > 0 and sy > 0):
+            raise ValueError(f"scale factors must be finite and positive, got {sx}, {sy}")
+        return Keypoints(self.uv * np.array([sx, sy]), self.confidence)
+
+
+class KeypointSource(Protocol):
+    """Where a video's keypoints come from: a file, a detector run on each frame, an oracle."""
+
+    def keypoints(self, frame_index: int, image: np.ndarray | None) -> Keypoints:
+        """Keypoints of one frame in its input pixels.
+
+        Parameters
+        ----------
+        frame_index : int
+            0-based index of the frame in the input video.
+        image : ndarray, shape (H, W, 3), uint8, or None
+            The input-resolution frame (RGB), for detectors; files and oracles ignore it.
+        """
+
+
+class KeypointFile:
+    """Keypoints read from a keypoint file (see the module): a :class:`KeypointSource`.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Raises
+    ------
+    FileNotFoundError, ValueError
+        When the file is missing or malformed (the message names the line).
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.frames = read_keypoints(self.path)
+        self.description = f"file {self.path.resolve()}"
+
+    def keypoints(self, frame_index: int, image: np.ndarray | None = None) -> Keypoints:
+        return self.frames.get(int(frame_index)) or Keypoints.empty()
+
+
+def _number(text: str, what: str, where: str) -> float:
+    if text.strip() == "":
+        return math.nan
+    try:
+        return float(text)
+    except ValueError:
+        raise ValueError(f"{where}: {what} {text!r} is not a number") from None
+
+
+def parse_keypoints(text: str, source: str = "keypoint file") -> dict[int, Keypoints]:
+    """Parse the text of a keypoint file (see the module).
+
+    Parameters
+    ----------
+    text : str
+    source : str
+        Name of the file, for messages.
+
+    Returns
+    -------
+    dict of int to Keypoints
+        By frame index; frames without a present joint are left out.
+    """
+    rows = csv.reader(io.StringIO(text))
+    header = next(rows, None)
+    if header is None or tuple(h.strip() for h in header) != KEYPOINT_COLUMNS:
+        raise ValueError(f"{source}: the first line must be {','.join(KEYPOINT_COLUMNS)}, got "
+                         f"{','.join(header) if header else 'nothing'}")
+    uv: dict[int, np.ndarray] = {}
+    conf: dict[int, np.ndarray] = {}
+    for line, row in enumerate(rows, start=2):
+        if not row or all(not cell.strip() for cell in row):
+            continue
+        where = f"{source} line {line}"
+        if len(row) != len(KEYPOINT_COLUMNS):
+            raise ValueError(f"{where}: expected {len(KEYPOINT_COLUMNS)} fields ({','.join(KEYPOINT_COLUMNS)}), "
+                             f"got {len(row)}")
+        frame_text, joint, u_text, v_text, c_text = (cell.strip() for cell in row)
+        try:
+            frame = int(frame_text)
+        except ValueError:
+            raise ValueError(f"{where}: frame {frame_text!r} is not an integer") from None
+        if frame < 0:
+            raise ValueError(f"{where}: frame {frame} is negative")
+        if joint not in _JOINT:
+            raise ValueError(f"{where}: unknown joint {joint!r}; joints are {', '.join(JOINT_NAMES)}")
+        u, v, c = (_number(t, name, where) for t, name in ((u_text, "u"), (v_text, "v"), (c_text, "confidence")))
+        if math.isinf(u) or math.isinf(v) or math.isinf(c):
+            raise ValueError(f"{where}: u, v and confidence must be finite (or NaN / empty for absent)")
+        if not math.isnan(c) and not 0.0 <= c <= 1.0:
+            raise ValueError(f"{where}: confidence {c} is outside [0, 1]")
+        frame_uv = uv.setdefault(frame, np.full((len(JOINT_NAMES), 2), np.nan))
+        frame_conf = conf.setdefault(frame, np.full(len(JOINT_NAMES), -1.0))
+        j = _JOINT[joint]
+        if frame_conf[j] != -1.0:
+            raise ValueError(f"{where}: frame {frame} gives joint {joint!r} twice")
+        frame_uv[j] = u, v
+        frame_conf[j] = 0.0 if math.isnan(c) else c
+    out = {}
+    for frame in sorted(uv):
+        k = Keypoints(uv[frame], np.maximum(conf[frame], 0.0))
+        if k.present.any():
+            out[frame] = k
+    return out
+
+
+def read_keypoints(path: str | Path) -> dict[int, Keypoints]:
+    """Read a keypoint file (see the module): keypoints by frame index, input pixels.
+
+    Raises
+    ------
+    FileNotFoundError
+    ValueError
+        When malformed; the message names the file and line.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"keypoint file not found: {path}")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a UTF-8 text file") from None
+    return parse_keypoints(text, str(path))
+
+
+def write_keypoints(path: str | Path, frames: Mapping[int, Keypoints]) -> None:
+    """Write keypoints by frame index as a keypoint file (atomically; present joints only).
+
+    Parameters
+    ----------
+    path : str or Path
+    frames : mapping of int to Keypoints
+        Input pixels; values are written with 17 significant digits (they read back exactly).
+    """
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(KEYPOINT_COLUMNS)
+    for frame in sorted(frames):
+        for name, (u, v, c) in frames[frame].as_mapping().items():
+            writer.writerow([int(frame), name, repr(u), repr(v), repr(c)])
+    write_text_atomic(path, buf.getvalue())
+
+
+__all__ = ["KEYPOINT_COLUMNS", "KeypointFile", "KeypointSource", "Keypoints", "parse_keypoints", "read_keypoints",
+           "write_keypoints"]

@@ -1,0 +1,103 @@
+"""2D keypoints from MediaPipe Pose (the optional extra ``keypoints``).
+
+MediaPipe Pose's legacy solution (``mediapipe.solutions.pose``, BlazePose GHUM 3D, Apache 2.0)
+in video mode with model complexity 1, whose landmark model ``pose_landmark_full.tflite`` the
+pinned wheel (``mediapipe==0.10.14``) bundles: nothing is downloaded at run time. It runs on the
+input-resolution RGB frame; landmarks come back normalised to the frame, so ``u = x * width``
+and ``v = y * height`` in input pixels, the confidence is the landmark's ``visibility``.
+
+Joints (:data:`mocap.body.skeleton.JOINT_NAMES`) from landmarks (the person's left and right, as
+MediaPipe's): ``head`` the midpoint of the ears (the centre of the head), shoulders, elbows and
+wrists their landmarks, ``*_hand`` the mean of the wrist, index and pinky landmarks (the palm's
+centre, where the model's hand joint is). ``neck`` has no landmark and is left absent. A joint
+whose landmarks are averaged takes their smallest visibility.
+"""
+from __future__ import annotations
+
+import time
+from types import MappingProxyType
+
+import numpy as np
+
+from mocap.io.keypoints import Keypoints
+
+#: MediaPipe Pose landmark indices averaged into each joint (absent joints have none).
+MEDIAPIPE_LANDMARKS = MappingProxyType({
+    "head": (7, 8),
+    "r_shoulder": (12,), "r_elbow": (14,), "r_wrist": (16,), "r_hand": (16, 18, 20),
+    "l_shoulder": (11,), "l_elbow": (13,), "l_wrist": (15,), "l_hand": (15, 17, 19),
+})
+#: What to install for ``--keypoints mediapipe``.
+MISSING_EXTRA = ("--keypoints mediapipe needs MediaPipe Pose, the optional extra 'keypoints': "
+                 "pip install 'mocap[keypoints]' (or give a keypoint file: --keypoints FILE.csv)")
+
+
+class MediaPipeKeypoints:
+    """A :class:`~mocap.io.keypoints.KeypointSource` running MediaPipe Pose on each frame.
+
+    Video mode: frames must come in order (MediaPipe tracks the person between them). Use as a
+    context manager, or call :meth:`close`.
+
+    Attributes
+    ----------
+    milliseconds : list of float
+        Wall-clock time of each frame's detection (the detector's own cost).
+
+    Raises
+    ------
+    ValueError
+        When the extra is not installed (:data:`MISSING_EXTRA`).
+    """
+
+    def __init__(self) -> None:
+        try:
+            from mediapipe.python.solutions import pose as mp_pose
+        except ImportError:
+            raise ValueError(MISSING_EXTRA) from None
+        from mediapipe import __version__
+
+        self._pose = mp_pose.Pose(static_image_mode=False, model_complexity=1)
+        self.milliseconds: list[float] = []
+        self.description = f"mediapipe {__version__} pose, model complexity 1"
+
+    def keypoints(self, frame_index: int, image: np.ndarray | None) -> Keypoints:
+        """Keypoints of one frame.
+
+        Parameters
+        ----------
+        frame_index : int
+            Unused (MediaPipe's video mode relies on the frames' order).
+        image : ndarray, shape (H, W, 3), uint8
+            The input-resolution RGB frame.
+
+        Returns
+        -------
+        Keypoints
+            Input pixels; empty when no person was found.
+        """
+        if image is None or image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
+            raise ValueError(f"MediaPipe needs an RGB uint8 frame (H, W, 3), got "
+                             f"{getattr(image, 'shape', None)} {getattr(image, 'dtype', None)}")
+        height, width = image.shape[:2]
+        started = time.perf_counter()
+        result = self._pose.process(np.ascontiguousarray(image))
+        self.milliseconds.append(1e3 * (time.perf_counter() - started))
+        if result.pose_landmarks is None:
+            return Keypoints.empty()
+        landmarks = result.pose_landmarks.landmark
+        joints = {}
+        for name, indices in MEDIAPIPE_LANDMARKS.items():
+            points = np.array([(landmarks[i].x * width, landmarks[i].y * height) for i in indices])
+            confidence = min(float(np.clip(landmarks[i].visibility, 0.0, 1.0)) for i in indices)
+            joints[name] = (*points.mean(axis=0), confidence)
+        return Keypoints.from_mapping(joints)
+
+    def close(self) -> None:
+        """Release MediaPipe's graph."""
+        self._pose.close()
+
+    def __enter__(self) -> "MediaPipeKeypoints":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
