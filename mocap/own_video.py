@@ -311,7 +311,7 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
         def frames_at(indices):
             indices = list(indices)
             return zip(indices, source.frames(indices=indices))
-        count = source.count
+        count = source.count_hint          # not waiting for the damage check
 
     # 1. the first usable frame: a face (or, with a background, a person-sized foreground)
     face = face_frame_full = None
@@ -542,7 +542,6 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
     else:
         seq = find_sequence(source)
         frames_in = VideoSource(seq.frames, fps=seq.fps() if seq.meta is not None else None)
-        frames_in.damaged_frames(options.allow_damaged)     # refused before anything is read
     seq_background = seq.background if seq is not None and not options.no_background and \
         options.background_frames is None else None
     background = options.background or seq_background

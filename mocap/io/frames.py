@@ -20,7 +20,7 @@ import imageio_ffmpeg
 import numpy as np
 
 from mocap.io.video import count_frames, iter_frames
-from mocap.io.video_check import check_video
+from mocap.io.video_check import RunningCheck, VideoCheck
 
 __all__ = ["VideoSource", "CameraSource", "camera_device"]
 
@@ -28,9 +28,11 @@ __all__ = ["VideoSource", "CameraSource", "camera_device"]
 class VideoSource:
     """Frames of a video file or image folder.
 
-    A video file is decoded once on opening (:func:`mocap.io.video_check.check_video`): its
-    frame count, every frame's timestamp and its damage are known before the first frame is
-    read.
+    A video file is checked (:class:`mocap.io.video_check.RunningCheck`) by an ffmpeg process
+    started on opening that decodes it once, alongside whatever reads the frames: the frame
+    timestamps come as it goes (:meth:`time_s`), the exact frame count and the damage
+    (:attr:`count`, :attr:`check`, :meth:`damaged_frames`) when it has decoded the whole
+    video (those wait for it); :attr:`count_hint` does not wait.
 
     Parameters
     ----------
@@ -47,9 +49,14 @@ class VideoSource:
     fps : float or None
         Announced frame rate of a video file (None for an image folder or an unknown rate).
     count : int
-        Number of frames.
+        Number of frames (of a video: waits for the check).
+    count_hint : int
+        The number of frames if known, else what the container announces (without waiting for
+        the check; a damaged file may hold fewer).
     check : VideoCheck or None
-        What decoding the video found (None for an image folder).
+        What decoding the video found (None for an image folder; waits for the check).
+    checked : bool
+        Whether the check has ended (:attr:`check` does not wait).
     live : bool
         False: the frames can be read again (the run re-reads them for the overlay video).
     """
@@ -58,25 +65,55 @@ class VideoSource:
 
     def __init__(self, path: str | Path, fps: float | None = None) -> None:
         self.path = Path(path)
+        self._running: RunningCheck | None = None
+        self._check: VideoCheck | None = None
+        self._count: int | None = None
         if self.path.is_dir() or not self.path.exists():
-            self.check = None
-            self.count = count_frames(self.path)
+            self._count = count_frames(self.path)
             self.fps = None
+            self._announced = self._count
         else:
-            self.check = check_video(self.path)
-            self.count = self.check.decoded
-            self.fps = self.check.fps
-        if self.count == 0:
-            raise ValueError(f"{self.path} has no frames")
-        first = next(iter_frames(self.path, 0, 1), None)
+            self._running = RunningCheck(self.path)
+            self._announced, self.fps = self._running.header()
+            if self._announced is None:          # nothing announced: the count is the check's
+                self._announced = self.count
+        first = next(iter_frames(self.path, 0, 1), None) if self._announced else None
         if first is None:
-            raise ValueError(f"{self.path} has no decodable frame")
+            if self._running is not None:
+                self.check                          # ffmpeg's own reason, when it has one
+            raise ValueError(f"{self.path} has no frames" if not self._announced else
+                             f"{self.path} has no decodable frame")
         self.height, self.width = first.shape[:2]
         self._folder_fps = fps or 25.0
 
     @property
     def name(self) -> str:
         return str(self.path)
+
+    @property
+    def check(self) -> VideoCheck | None:
+        if self._running is not None and self._check is None:
+            self._check = self._running.result()
+        return self._check
+
+    @property
+    def checked(self) -> bool:
+        return self._running is None or self._running.done
+
+    @property
+    def count(self) -> int:
+        if self._count is None:
+            self._count = self.check.decoded
+        return self._count
+
+    @property
+    def count_hint(self) -> int:
+        return self.count if self.checked else self._announced
+
+    def close(self) -> None:
+        """Stop the check's ffmpeg if it still runs (safe to call twice)."""
+        if self._running is not None:
+            self._running.close()
 
     def frames(self, start: int = 0, stop: int | None = None, *, indices=None) -> Iterator[np.ndarray]:
         """Frames ``start`` to ``stop`` (exclusive), or only the sorted ``indices`` among them,
@@ -102,9 +139,9 @@ class VideoSource:
     def time_s(self, index: int) -> float:
         """Time of frame ``index``, seconds from the first frame: a video frame's own timestamp,
         an image folder's ``index / fps``."""
-        if self.check is None:
+        if self._running is None:
             return index / self._folder_fps
-        return self.check.times[index]
+        return self._running.time_s(index)
 
 
 def camera_device(index: int) -> tuple[str, list[str]]:
