@@ -569,39 +569,43 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
     else:
         seq = find_sequence(source)
         frames_in = VideoSource(seq.frames, fps=seq.fps() if seq.meta is not None else None)
-    seq_background = seq.background if seq is not None and not options.no_background and \
-        options.background_frames is None else None
-    background = options.background or seq_background
-    calibration = options.calibration or (seq.calibration if seq is not None else None)
-    for what, path in (("background", background), ("calibration", calibration)):
-        if path is not None and not Path(path).is_file():
-            raise FileNotFoundError(f"{what} file not found: {path}")
-    width, height = frames_in.width, frames_in.height
-    factor = None if options.work_width is None else working_factor(width, height, options.work_width)
-    given = None
-    if calibration is not None:
-        given = Calibration.from_json(calibration)
-        factor = factor or working_factor(width, height)
-        given = dataclasses.replace(given, camera=given.camera.working(width, height, factor))
-    setup, consumed = setup_own_video(
-        frames_in, factor, background_mode=options.background_mode(seq_background is not None),
-        background_image=read_image(background) if background else None,
-        background_frames=options.background_frames, calibration=given, hfov_deg=options.hfov_deg,
-        height_m=options.height_m, progress=progress)
-    if live:
-        frames_in.hold(consumed)
-    setup = dataclasses.replace(setup, colour_from=options.colour,
-                                background_file=Path(background) if background else None)
-    account = {**setup.record, "input_width": width, "input_height": height,
-               "working_width": setup.calibration.camera.width, "working_height": setup.calibration.camera.height}
-    if on_setup is not None:
-        on_setup(account)
-    fps = (seq.fps(frames_in.fps or 25.0) if seq is not None and seq.meta is not None else frames_in.fps) or 25.0
-    ground_truth = options.ground_truth or (seq.ground_truth if seq is not None else None)
-    newcomer = newcomer_finder(setup, width, height, hfov_deg=options.hfov_deg, height_m=options.height_m)
-    summary = track_video(frames_in, setup, out_dir, options.tracker, ground_truth=ground_truth, fps=fps,
-                          max_frames=options.max_frames, overwrite=options.overwrite, progress=progress,
-                          write_overlay=options.overlay, allow_damaged=options.allow_damaged,
-                          start_frame=options.start, show=options.show, newcomer=newcomer)
-    summary.setup = account
-    return summary
+    try:
+        seq_background = seq.background if seq is not None and not options.no_background and \
+            options.background_frames is None else None
+        background = options.background or seq_background
+        calibration = options.calibration or (seq.calibration if seq is not None else None)
+        for what, path in (("background", background), ("calibration", calibration)):
+            if path is not None and not Path(path).is_file():
+                raise FileNotFoundError(f"{what} file not found: {path}")
+        width, height = frames_in.width, frames_in.height
+        factor = None if options.work_width is None else working_factor(width, height, options.work_width)
+        given = None
+        if calibration is not None:
+            given = Calibration.from_json(calibration)
+            factor = factor or working_factor(width, height)
+            given = dataclasses.replace(given, camera=given.camera.working(width, height, factor))
+        setup, consumed = setup_own_video(
+            frames_in, factor, background_mode=options.background_mode(seq_background is not None),
+            background_image=read_image(background) if background else None,
+            background_frames=options.background_frames, calibration=given, hfov_deg=options.hfov_deg,
+            height_m=options.height_m, progress=progress)
+        if live:
+            frames_in.hold(consumed)
+        setup = dataclasses.replace(setup, colour_from=options.colour,
+                                    background_file=Path(background) if background else None)
+        account = {**setup.record, "input_width": width, "input_height": height,
+                   "working_width": setup.calibration.camera.width, "working_height": setup.calibration.camera.height}
+        if on_setup is not None:
+            on_setup(account)
+        fps = (seq.fps(frames_in.fps or 25.0) if seq is not None and seq.meta is not None else frames_in.fps) or 25.0
+        ground_truth = options.ground_truth or (seq.ground_truth if seq is not None else None)
+        newcomer = newcomer_finder(setup, width, height, hfov_deg=options.hfov_deg, height_m=options.height_m)
+        summary = track_video(frames_in, setup, out_dir, options.tracker, ground_truth=ground_truth, fps=fps,
+                              max_frames=options.max_frames, overwrite=options.overwrite, progress=progress,
+                              write_overlay=options.overlay, allow_damaged=options.allow_damaged,
+                              start_frame=options.start, show=options.show, newcomer=newcomer)
+        summary.setup = account
+        return summary
+    finally:
+        if not live:
+            frames_in.close()       # the damage check's ffmpeg, when the run ended before it did
