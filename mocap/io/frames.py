@@ -20,7 +20,7 @@ import imageio_ffmpeg
 import numpy as np
 
 from mocap.io.video import count_frames, iter_frames
-from mocap.io.video_check import RunningCheck, VideoCheck
+from mocap.io.video_check import RunningCheck, VideoCheck, announced
 
 __all__ = ["VideoSource", "CameraSource", "camera_device"]
 
@@ -29,10 +29,11 @@ class VideoSource:
     """Frames of a video file or image folder.
 
     A video file is checked (:class:`mocap.io.video_check.RunningCheck`) by an ffmpeg process
-    started on opening that decodes it once, alongside whatever reads the frames: the frame
-    timestamps come as it goes (:meth:`time_s`), the exact frame count and the damage
-    (:attr:`count`, :attr:`check`, :meth:`damaged_frames`) when it has decoded the whole
-    video (those wait for it); :attr:`count_hint` does not wait.
+    that decodes it once, alongside whatever reads the frames, started on first need (any of
+    :attr:`checked`, :meth:`time_s`, :attr:`count`, :attr:`check`, :meth:`damaged_frames`):
+    the frame timestamps come as it goes (:meth:`time_s`), the exact frame count and the damage
+    (:attr:`count`, :attr:`check`, :meth:`damaged_frames`) when it has decoded the whole video
+    (those wait for it). Opening reads only the container's header (:attr:`count_hint`).
 
     Parameters
     ----------
@@ -56,7 +57,7 @@ class VideoSource:
     check : VideoCheck or None
         What decoding the video found (None for an image folder; waits for the check).
     checked : bool
-        Whether the check has ended (:attr:`check` does not wait).
+        Whether the check has ended (:attr:`check` does not wait); starts it.
     live : bool
         False: the frames can be read again (the run re-reads them for the overlay video).
     """
@@ -68,18 +69,18 @@ class VideoSource:
         self._running: RunningCheck | None = None
         self._check: VideoCheck | None = None
         self._count: int | None = None
-        if self.path.is_dir() or not self.path.exists():
+        self._video = not (self.path.is_dir() or not self.path.exists())
+        if not self._video:
             self._count = count_frames(self.path)
             self.fps = None
             self._announced = self._count
         else:
-            self._running = RunningCheck(self.path)
-            self._announced, self.fps = self._running.header()
+            self._announced, self.fps = announced(self.path)
             if self._announced is None:          # nothing announced: the count is the check's
                 self._announced = self.count
         first = next(iter_frames(self.path, 0, 1), None) if self._announced else None
         if first is None:
-            if self._running is not None:
+            if self._video:
                 self.check                          # ffmpeg's own reason, when it has one
             raise ValueError(f"{self.path} has no frames" if not self._announced else
                              f"{self.path} has no decodable frame")
@@ -90,15 +91,21 @@ class VideoSource:
     def name(self) -> str:
         return str(self.path)
 
+    def _checking(self) -> RunningCheck:
+        """The check, started on first need (the set-up's own decoding runs before it, alone)."""
+        if self._running is None:
+            self._running = RunningCheck(self.path)
+        return self._running
+
     @property
     def check(self) -> VideoCheck | None:
-        if self._running is not None and self._check is None:
-            self._check = self._running.result()
+        if self._video and self._check is None:
+            self._check = self._checking().result()
         return self._check
 
     @property
     def checked(self) -> bool:
-        return self._running is None or self._running.done
+        return not self._video or self._checking().done
 
     @property
     def count(self) -> int:
@@ -139,9 +146,9 @@ class VideoSource:
     def time_s(self, index: int) -> float:
         """Time of frame ``index``, seconds from the first frame: a video frame's own timestamp,
         an image folder's ``index / fps``."""
-        if self._running is None:
+        if not self._video:
             return index / self._folder_fps
-        return self._running.time_s(index)
+        return self._checking().time_s(index)
 
 
 def camera_device(index: int) -> tuple[str, list[str]]:

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import imageio_ffmpeg
 
-__all__ = ["VideoCheck", "RunningCheck", "check_video", "ffmpeg_failure", "format_frames"]
+__all__ = ["VideoCheck", "RunningCheck", "announced", "check_video", "ffmpeg_failure", "format_frames"]
 
 _DURATION = re.compile(r"Duration: (\d+):(\d\d):(\d\d(?:\.\d+)?)")
 _FPS = re.compile(r"Stream #\d+:\d+.*?: Video: .*?(\d+(?:\.\d+)?)(k?) fps")
@@ -282,22 +282,23 @@ class RunningCheck:
             raise ValueError(f"{self.path} has {check.decoded} decodable frames, no frame {index}")
         return check.times[index]
 
-    def header(self) -> tuple[int | None, float | None]:
-        """(frames the container announces, announced frame rate) from the container's header
-        (waits for the first decoded frame or the end); ``(None, None)`` where it says nothing."""
-        with self._changed:
-            self._changed.wait_for(lambda: self._pts or self._result is not None)
-        log = "".join(self._lines)
-        duration, fps = _DURATION.search(log), _announced_fps(log)
-        if not (duration and fps):
-            return None, fps
-        return int(round(_seconds(duration) * fps)), fps
-
     def close(self) -> None:
         """Stop ffmpeg (safe to call twice, and after the end)."""
         if self._proc.poll() is None:
             self._proc.kill()
         self._thread.join()
+
+
+def announced(path: str | Path) -> tuple[int | None, float | None]:
+    """(frames, frame rate) a video file's container announces, from its header without
+    decoding (the frames rounded from its duration); None for what it does not say or a file
+    ffmpeg cannot open (:func:`check_video` says why)."""
+    cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-nostdin", "-i", str(path)]
+    log = subprocess.run(cmd, capture_output=True, text=True, errors="replace").stderr   # exits 1: no output
+    duration, fps = _DURATION.search(log), _announced_fps(log)
+    if not (duration and fps):
+        return None, fps
+    return int(round(_seconds(duration) * fps)), fps
 
 
 def _announced_fps(log: str) -> float | None:
