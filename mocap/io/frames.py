@@ -52,8 +52,8 @@ class VideoSource:
     count : int
         Number of frames (of a video: waits for the check).
     count_hint : int
-        The number of frames if known, else what the container announces (without waiting for
-        the check; a damaged file may hold fewer).
+        The number of frames if known, else what the container announces (starts the check
+        without waiting for it; a damaged file may hold fewer).
     check : VideoCheck or None
         What decoding the video found (None for an image folder; waits for the check).
     checked : bool
@@ -92,7 +92,7 @@ class VideoSource:
         return str(self.path)
 
     def _checking(self) -> RunningCheck:
-        """The check, started on first need (the set-up's own decoding runs before it, alone)."""
+        """The check, started on first need (for ``track``: the set-up's :attr:`count_hint`)."""
         if self._running is None:
             self._running = RunningCheck(self.path)
         return self._running
