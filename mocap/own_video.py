@@ -13,7 +13,7 @@ the video itself, at the tracker's working resolution (:mod:`mocap.imaging.resam
    colours: :mod:`mocap.imaging.scene`). A live camera has no clip to look at: colour-only
    unless a background is given.
 2. **Calibration** — on the first usable frame among the first ``search_frames``: the first
-   with a face (:func:`mocap.imaging.detect_face`, at input resolution), or without a face
+   with a face (:func:`find_face`, on the frame reduced to about 640 pixels), or without a face
    but with a background, the first with a person-sized foreground
    (:func:`mocap.calibrate.calibrate_person`). The camera is a pinhole of horizontal field of
    view ``hfov_deg`` (default a typical webcam's); ``height_m`` fixes the absolute scale.
@@ -61,6 +61,9 @@ MIN_PERSON_FRACTION = 0.01
 FACE_WORKING_PX = 14
 #: Smallest face looked for, in working pixels (its skin sample must hold enough pixels).
 MIN_FACE_WORKING_PX = 9
+#: Longer side (pixels) of the image the face search looks at: a larger frame is first reduced
+#: by an integer factor (block means, :func:`mocap.imaging.resample.downscale`) to about this.
+FACE_SEARCH_SIDE = 640
 #: Share of skin-toned pixels a face's centre must hold to be calibrated on.
 MIN_FACE_SKIN = 0.3
 #: Share of the face box that must be foreground against the estimate to use it.
@@ -111,6 +114,30 @@ def _whole_person(foreground: np.ndarray) -> bool:
     rows, cols = np.nonzero(parts == largest)
     h, w = foreground.shape
     return bool(rows.min() > 0 and cols.min() > 0 and rows.max() < h - 1 and cols.max() < w - 1)
+
+
+def find_face(frame: np.ndarray, factor: int) -> Box | None:
+    """The face in an input-size frame (:func:`mocap.imaging.detect_face`, smallest side
+    ``max(24, MIN_FACE_WORKING_PX * factor)`` pixels of the searched image), searched on the
+    frame reduced by an integer factor to about :data:`FACE_SEARCH_SIDE` pixels (a block mean:
+    cheaper than the detector's own smoothing of the whole input frame), or None.
+
+    Parameters
+    ----------
+    frame : ndarray of uint8, shape (H, W, 3)
+        Input-size frame.
+    factor : int
+        Working-resolution factor.
+
+    Returns
+    -------
+    Box or None
+        In input pixels.
+    """
+    search = max(1, int(np.ceil(max(frame.shape[:2]) / FACE_SEARCH_SIDE - 1e-9)))
+    found = detect_face(downscale(frame, search), min_size=max(24, MIN_FACE_WORKING_PX * factor),
+                        max_side=FACE_SEARCH_SIDE)
+    return None if found is None else Box(*(int(v) * search for v in found))
 
 
 def _plausible_face(frame: np.ndarray, face: Box) -> bool:
@@ -165,7 +192,7 @@ def find_person(frame: np.ndarray, factor: int, camera: Camera, background: np.n
                 whole_person: bool = True):
     """Calibrate the person in one input-size frame, or None when there is nobody to calibrate.
 
-    The face first (:func:`mocap.imaging.detect_face` at input resolution, :func:`_plausible_face`);
+    The face first (:func:`find_face`, :func:`_plausible_face`);
     without one and with a background, a person-sized foreground clear of the borders.
 
     Parameters
@@ -183,7 +210,7 @@ def find_person(frame: np.ndarray, factor: int, camera: Camera, background: np.n
     (PersonCalibration, face box in input pixels or None) or None
     """
     small = downscale(frame, factor)
-    found = detect_face(frame, min_size=max(24, MIN_FACE_WORKING_PX * factor))
+    found = find_face(frame, factor)
     if found is not None and _plausible_face(frame, found):
         face = Box(*(int(round(v / factor)) for v in found))
         try:
@@ -316,7 +343,7 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
         def frames_at(indices):
             indices = list(indices)
             return zip(indices, source.frames(indices=indices))
-        count = source.count
+        count = source.count_hint          # not waiting for the damage check
 
     # 1. the first usable frame: a face (or, with a background, a person-sized foreground)
     face = face_frame_full = None
@@ -328,7 +355,7 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
     if calibration is None:
         for index, frame in tqdm(frames_at(searched), total=len(searched), desc="looking for a face", unit="frame",
                                  disable=not progress):
-            found = detect_face(frame, min_size=max(24, MIN_FACE_WORKING_PX * factor))
+            found = find_face(frame, factor)
             if found is not None and _plausible_face(frame, found):
                 face_full, calib_index, face_frame_full = found, index, frame
                 if auto_factor:
@@ -576,40 +603,44 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
     else:
         seq = find_sequence(source)
         frames_in = VideoSource(seq.frames, fps=seq.fps() if seq.meta is not None else None)
-        frames_in.damaged_frames(options.allow_damaged)     # refused before anything is read
-    seq_background = seq.background if seq is not None and not options.no_background and \
-        options.background_frames is None else None
-    background = options.background or seq_background
-    calibration = options.calibration or (seq.calibration if seq is not None else None)
-    for what, path in (("background", background), ("calibration", calibration)):
-        if path is not None and not Path(path).is_file():
-            raise FileNotFoundError(f"{what} file not found: {path}")
-    width, height = frames_in.width, frames_in.height
-    factor = None if options.work_width is None else working_factor(width, height, options.work_width)
-    given = None
-    if calibration is not None:
-        given = Calibration.from_json(calibration)
-        factor = factor or working_factor(width, height)
-        given = dataclasses.replace(given, camera=given.camera.working(width, height, factor))
-    setup, consumed = setup_own_video(
-        frames_in, factor, background_mode=options.background_mode(seq_background is not None),
-        background_image=read_image(background) if background else None,
-        background_frames=options.background_frames, calibration=given, hfov_deg=options.hfov_deg,
-        height_m=options.height_m, progress=progress, keypoints=keypoints)
-    if live:
-        frames_in.hold(consumed)
-    setup = dataclasses.replace(setup, colour_from=options.colour,
-                                background_file=Path(background) if background else None)
-    account = {**setup.record, "input_width": width, "input_height": height,
-               "working_width": setup.calibration.camera.width, "working_height": setup.calibration.camera.height}
-    if on_setup is not None:
-        on_setup(account)
-    fps = (seq.fps(frames_in.fps or 25.0) if seq is not None and seq.meta is not None else frames_in.fps) or 25.0
-    ground_truth = options.ground_truth or (seq.ground_truth if seq is not None else None)
-    newcomer = newcomer_finder(setup, width, height, hfov_deg=options.hfov_deg, height_m=options.height_m)
-    summary = track_video(frames_in, setup, out_dir, options.tracker, ground_truth=ground_truth, fps=fps,
-                          max_frames=options.max_frames, overwrite=options.overwrite, progress=progress,
-                          write_overlay=options.overlay, allow_damaged=options.allow_damaged,
-                          start_frame=options.start, show=options.show, newcomer=newcomer, keypoints=keypoints)
-    summary.setup = account
-    return summary
+    try:
+        seq_background = seq.background if seq is not None and not options.no_background and \
+            options.background_frames is None else None
+        background = options.background or seq_background
+        calibration = options.calibration or (seq.calibration if seq is not None else None)
+        for what, path in (("background", background), ("calibration", calibration)):
+            if path is not None and not Path(path).is_file():
+                raise FileNotFoundError(f"{what} file not found: {path}")
+        width, height = frames_in.width, frames_in.height
+        factor = None if options.work_width is None else working_factor(width, height, options.work_width)
+        given = None
+        if calibration is not None:
+            given = Calibration.from_json(calibration)
+            factor = factor or working_factor(width, height)
+            given = dataclasses.replace(given, camera=given.camera.working(width, height, factor))
+        setup, consumed = setup_own_video(
+            frames_in, factor, background_mode=options.background_mode(seq_background is not None),
+            background_image=read_image(background) if background else None,
+            background_frames=options.background_frames, calibration=given, hfov_deg=options.hfov_deg,
+            height_m=options.height_m, progress=progress, keypoints=keypoints)
+        if live:
+            frames_in.hold(consumed)
+        setup = dataclasses.replace(setup, colour_from=options.colour,
+                                    background_file=Path(background) if background else None)
+        account = {**setup.record, "input_width": width, "input_height": height,
+                   "working_width": setup.calibration.camera.width, "working_height": setup.calibration.camera.height}
+        if on_setup is not None:
+            on_setup(account)
+        fps = (seq.fps(frames_in.fps or 25.0) if seq is not None and seq.meta is not None else frames_in.fps) or 25.0
+        ground_truth = options.ground_truth or (seq.ground_truth if seq is not None else None)
+        newcomer = newcomer_finder(setup, width, height, hfov_deg=options.hfov_deg, height_m=options.height_m)
+        summary = track_video(frames_in, setup, out_dir, options.tracker, ground_truth=ground_truth, fps=fps,
+                              max_frames=options.max_frames, overwrite=options.overwrite, progress=progress,
+                              write_overlay=options.overlay, allow_damaged=options.allow_damaged,
+                              start_frame=options.start, show=options.show, newcomer=newcomer,
+                              keypoints=keypoints)
+        summary.setup = account
+        return summary
+    finally:
+        if not live:
+            frames_in.close()       # the damage check's ffmpeg, when the run ended before it did

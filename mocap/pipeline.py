@@ -186,12 +186,16 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
     out_dir = Path(out_dir)
     if isinstance(start_frame, bool) or not isinstance(start_frame, int) or start_frame < 0:
         raise ValueError(f"the start frame must be a non-negative integer, got {start_frame!r}")
-    if frames_in.live:
-        total, damaged = frames_in.count, []
-    else:
-        total, damaged = frames_in.count, frames_in.damaged_frames(allow_damaged)
-        if start_frame >= total:
-            raise ValueError(f"start frame {start_frame} is past the end of {frames_in.name} ({total} frames)")
+    # a file's damage check decodes it alongside the run (VideoSource): its verdict is taken as
+    # soon as it is known and at the latest before the outputs are finished (verdict())
+    damaged: list[int] | None = [] if frames_in.live else None
+    total = frames_in.count if frames_in.live or frames_in.checked else None
+    if not frames_in.live:
+        if frames_in.checked:
+            damaged = frames_in.damaged_frames(allow_damaged)
+        if start_frame >= frames_in.count_hint and start_frame >= frames_in.count:
+            raise ValueError(f"start frame {start_frame} is past the end of {frames_in.name} "
+                             f"({frames_in.count} frames)")
     if max_frames is not None:
         if max_frames < 1:
             raise ValueError(f"max_frames must be at least 1, got {max_frames}")
@@ -270,8 +274,28 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
     pending: dict[int, np.ndarray] = {}
     # dark flags of the frames pushed but not decided yet (kept in the checkpoint with the tracker)
     dark: dict[int, bool] = {} if checkpoint is None else {int(f): bool(v) for f, v in pending_dark}
-    bar = tqdm(total=None if total is None else total - start_frame, initial=start - start_frame, desc="tracking",
-               unit="frame", disable=not progress)
+    expected = total if total is not None or frames_in.live else frames_in.count_hint
+    if max_frames is not None and expected is not None:
+        expected = min(expected, start_frame + max_frames)
+    bar = tqdm(total=None if expected is None else expected - start_frame, initial=start - start_frame,
+               desc="tracking", unit="frame", disable=not progress)
+    made = [] if checkpoint is not None else [journal, run_json, state_path, out_dir / "colour_model.json",
+                                              out_dir / "overlay.mp4"]
+
+    def verdict(wait: bool) -> None:
+        """The damage check's verdict, once: a damaged video stops the run unless allowed (what
+        this run wrote is removed: a refused video leaves no results)."""
+        nonlocal damaged
+        if damaged is not None or not (wait or frames_in.checked):
+            return
+        try:
+            damaged = frames_in.damaged_frames(allow_damaged)
+        except ValueError:
+            if live is not None:
+                live.close()
+            for path in made:
+                path.unlink(missing_ok=True)
+            raise
     interrupted = False
 
     clock = time.perf_counter()
@@ -306,6 +330,12 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
             bar.set_postfix(fps=f"{1e3 / np.mean(results_ms):.0f}", F=f"{result.region_residual:.2f}",
                             D=f"{result.edge_residual:.1f}")
 
+    def checkpoint_before(next_index: int) -> None:
+        write_checkpoint(state_path, {**tracker.state(), PENDING_DARK: np.array(sorted(dark.items()),
+                                                                                 np.int64).reshape(-1, 2),
+                                      PEOPLE: np.array(json.dumps(people))}, next_index, journal)
+
+    last = None
     try:
         for index, when, is_dark, small, segment, prepared, frame, found in prefetch(read, READ_AHEAD,
                                                                                      name="mocap-reader"):
@@ -338,13 +368,19 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
                     people["segments"][-1]["last_frame"] = people["last_seen"]
             else:
                 people["absent"], people["last_seen"] = 0, index
+            verdict(wait=False)
             if (index + 1) % every == 0 or index + 1 == total:
-                write_checkpoint(state_path, {**tracker.state(), PENDING_DARK: np.array(sorted(dark.items()),
-                                                                                         np.int64).reshape(-1, 2),
-                                              PEOPLE: np.array(json.dumps(people))}, index + 1, journal)
+                checkpoint_before(index + 1)
             bar.update(1)
+            last = index
+        verdict(wait=True)
+        if total is None and last is not None and (last + 1) % every != 0:     # the checkpoint after the last
+            checkpoint_before(last + 1)
         # the held-back frames: not checkpointed, a resume continues from the last checkpoint instead
         emit(tracker.finish())
+    except ValueError:
+        verdict(wait=True)              # a damaged video's reader may fail first: the damage is the reason
+        raise
     except KeyboardInterrupt:
         if not frames_in.live:
             raise

@@ -187,6 +187,41 @@ def test_a_damaged_video_stops_the_run_or_is_tracked_with_its_frames_marked(sequ
 
 
 @pytest.mark.slow
+def test_damage_the_check_finds_while_tracking_stops_the_run_and_leaves_no_results(sequence, tmp_path, capsys,
+                                                                                   monkeypatch):
+    """The damage check runs beside the run: held back here until 5 frames were read, its
+    verdict must still stop the run with the frame numbers and remove what the run wrote."""
+    import imageio.v3 as iio
+
+    from mocap.io.frames import VideoSource
+    from mocap.io.video import image_files
+    frames = np.stack([iio.imread(f) for f in image_files(sequence / "frames")])
+    clip, cut = tmp_path / "clip.mkv", tmp_path / "cut.mkv"
+    iio.imwrite(clip, np.concatenate([frames, frames]), plugin="FFMPEG", fps=10, macro_block_size=8)   # 16 frames
+    data = clip.read_bytes()
+    cut.write_bytes(data[: len(data) * 9 // 10])
+    read, asked = [], []
+    frames_of, checked = VideoSource.frames, VideoSource.checked
+
+    def counted(self, *args, **kwargs):
+        for frame in frames_of(self, *args, **kwargs):
+            read.append(1)
+            yield frame
+    monkeypatch.setattr(VideoSource, "frames", counted)
+    monkeypatch.setattr(VideoSource, "checked", property(lambda self: len(read) >= 5 and checked.fget(self)))
+    damaged_frames = VideoSource.damaged_frames
+    monkeypatch.setattr(VideoSource, "damaged_frames",
+                        lambda self, allow=False: asked.append(len(read)) or damaged_frames(self, allow))
+    out = tmp_path / "refused"
+    assert main(["track", str(cut), "--out", str(out), "--background", str(sequence / "background.png"),
+                 "--calibration", str(sequence / "calibration.json"), *TRACK_ARGS]) == 2
+    last = capsys.readouterr().err.strip().splitlines()[-1]         # after the progress bar, the one-line error
+    assert last.startswith("error: ") and "cut.mkv is damaged: 16 announced" in last and "--allow-damaged" in last
+    assert asked and asked[0] >= 5                      # the verdict came while frames were tracked
+    assert not (out / "poses.csv").exists() and not (out / "run.json").exists() and not (out / STATE_FILE).exists()
+
+
+@pytest.mark.slow
 def test_colours_are_learned_where_the_person_is_and_start_skips_frames(sequence, tmp_path, capsys):
     import shutil
 

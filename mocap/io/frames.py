@@ -20,7 +20,7 @@ import imageio_ffmpeg
 import numpy as np
 
 from mocap.io.video import count_frames, iter_frames
-from mocap.io.video_check import check_video
+from mocap.io.video_check import RunningCheck, VideoCheck, announced
 
 __all__ = ["VideoSource", "CameraSource", "camera_device"]
 
@@ -28,9 +28,12 @@ __all__ = ["VideoSource", "CameraSource", "camera_device"]
 class VideoSource:
     """Frames of a video file or image folder.
 
-    A video file is decoded once on opening (:func:`mocap.io.video_check.check_video`): its
-    frame count, every frame's timestamp and its damage are known before the first frame is
-    read.
+    A video file is checked (:class:`mocap.io.video_check.RunningCheck`) by an ffmpeg process
+    that decodes it once, alongside whatever reads the frames, started on first need (any of
+    :attr:`checked`, :meth:`time_s`, :attr:`count`, :attr:`check`, :meth:`damaged_frames`):
+    the frame timestamps come as it goes (:meth:`time_s`), the exact frame count and the damage
+    (:attr:`count`, :attr:`check`, :meth:`damaged_frames`) when it has decoded the whole video
+    (those wait for it). Opening reads only the container's header (:attr:`count_hint`).
 
     Parameters
     ----------
@@ -47,9 +50,14 @@ class VideoSource:
     fps : float or None
         Announced frame rate of a video file (None for an image folder or an unknown rate).
     count : int
-        Number of frames.
+        Number of frames (of a video: waits for the check).
+    count_hint : int
+        The number of frames if known, else what the container announces (starts the check
+        without waiting for it; a damaged file may hold fewer).
     check : VideoCheck or None
-        What decoding the video found (None for an image folder).
+        What decoding the video found (None for an image folder; waits for the check).
+    checked : bool
+        Whether the check has ended (:attr:`check` does not wait); starts it.
     live : bool
         False: the frames can be read again (the run re-reads them for the overlay video).
     """
@@ -58,25 +66,61 @@ class VideoSource:
 
     def __init__(self, path: str | Path, fps: float | None = None) -> None:
         self.path = Path(path)
-        if self.path.is_dir() or not self.path.exists():
-            self.check = None
-            self.count = count_frames(self.path)
+        self._running: RunningCheck | None = None
+        self._check: VideoCheck | None = None
+        self._count: int | None = None
+        self._video = not (self.path.is_dir() or not self.path.exists())
+        if not self._video:
+            self._count = count_frames(self.path)
             self.fps = None
+            self._announced = self._count
         else:
-            self.check = check_video(self.path)
-            self.count = self.check.decoded
-            self.fps = self.check.fps
-        if self.count == 0:
-            raise ValueError(f"{self.path} has no frames")
-        first = next(iter_frames(self.path, 0, 1), None)
+            self._announced, self.fps = announced(self.path)
+            if self._announced is None:          # nothing announced: the count is the check's
+                self._announced = self.count
+        first = next(iter_frames(self.path, 0, 1), None) if self._announced else None
         if first is None:
-            raise ValueError(f"{self.path} has no decodable frame")
+            if self._video:
+                self.check                          # ffmpeg's own reason, when it has one
+            raise ValueError(f"{self.path} has no frames" if not self._announced else
+                             f"{self.path} has no decodable frame")
         self.height, self.width = first.shape[:2]
         self._folder_fps = fps or 25.0
 
     @property
     def name(self) -> str:
         return str(self.path)
+
+    def _checking(self) -> RunningCheck:
+        """The check, started on first need (for ``track``: the set-up's :attr:`count_hint`)."""
+        if self._running is None:
+            self._running = RunningCheck(self.path)
+        return self._running
+
+    @property
+    def check(self) -> VideoCheck | None:
+        if self._video and self._check is None:
+            self._check = self._checking().result()
+        return self._check
+
+    @property
+    def checked(self) -> bool:
+        return not self._video or self._checking().done
+
+    @property
+    def count(self) -> int:
+        if self._count is None:
+            self._count = self.check.decoded
+        return self._count
+
+    @property
+    def count_hint(self) -> int:
+        return self.count if self.checked else self._announced
+
+    def close(self) -> None:
+        """Stop the check's ffmpeg if it still runs (safe to call twice)."""
+        if self._running is not None:
+            self._running.close()
 
     def frames(self, start: int = 0, stop: int | None = None, *, indices=None) -> Iterator[np.ndarray]:
         """Frames ``start`` to ``stop`` (exclusive), or only the sorted ``indices`` among them,
@@ -102,9 +146,9 @@ class VideoSource:
     def time_s(self, index: int) -> float:
         """Time of frame ``index``, seconds from the first frame: a video frame's own timestamp,
         an image folder's ``index / fps``."""
-        if self.check is None:
+        if not self._video:
             return index / self._folder_fps
-        return self.check.times[index]
+        return self._checking().time_s(index)
 
 
 def camera_device(index: int) -> tuple[str, list[str]]:

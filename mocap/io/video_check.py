@@ -20,7 +20,7 @@ from pathlib import Path
 
 import imageio_ffmpeg
 
-__all__ = ["VideoCheck", "check_video", "ffmpeg_failure", "format_frames"]
+__all__ = ["VideoCheck", "RunningCheck", "announced", "check_video", "ffmpeg_failure", "format_frames"]
 
 _DURATION = re.compile(r"Duration: (\d+):(\d\d):(\d\d(?:\.\d+)?)")
 _FPS = re.compile(r"Stream #\d+:\d+.*?: Video: .*?(\d+(?:\.\d+)?)(k?) fps")
@@ -183,20 +183,141 @@ def check_video(path: str | Path) -> VideoCheck:
         With one sentence (:func:`ffmpeg_failure`) if ffmpeg cannot open it, or if no frame
         decodes.
     """
-    path = Path(path)
-    if not path.exists():
-        raise FileNotFoundError(f"no such file: {path}")
-    if path.is_file() and path.stat().st_size == 0:
-        raise ValueError(ffmpeg_failure(path, ""))
-    cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-nostats", "-nostdin", "-v", "info",
-           "-i", str(path), "-map", "0:v:0", "-vf", "showinfo", "-fps_mode", "passthrough", "-f", "null", "-"]
-    proc = subprocess.run(cmd, capture_output=True, text=True, errors="replace")
-    log = proc.stderr
+    return RunningCheck(path).result()
+
+
+class RunningCheck:
+    """:func:`check_video` running on ffmpeg's own process while the caller goes on.
+
+    The frames' timestamps come in as ffmpeg decodes (:meth:`time_s` waits for the one
+    asked for); the damage is known when the whole video is decoded (:meth:`result`).
+    The process runs ahead of any tracker (decoding only), holds no frames and stops with
+    :meth:`close`.
+
+    Parameters
+    ----------
+    path : str or Path
+        A video file.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``path`` does not exist.
+    ValueError
+        If it is an empty file.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        import threading
+
+        self.path = Path(path)
+        if not self.path.exists():
+            raise FileNotFoundError(f"no such file: {self.path}")
+        if self.path.is_file() and self.path.stat().st_size == 0:
+            raise ValueError(ffmpeg_failure(self.path, ""))
+        # showinfo without its per-plane checksums (a quarter of the decoding's CPU time at 720p)
+        cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-nostats", "-nostdin", "-v", "info",
+               "-i", str(self.path), "-map", "0:v:0", "-vf", "showinfo=checksum=0", "-fps_mode", "passthrough",
+               "-f", "null", "-"]
+        self._proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                      stderr=subprocess.PIPE, text=True, errors="replace")
+        self._lines: list[str] = []
+        self._pts: list[float] = []             # pts_time of frames 0, 1, ... as they come
+        self._result: VideoCheck | Exception | None = None
+        self._changed = threading.Condition()
+        self._thread = threading.Thread(target=self._read, name="mocap-video-check", daemon=True)
+        self._thread.start()
+
+    def _read(self) -> None:
+        for line in self._proc.stderr:
+            self._lines.append(line)
+            shown = [float(m.group(3)) for m in _SHOWINFO.finditer(line)]
+            if shown:
+                with self._changed:
+                    self._pts.extend(shown)
+                    self._changed.notify_all()
+        self._proc.wait()
+        try:
+            result: VideoCheck | Exception = _parse_check(self.path, "".join(self._lines), self._proc.returncode)
+        except ValueError as exc:
+            result = exc
+        with self._changed:
+            self._result = result
+            self._changed.notify_all()
+
+    @property
+    def done(self) -> bool:
+        """Whether the whole video is decoded (:meth:`result` does not wait)."""
+        return self._result is not None
+
+    def result(self) -> VideoCheck:
+        """The whole check (waits for the end of the decoding).
+
+        Raises
+        ------
+        ValueError
+            As :func:`check_video`.
+        """
+        with self._changed:
+            self._changed.wait_for(lambda: self._result is not None)
+        if isinstance(self._result, Exception):
+            raise self._result
+        return self._result
+
+    def time_s(self, index: int) -> float:
+        """Timestamp of decoded frame ``index``, seconds from frame 0 (waits until ffmpeg has
+        decoded it).
+
+        Raises
+        ------
+        ValueError
+            The video has no frame ``index``, or the check failed (as :func:`check_video`).
+        """
+        with self._changed:
+            self._changed.wait_for(lambda: len(self._pts) > index or self._result is not None)
+            if len(self._pts) > index:
+                return self._pts[index] - self._pts[0]
+        check = self.result()
+        if index >= check.decoded:
+            raise ValueError(f"{self.path} has {check.decoded} decodable frames, no frame {index}")
+        return check.times[index]
+
+    def close(self) -> None:
+        """Stop ffmpeg (safe to call twice, and after the end)."""
+        if self._proc.poll() is None:
+            self._proc.kill()
+        self._thread.join()
+
+
+def announced(path: str | Path) -> tuple[int | None, float | None]:
+    """(frames, frame rate) a video file's container announces, from its header without
+    decoding (the frames rounded from its duration); None for what it does not say or a file
+    ffmpeg cannot open (:func:`check_video` says why)."""
+    cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-nostdin", "-i", str(path)]
+    log = subprocess.run(cmd, capture_output=True, text=True, errors="replace").stderr   # exits 1: no output
+    duration, fps = _DURATION.search(log), _announced_fps(log)
+    if not (duration and fps):
+        return None, fps
+    return int(round(_seconds(duration) * fps)), fps
+
+
+def _announced_fps(log: str) -> float | None:
+    """The video stream's announced frame rate in ffmpeg's log, or None."""
+    match = _FPS.search(log)
+    if not match:
+        return None
+    return float(match.group(1)) * (1000.0 if match.group(2) else 1.0)
+
+
+def _seconds(duration: re.Match) -> float:
+    """Seconds of an ffmpeg ``Duration: HH:MM:SS.ss`` match."""
+    return int(duration.group(1)) * 3600 + int(duration.group(2)) * 60 + float(duration.group(3))
+
+
+def _parse_check(path: Path, log: str, returncode: int) -> VideoCheck:
+    """The :class:`VideoCheck` of ffmpeg's whole ``showinfo`` log of ``path``."""
     duration = _DURATION.search(log)
-    fps_match = _FPS.search(log)
-    fps = None
-    if fps_match:
-        fps = float(fps_match.group(1)) * (1000.0 if fps_match.group(2) else 1.0)
+    fps = _announced_fps(log)
     times, corrupt, messages = [], [], []
     pending_damage = ended_early = False
     # ffmpeg's threads may interleave messages on one line: split at every "[name @ 0x...]" prefix
@@ -215,14 +336,14 @@ def check_video(path: str | Path) -> VideoCheck:
             else:
                 pending_damage = True       # belongs to the next frame put out (data lost before it)
     if not times:
-        if proc.returncode != 0 or not fps:
+        if returncode != 0 or not fps:
             raise ValueError(ffmpeg_failure(path, log))
         raise ValueError(f"{path} has no video frames")
     start = times[0]            # frame 0 (containers may start their clock elsewhere, e.g. AVI with B-frames)
     times = [t - start for t in times]
     announced = None
     if duration and fps:
-        seconds = int(duration.group(1)) * 3600 + int(duration.group(2)) * 60 + float(duration.group(3))
+        seconds = _seconds(duration)
         announced = int(round(seconds * fps))
         interval = 1.0 / fps
         end = max(times) + interval
