@@ -312,9 +312,9 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
             when = time.perf_counter() - clock if frames_in.live else frames_in.time_s(index)
             small = downscale(frame, work_factor)
             segment, colour, scene = colours[0]
-            found = None if keypoints is None else keypoints.keypoints(index, frame).scaled(*to_working)
+            seen = None if keypoints is None else keypoints.keypoints(index, frame).scaled(*to_working)
             yield index, when, bool(small.mean() < DARK_MEAN), small, segment, \
-                prepare_frame(small, bg_image, colour, imaging, scene=scene), frame if newcomer else None, found
+                prepare_frame(small, bg_image, colour, imaging, scene=scene), frame if newcomer else None, seen
 
     times: dict[int, float] = {}         # a live source's frame times, until the frames are decided
 
@@ -337,7 +337,7 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
 
     last = None
     try:
-        for index, when, is_dark, small, segment, prepared, frame, found in prefetch(read, READ_AHEAD,
+        for index, when, is_dark, small, segment, prepared, frame, seen in prefetch(read, READ_AHEAD,
                                                                                      name="mocap-reader"):
             dark[index] = is_dark
             if frames_in.live:
@@ -359,7 +359,7 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
                         live.model = person[0]
                     prepared = prepare_frame(small, bg_image, person[1], imaging, scene=person[2])
             del frame
-            emit(tracker.push(index, prepared, found))
+            emit(tracker.push(index, prepared, seen))        # seen: the frame's keypoints, if any
             if prepared.is_empty:
                 people["absent"] += 1
                 seen = people["last_seen"] >= people["segments"][-1]["first_frame"]
