@@ -216,6 +216,7 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     joints = np.array([r.joints for r in results])
     truth = loaded.ground_truth.joints[: len(joints)]
     oracle = flip_oracle(joints, truth)
+    proposed = bool(np.isfinite(proposal_best).any())      # a source that never proposed (no keypoints) is no stage
     tracked_costs = np.array([(r.region_residual, r.edge_residual) for r in results])
     truth_costs = np.array([(region(q), edge(q)) for (region, edge), q in
                             zip(map(tracker.costs, prepared), loaded.ground_truth.poses[: len(joints)])])
@@ -231,10 +232,10 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
             # other candidate (tracked hypotheses, recovery, re-acquisition, jumps) misses but it does not
             # (None without a proposal stage)
             "proposal_oracle_failure_rate": float(np.mean(np.array(proposal_best) > DEFAULT_FAILURE_MM))
-            if proposal_origins else None,
+            if proposed else None,
             "proposal_catches_rate": float(np.mean((np.array(other_best) > DEFAULT_FAILURE_MM)
                                                    & (np.array(proposal_best) <= DEFAULT_FAILURE_MM)))
-            if proposal_origins else None,
+            if proposed else None,
             "others_miss_rate": float(np.mean(np.array(other_best) > DEFAULT_FAILURE_MM)),
             "tracking_ms_per_frame": 1e3 * seconds / len(joints),
             "evaluations_per_frame": float(np.mean([r.evaluations for r in results])),
