@@ -39,7 +39,7 @@ from mocap.body.pose import check_pose, clamp_to_limits
 from mocap.body.prior import PosePrior, default_prior
 from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.render.camera import Camera
-from mocap.track.config import (JUMPS_REFINED, MERGE_DISTANCE_M, MIN_SKIN_BLOB_PIXELS, RECOVERY_STEP_SCALE,
+from mocap.track.config import (JUMPS_REFINED, MERGE_DISTANCE_M, RECOVERY_STEP_SCALE,
                                 TrackerConfig)
 from mocap.track.decode import backtrack, viterbi_step
 from mocap.track.proposals import (BlobArmSource, KeypointArmSource, ProposalContext, ProposalSource, jump_proposals,
@@ -57,7 +57,8 @@ class FrameResult:
     part of ``beam``) and ``total`` (milliseconds; plus the image side's parts ``prepare_*``).
     ``hypothesis`` is the chosen hypothesis's rank in its frame's beam when that frame was
     tracked (0: it led), ``score`` its unary score and ``origin`` what produced it in that
-    frame (:data:`ORIGINS` or a proposal source's ``origin``).
+    frame (``tracked``, ``recovery``, ``reacquisition``, ``jump``, a proposal source's ``origin``,
+    ``empty`` or ``initial``).
     """
 
     frame: int
@@ -380,7 +381,7 @@ def proposal_sources(config: TrackerConfig) -> list[ProposalSource]:
     if config.keypoint_weight > 0:
         sources.append(KeypointArmSource(min_offset_px=config.reacquisition_distance_px))
     if config.blob_arms:
-        sources.append(BlobArmSource(min_pixels=MIN_SKIN_BLOB_PIXELS))
+        sources.append(BlobArmSource())
     if config.exemplars:
         from mocap.track.exemplars import ExemplarSource      # loads the shipped exemplar set
 
