@@ -60,7 +60,7 @@ from experiments import RESULTS_DIR
 from experiments.units import (EXTENSIONS, PREPARED_FILE, PREPARED_FILE_PAPER, DataSpec, load_prepared, load_sequence,
                                prepare_data, prepared_file)
 from mocap.body import JOINT_NAMES
-from mocap.io.jsonfile import read_json, write_json
+from mocap.files import read_json, write_json
 from mocap.metrics import DEFAULT_FAILURE_MM, failure_rate, mpjpe, pa_mpjpe, reprojection_error, root_relative_mpjpe
 from mocap.synth import SEQUENCE_NAMES, SEQUENCES
 from mocap.track import Tracker, TrackerConfig, register, track_prepared

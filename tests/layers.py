@@ -2,14 +2,15 @@
 
 Layers, low to high; a module may import its own layer and below:
 
-0 base    ``mocap/_*.py``, ``mocap/labels.py``, ``mocap/config.py``, ``mocap/io/atomic*``, ``jsonfile*``, ``files*``
+0 base    ``mocap/_*.py``, ``mocap/labels.py``, ``mocap/config.py``, ``mocap/files.py``
 1 body    ``mocap/body``
-2 render  ``mocap/render``
-3 image   ``mocap/imaging``, ``mocap/cost.py``, ``mocap/metrics.py``
-4 fit     ``mocap/optimize.py``
-5 track   ``mocap/track*``, ``mocap/calibrat*``, ``mocap/synth``, the rest of ``mocap/io``, ``mocap/pipeline.py``,
-          ``mocap/bench.py`` (every other module of the package)
-6 face    ``mocap/commands``, ``mocap/cli.py``, ``mocap/__main__.py``, ``experiments``, ``notebooks``, ``docs``
+2 io      ``mocap/io`` (files of frames, poses, keypoints: the body model's names, nothing above)
+3 render  ``mocap/render``
+4 image   ``mocap/imaging``, ``mocap/cost.py``, ``mocap/metrics.py``
+5 fit     ``mocap/optimize.py``
+6 track   ``mocap/track*``, ``mocap/calibrat*``, ``mocap/synth`` (every other module of the package)
+7 run     ``mocap/run`` (a source in, a run's files out), ``mocap/bench.py``
+8 face    ``mocap/commands``, ``mocap/cli.py``, ``mocap/__main__.py``, ``experiments``, ``notebooks``, ``docs``
 
 (The layers of ``../shared/tools/check_layers.py``.) A second rule: no module imports another
 package's private names (``from mocap.x import _y``, ``import mocap.x._y``) — a private module
@@ -20,24 +21,25 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-LAYER_NAMES = ("base", "body", "render", "image", "fit", "track", "face")
+LAYER_NAMES = ("base", "body", "io", "render", "image", "fit", "track", "run", "face")
 _TOP = {"experiments", "notebooks", "docs"}
-_BY_SUBPACKAGE = {"body": 1, "render": 2, "imaging": 3, "cost": 3, "metrics": 3, "optimize": 4,
-                  "commands": 6, "cli": 6, "__main__": 6}
+_BY_SUBPACKAGE = {"labels": 0, "config": 0, "files": 0, "body": 1, "io": 2, "render": 3, "imaging": 4, "cost": 4,
+                  "metrics": 4, "optimize": 5, "run": 7, "bench": 7, "commands": 8, "cli": 8, "__main__": 8}
+#: Layer of every other module of the package.
+_DEFAULT = 6
 
 
 def layer(module: str) -> int:
-    """Layer (0..6) of a dotted module name of the project; -1 for other packages."""
+    """Layer (0..8) of a dotted module name of the project; -1 for other packages."""
     parts = module.split(".")
     if parts[0] in _TOP:
-        return 6
+        return LAYER_NAMES.index("face")
     if parts[0] != "mocap" or len(parts) == 1:
         return -1
     sub = parts[1]
-    if (sub.startswith("_") and sub != "__main__") or sub in ("labels", "config") or (
-            sub == "io" and len(parts) > 2 and parts[2].split("_")[0] in ("atomic", "jsonfile", "files")):
+    if sub.startswith("_") and sub != "__main__":
         return 0
-    return _BY_SUBPACKAGE.get(sub, 5)
+    return _BY_SUBPACKAGE.get(sub, _DEFAULT)
 
 
 def project_modules(root: Path) -> dict[str, Path]:

@@ -28,8 +28,8 @@ from mocap.commands._common import add_background_options
 from mocap.imaging import ColourModel, ImagingConfig, learn_colour_model, median_background, \
     prepare_frame
 from mocap.imaging.visual import colour_distance, colour_labels, label_palette, overlay_edges, tile
-from mocap.io.atomic import write_bytes_atomic
-from mocap.io.jsonfile import read_json, write_json
+from mocap.files import write_bytes_atomic
+from mocap.files import read_json, write_json
 from mocap.imaging.resample import working_factor
 from mocap.io.frames import VideoSource
 from mocap.io.video import VideoWriter, read_image

@@ -25,7 +25,7 @@ import numpy as np
 
 from mocap.calibrate import Calibration, colour_model_from_pose
 from mocap.imaging import ColourModel, ImagingConfig, learn_colour_model, prepare_frame
-from mocap.io.atomic import write_text_atomic
+from mocap.files import write_text_atomic
 from mocap.io.checkpoint import Checkpoint, read_checkpoint, truncate_journal, write_checkpoint
 from mocap.io.frames import VideoSource
 from mocap.io.lock import one_writer
@@ -407,7 +407,7 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
                          overlay_frames=overlay_frames, models=models, extra_run={"segments": people["segments"]})
     detector_ms = getattr(keypoints, "milliseconds", None)
     if detector_ms:         # the detector's own time per frame, beside the tracker's ms_total
-        from mocap.io.jsonfile import read_json, write_json
+        from mocap.files import read_json, write_json
         write_json(run_json, {**read_json(run_json), "keypoints_ms_per_frame": float(np.median(detector_ms))})
     return summary
 

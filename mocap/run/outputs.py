@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from mocap.body.skeleton import JOINT_NAMES
-from mocap.io.atomic import write_bytes_atomic, write_text_atomic
+from mocap.files import write_bytes_atomic, write_text_atomic
 from mocap.io.pose_table import PoseTable
 from mocap.io.video_check import format_frames
 
