@@ -99,9 +99,10 @@ class SweepConfig(JsonConfig):
         Budgets (both axes) of the grid run on clip-driven sequences.
     figure_sequence : str
         Sequence of the single-sequence figures (the paper shows its sequence 2).
-    region_failure_threshold : float
-        A frame with F above this is a failure of F (Fig. 11).
-    edge_failure_threshold_px : float, pixels
+    figure_failure_f : float
+        A frame with F above this is a failure of F in the figures (Fig. 11; not the tracker's own
+        failure mark, :data:`mocap.track.config.REGION_FAILURE_THRESHOLD`).
+    figure_failure_edge_px : float, pixels
         A frame with mean edge distance above this is a failure of the edge distance (Fig. 12).
     mpjpe_failure_mm : float, millimetres
         A frame with MPJPE above this is a ground-truth failure.
@@ -131,8 +132,8 @@ class SweepConfig(JsonConfig):
     motion_frames: int = 150
     motion_budgets: tuple[int, ...] = (0, 50, 100, 200, 300, 500)
     figure_sequence: str = "gestures-2"
-    region_failure_threshold: float = 0.3
-    edge_failure_threshold_px: float = 1.0
+    figure_failure_f: float = 0.3
+    figure_failure_edge_px: float = 1.0
     mpjpe_failure_mm: float = 100.0
 
     def __post_init__(self) -> None:
@@ -156,7 +157,7 @@ class SweepConfig(JsonConfig):
         _positive("seed", self.seed, integer=True, allow_zero=True)
         for name in ("ftol", "converged_ftol"):
             _positive(name, getattr(self, name), allow_zero=True)
-        for name in ("table2_min_seconds", "region_failure_threshold", "edge_failure_threshold_px",
+        for name in ("table2_min_seconds", "figure_failure_f", "figure_failure_edge_px",
                      "mpjpe_failure_mm"):
             _positive(name, getattr(self, name))
         object.__setattr__(self, "size", _size("size", self.size))

@@ -56,13 +56,16 @@ def _git_commit(root: Path) -> str:
 
 def _track(seq, calibration, out: Path, evaluations: int | None, frames: int | None) -> dict:
     """Track one sequence folder; the ``run.json`` metrics (resumes a finished or partial run)."""
-    from mocap.pipeline import RunSetup, track_video
+    import mocap.run
     from mocap.track import TrackerConfig
 
     config = TrackerConfig() if evaluations is None else TrackerConfig(evaluations=evaluations)
-    summary = track_video(seq.frames, RunSetup.from_files(calibration, seq.background), out, config,
-                          ground_truth=seq.ground_truth,
-                          fps=seq.fps(), max_frames=frames, progress=False, write_overlay=False)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    calibration_file = out.parent / f"{out.name}.calibration.json"     # beside the run: its folder holds one run
+    calibration.to_json(calibration_file)
+    options = mocap.run.OwnVideoOptions(calibration=str(calibration_file), max_frames=frames, overlay=False,
+                                        tracker=config)
+    summary = mocap.run.track(seq.root, out, options, progress=False)
     return dict(summary.metrics)
 
 

@@ -1,6 +1,6 @@
 """``python -m experiments.long_run``: a run's memory does not grow with its length.
 
-Tracks a long clip at 160x120 through the whole pipeline (:func:`mocap.pipeline.track_video`:
+Tracks a long clip at 160x120 through the whole run (:func:`mocap.run.track`:
 image side, tracker, ``poses.csv`` journal and checkpoint after every frame) and samples the
 process's resident set size (Linux ``/proc/self/status``) against the number of frames written.
 The clip is a short synthetic sequence repeated (a folder of symbolic links), so a 10,000-frame
@@ -67,7 +67,7 @@ def main(argv=None) -> int:
     if args.frames <= args.first or args.first < 1 or args.iterations < 1:
         p.error("need 1 <= --from < --frames and --iterations >= 1")
 
-    from mocap.pipeline import RunSetup, track_video
+    import mocap.run
     from mocap.synth import generate_sequence
     from mocap.track import TrackerConfig
 
@@ -85,8 +85,10 @@ def main(argv=None) -> int:
         sampler = _Sampler(out / "poses.csv")
         sampler.start()
         try:
-            summary = track_video(loop, RunSetup.from_files(seq / "calibration.json", seq / "background.png"), out,
-                                  TrackerConfig(evaluations=args.iterations), overwrite=True, write_overlay=False)
+            options = mocap.run.OwnVideoOptions(background=str(seq / "background.png"),
+                                                calibration=str(seq / "calibration.json"), overwrite=True,
+                                                overlay=False, tracker=TrackerConfig(evaluations=args.iterations))
+            summary = mocap.run.track(loop, out, options)
         finally:
             sampler.stop()
     during = [(rows, kb) for rows, kb in sampler.samples if rows < args.frames]     # not the final outputs

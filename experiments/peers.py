@@ -111,9 +111,9 @@ def _track(video: Path, out: Path, *, overlay: bool, keypoints: str | None = Non
     """``python -m mocap track VIDEO`` with no other option (``--no-overlay`` unless ``overlay``;
     ``--keypoints`` when given), through the library entry point the CLI calls."""
     from mocap.io.pose_table import PoseTable
-    from mocap.own_video import OwnVideoOptions, track_own_video
+    import mocap.run
 
-    track_own_video(video, out, OwnVideoOptions(overlay=overlay, overwrite=True, keypoints=keypoints))
+    mocap.run.track(video, out, mocap.run.OwnVideoOptions(overlay=overlay, overwrite=True, keypoints=keypoints))
     return PoseTable.read(out / "poses.csv")
 
 

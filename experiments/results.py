@@ -96,7 +96,7 @@ class Results:
     # ------------------------------------------------------------------ statistics
     def thresholds(self) -> dict:
         c = self.config
-        return {"F": c.region_failure_threshold, "D": c.edge_failure_threshold_px, "mpjpe": c.mpjpe_failure_mm}
+        return {"F": c.figure_failure_f, "D": c.figure_failure_edge_px, "mpjpe": c.mpjpe_failure_mm}
 
     def stat(self, spec: RunSpec, name: str) -> float:
         """Statistic ``name`` (:data:`STATS`) of one unit; NaN if it is not stored."""

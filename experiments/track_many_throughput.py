@@ -2,7 +2,7 @@
 
 Writes ``--clips`` short synthetic sequence folders (the six sequences in turn, seeds 0, 1, ...;
 160x120, ``--frames`` frames), tracks one of them once to fill the compiled-kernel cache, then
-times the whole :func:`mocap.many.track_many` call (local cluster started and stopped included,
+times the whole :func:`mocap.run.many.track_many` call (local cluster started and stopped included,
 as a user's command) over all clips with 1 worker process and with 2, into fresh folders, and
 prints both times, the ratio and the machine's load average (1 minute) before and after. The
 machine may be shared: the ratio of one run is the measurement, not either time alone; with
@@ -39,8 +39,8 @@ def main(argv=None) -> int:
     if min(args.clips, args.frames, args.repeats, args.iterations or 1) < 1:
         p.error("--clips, --frames, --iterations and --repeats must be at least 1")
 
-    from mocap.many import track_many
-    from mocap.own_video import OwnVideoOptions
+    from mocap.run.many import track_many
+    from mocap.run import OwnVideoOptions
     from mocap.synth import generate_sequence
     from mocap.synth.sequence import SEQUENCE_NAMES
     from mocap.track import TrackerConfig

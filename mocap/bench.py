@@ -219,7 +219,7 @@ def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, mi
 
 
 def video_rows(*, frames: int, cpus: set[int] | None = None) -> list[BenchRow]:
-    """Row ``video_640x480``: :func:`mocap.own_video.track_own_video` (what ``python -m mocap track``
+    """Row ``video_640x480``: :func:`mocap.run.track` (what ``python -m mocap track``
     calls) end to end on a 640x480 MP4 (the synthetic
     ``gestures-1`` clip rendered at 160x120 and enlarged 4x, so that the working resolution
     sees the benchmark's own frames), with its true calibration and background.
@@ -238,7 +238,8 @@ def video_rows(*, frames: int, cpus: set[int] | None = None) -> list[BenchRow]:
     from mocap.io.frames import VideoSource
     from mocap.io.pose_table import PoseTable
     from mocap.io.video import VideoWriter, iter_frames, read_image
-    from mocap.own_video import OwnVideoOptions, track_own_video
+    import mocap.run
+    from mocap.run import OwnVideoOptions
     from mocap.synth import generate_sequence
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -254,7 +255,7 @@ def video_rows(*, frames: int, cpus: set[int] | None = None) -> list[BenchRow]:
         calibration = Calibration.from_json(seq / "calibration.json")     # at the working size, 160x120
         options = OwnVideoOptions(background=str(background), calibration=str(seq / "calibration.json"),
                                   overwrite=True)
-        run = lambda out, n: track_own_video(video, out, dataclasses.replace(options, max_frames=n), progress=False)
+        run = lambda out, n: mocap.run.track(video, out, dataclasses.replace(options, max_frames=n), progress=False)
         run(tmp / "warm-up", 2)                     # compile and load every kernel first
         pinned = os.sched_getaffinity(0) if cpus is not None else None
         if cpus is not None:

@@ -228,7 +228,7 @@ def _silhouette_starts(foreground: np.ndarray, camera: Camera, base: BodyDimensi
 
 
 #: Weight of the keypoint distance in the calibration's fits, units of F per pixel (the tracker's
-#: default ``keypoint_weight / region_weight``): shoulders, head and arms pulled onto 2D keypoints.
+#: default ``keypoint_weight / REGION_WEIGHT``): shoulders, head and arms pulled onto 2D keypoints.
 CALIBRATION_KEYPOINT_WEIGHT = 0.04
 
 

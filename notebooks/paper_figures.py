@@ -50,7 +50,7 @@ cfg = results.config
 display(Markdown(
     f"- sequences: {', '.join(cfg.sequences)} ({cfg.frames} frames, {cfg.size[0]}x{cfg.size[1]})\n"
     f"- grid: region {list(cfg.region_budgets)} x edge {list(cfg.edge_budgets)} evaluations per frame\n"
-    f"- failure thresholds: F > {cfg.region_failure_threshold:g}, edge distance > {cfg.edge_failure_threshold_px:g} px, "
+    f"- failure thresholds: F > {cfg.figure_failure_f:g}, edge distance > {cfg.figure_failure_edge_px:g} px, "
     f"MPJPE > {cfg.mpjpe_failure_mm:g} mm\n"
     f"- clips: {len(results.clips)}; wall time so far: {results.wall_time_s() / 60:.1f} min"))
 

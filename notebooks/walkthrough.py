@@ -41,14 +41,14 @@ from mocap.calibrate import Calibration, colour_model_from_pose
 from mocap.cost import EdgeCost, RegionCost
 from mocap.imaging import prepare_frame
 from mocap.imaging.visual import colour_distance, colour_labels
-from mocap.io.overlay import draw_model
+from mocap.run.overlay import draw_model
 from mocap.io.pose_table import PoseTable
 from mocap.io.sequence import find_sequence
 from mocap.io.video import iter_frames, read_image
 from mocap.metrics import mpjpe
 from mocap.render import render
 from mocap.synth.datasets import default_sequence
-from mocap.track import Tracker, TrackerConfig, register, track_prepared
+from mocap.track import TrackerConfig, register
 
 root = default_sequence(frames=N_FRAMES)
 seq = find_sequence(root)
@@ -126,21 +126,28 @@ print(f"region: {reg.region.evaluations} evaluations, {reg.region.iterations} it
 
 # %% [markdown]
 # ## 4. Tracking
-# Each frame starts from the previous pose; the auto policy splits the budget 50/50 from 200
-# evaluations on.
+# The whole run, as `python -m mocap track` does it (`mocap.run.track`: set-up, reader thread,
+# tracker, `poses.csv` and the other files; docs/design.md section 4). Each frame starts from
+# the previous pose; the auto policy splits the budget 50/50 from 200 evaluations on.
 
 # %%
-tracker = Tracker(model, camera, TrackerConfig(evaluations=EVALUATIONS), calibration.initial_pose)
-results = track_prepared([prepare_frame(f, background, colour_model) for f in frames], tracker)
-joints = np.array([res.joints for res in results])
-per_frame_mm = mpjpe(joints, truth.joints[: len(results)], per_frame=True)
-ms = np.array([res.timings_ms["total"] for res in results[1:]])
+import tempfile
+
+import mocap.run
+
+run_dir = tempfile.mkdtemp(prefix="mocap-walkthrough-")      # a temporary folder: nothing left in the repository
+options = mocap.run.OwnVideoOptions(max_frames=N_FRAMES, overlay=False, overwrite=True,
+                                    tracker=TrackerConfig(evaluations=EVALUATIONS))
+summary = mocap.run.track(root, run_dir, options, progress=False)
+table = PoseTable.read(f"{run_dir}/poses.csv")
+per_frame_mm = mpjpe(table.joints, truth.joints[: len(table)], per_frame=True)
+ms = table.extra["ms_total"][1:]
 fig, axes = plt.subplots(3, 1, figsize=(9, 6), sharex=True)
-axes[0].plot([res.region_residual for res in results], color="0.2")
+axes[0].plot(table.extra["region_residual"], color="0.2")
 axes[0].set_ylabel("F")
-axes[1].plot([res.edge_residual for res in results], color="0.2")
+axes[1].plot(table.extra["edge_residual"], color="0.2")
 axes[1].set_ylabel("edge dist. (px)")
 axes[2].plot(per_frame_mm, color="tab:blue")
 axes[2].set_ylabel("MPJPE (mm)")
 axes[2].set_xlabel("frame")
-print(f"MPJPE {per_frame_mm.mean():.1f} mm over {len(results)} frames at {1e3 / ms.mean():.0f} frames/s")
+print(f"MPJPE {per_frame_mm.mean():.1f} mm over {len(table)} frames at {1e3 / ms.mean():.0f} frames/s")

@@ -2,7 +2,7 @@
 
 Test helper for crash-exact resume and the output-folder lock. It wraps the two writes of a
 tracking run — a ``poses.csv`` row (:meth:`mocap.io.pose_table.PoseTable.append_to`) and the
-checkpoint (:func:`mocap.pipeline.write_checkpoint`) — and at the ``N``-th one (1-based, counted in
+checkpoint (:func:`mocap.io.checkpoint.write_checkpoint`, as :mod:`mocap.run.journal` calls it) — and at the ``N``-th one (1-based, counted in
 this process) does what ``MODE`` says:
 
 ``after-row``    SIGKILL itself right after the row is on disk, before the checkpoint
@@ -37,7 +37,7 @@ def install(mode: str, n: int) -> None:
     than the CLI, e.g. a Dask worker)."""
     if mode not in ("after-row", "mid-row", "after-state", "pause"):
         raise SystemExit(f"unknown mode {mode!r}")
-    import mocap.pipeline as run
+    import mocap.run.journal as run
     from mocap.io.pose_table import PoseTable
 
     counts = {"row": 0, "state": 0}

@@ -1,6 +1,7 @@
-"""One entry point for "track my own video": the CLI, ``bench`` and ``experiments.peers`` all
-call :func:`mocap.own_video.track_own_video` (none calls the CLI's ``main``); its options are a
-JSON record; ``Camera.working`` is the one reduction to the working resolution."""
+"""One entry point to track a video: every route — the commands ``track``, ``track-many``,
+``demo``, ``bench``, the experiments ``docs``, ``long_run``, ``peers`` and the notebooks — calls
+:func:`mocap.run.track` (none calls the CLI's ``main``, none builds a run by hand); its options
+are a JSON record; ``Camera.working`` is the one reduction to the working resolution."""
 from __future__ import annotations
 
 import ast
@@ -8,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from mocap.own_video import OwnVideoOptions
+from mocap.run import OwnVideoOptions
 from mocap.render import Camera
 from mocap.track import TrackerConfig
 
@@ -21,8 +22,8 @@ class _Called(Exception):
 
 @pytest.fixture
 def recorder(monkeypatch):
-    """``track_own_video`` replaced by one that records its arguments and stops the caller."""
-    import mocap.own_video
+    """``mocap.run.track`` replaced by one that records its arguments and stops the caller."""
+    import mocap.run
 
     calls = []
 
@@ -30,7 +31,7 @@ def recorder(monkeypatch):
         calls.append((source, Path(out_dir), options))
         raise _Called
 
-    monkeypatch.setattr(mocap.own_video, "track_own_video", record)
+    monkeypatch.setattr(mocap.run, "track", record)
     return calls
 
 
@@ -64,6 +65,68 @@ def test_peers_experiment_calls_the_library(recorder, tmp_path):
         _track(tmp_path / "clip.mp4", tmp_path / "run", overlay=False)
     (source, out, options), = recorder
     assert options == OwnVideoOptions(overlay=False, overwrite=True)
+
+
+def test_demo_calls_the_library_on_the_bundled_sequence(recorder, tmp_path):
+    from mocap.cli import main
+
+    with pytest.raises(_Called):
+        main(["demo", "--out", str(tmp_path / "demo"), "--iterations", "50", "--no-overlay"])
+    (source, out, options), = recorder
+    assert (Path(source) / "frames").is_dir() and out == tmp_path / "demo"
+    assert options == OwnVideoOptions(overlay=False, tracker=TrackerConfig(evaluations=50))
+
+
+def test_track_many_workers_call_the_library(recorder, tmp_path):
+    from mocap.run.many import track_input
+
+    with pytest.raises(_Called):
+        track_input(str(tmp_path / "clip.mp4"), str(tmp_path / "out"), OwnVideoOptions(max_frames=3))
+    (source, out, options), = recorder
+    assert options == OwnVideoOptions(max_frames=3)
+
+
+#: Every route that tracks a video, and what each must call: the run's entry point, or (frame-level
+#: control: pushing frames one at a time, looking at the beam) the tracker's API.
+ROUTES = {
+    "mocap/commands/track.py": "mocap.run.track", "mocap/run/many.py": "mocap.run.track",
+    "mocap/commands/demo.py": "mocap.run.track", "mocap/bench.py": "mocap.run.track",
+    "experiments/docs.py": "mocap.run.track", "experiments/long_run.py": "mocap.run.track",
+    "experiments/peers.py": "mocap.run.track", "notebooks/walkthrough.py": "mocap.run.track",
+    "experiments/units.py": "Tracker", "experiments/ambiguity.py": "Tracker",
+}
+#: Names that build a run by hand (the run floor's own parts): used only inside ``mocap/run/``.
+RUN_PARTS = ("track_frames", "RunLoop", "RunParams", "find_setup")
+
+
+def _called_names(path: Path) -> set[str]:
+    """Dotted names of every call in a file (``mocap.run.track(...)`` -> ``mocap.run.track``)."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Call):
+            parts, f = [], node.func
+            while isinstance(f, ast.Attribute):
+                parts.append(f.attr)
+                f = f.value
+            if isinstance(f, ast.Name):
+                names.add(".".join([f.id, *reversed(parts)]))
+    return names
+
+
+@pytest.mark.parametrize("route, entry", sorted(ROUTES.items()))
+def test_every_route_calls_the_one_entry_point(route, entry):
+    assert entry in _called_names(ROOT / route), f"{route} does not call {entry}"
+
+
+def test_nothing_outside_the_run_floor_builds_a_run_by_hand():
+    offenders = []
+    for folder in ("mocap", "experiments", "notebooks", "docs"):
+        for path in (ROOT / folder).glob("**/*.py"):
+            if path.is_relative_to(ROOT / "mocap" / "run") or path.name == "calibrate.py":
+                continue     # (the calibrate command uses the set-up alone, to write a calibration)
+            used = {n.rpartition(".")[2] for n in _called_names(path)}
+            offenders += [f"{path.relative_to(ROOT)}: {name}" for name in RUN_PARTS if name in used]
+    assert offenders == []
 
 
 def test_no_library_or_experiment_module_calls_the_cli():

@@ -85,8 +85,8 @@ def test_uv_columns_are_the_camera_projection_in_input_pixels(sequence, tmp_path
 def test_fake_camera_gives_the_same_poses_as_the_file(sequence, tmp_path):
     from mocap.io.frames import CameraSource, VideoSource
     from mocap.io.video import VideoWriter, iter_frames, read_image
-    from mocap.own_video import setup_own_video
-    from mocap.pipeline import track_video
+    from mocap.run.loop import RunParams, track_frames
+    from mocap.run.setup import SetupRequest, find_setup
     from mocap.track import TrackerConfig
 
     video = tmp_path / "clip.mp4"
@@ -97,13 +97,13 @@ def test_fake_camera_gives_the_same_poses_as_the_file(sequence, tmp_path):
     background = read_image(sequence / "background.png")
     poses = []
     for name, source in (("file", VideoSource(video)), ("camera", CameraSource.replaying(video))):
-        setup, consumed = setup_own_video(source, 1, background_mode="image", background_image=background,
-                                          calibration=calibration, progress=False)
+        found = find_setup(source, SetupRequest(1, "image", background, calibration=calibration, progress=False))
+        setup, consumed = found.setup, found.consumed
         if source.live:
             assert 1 <= len(consumed) <= N_FRAMES          # read by the set-up, tracked first
             source.hold(consumed)
-        track_video(source, setup, tmp_path / name, TrackerConfig(evaluations=60), progress=False,
-                    write_overlay=False)
+        track_frames(source, setup, tmp_path / name, RunParams(TrackerConfig(evaluations=60), progress=False,
+                                                               write_overlay=False))
         poses.append(PoseTable.read(tmp_path / name / "poses.csv").poses)
     assert poses[0].shape == (N_FRAMES, 23)
     np.testing.assert_array_equal(poses[0], poses[1])

@@ -17,7 +17,7 @@ import pytest
 from mocap.cli import main
 from mocap.io.lock import LOCK_FILE, FolderLock
 from mocap.io.pose_table import PoseTable
-from mocap.pipeline import STATE_FILE
+from mocap.run.journal import STATE_FILE
 
 from tests.conftest import REPO_ROOT
 

@@ -17,7 +17,7 @@ import pytest
 
 from mocap.cli import main
 from mocap.io.pose_table import PoseTable
-from mocap.many import SUMMARY_COLUMNS, read_summary
+from mocap.run.many import SUMMARY_COLUMNS, read_summary
 
 from tests.conftest import REPO_ROOT
 from tests.dask_cluster import cluster_env, local_cluster, wait_for

@@ -65,6 +65,8 @@ def print_summary(summary) -> None:
     if summary.empty_frames or summary.dark_frames:
         print(f"{summary.empty_frames} frames with nobody in view (marked empty = 1 in poses.csv, pose kept), "
               f"{summary.dark_frames} very dark frames (marked dark = 1); tracking went on through them")
+    if summary.advice:
+        print(summary.advice)
     if summary.metrics:
         m = summary.metrics
         print(f"accuracy vs ground truth: MPJPE {m['mpjpe_mm']:.1f} mm, root-relative "

@@ -45,16 +45,19 @@ def run(args: argparse.Namespace) -> int:
     from mocap.io.frames import VideoSource
     from mocap.io.sequence import find_sequence
     from mocap.io.video import read_image
-    from mocap.own_video import keypoint_source, setup_own_video
     from mocap.render import Camera
+    from mocap.run.options import OwnVideoOptions, keypoint_source
+    from mocap.run.setup import SetupRequest, find_setup
 
     keypoints = keypoint_source(None if args.keypoints is None else str(args.keypoints))
 
     seq = find_sequence(args.video)
     source = VideoSource(seq.frames)
     source.damaged_frames(args.allow_damaged)
-    background = args.background or (seq.background if not args.no_background and args.background_frames is None
-                                     else None)
+    chosen = OwnVideoOptions(background=args.background, background_frames=args.background_frames,
+                             no_background=args.no_background, hfov_deg=args.hfov, height_m=args.height)
+    own_background = seq.background if not args.no_background and args.background_frames is None else None
+    background = args.background or own_background
     if background is not None and args.height is None:
         index = args.frame or 0
         frame = next(source.frames(index, index + 1), None)
@@ -67,12 +70,10 @@ def run(args: argparse.Namespace) -> int:
     else:
         if args.frame is not None:
             raise ValueError("--frame needs --background IMG (without one the first usable frame is found)")
-        mode = "image" if background is not None else ("frames" if args.background_frames else
-                                                       ("none" if args.no_background else "auto"))
-        setup, _ = setup_own_video(source, background_mode=mode,
-                                   background_image=read_image(background) if background is not None else None,
-                                   background_frames=args.background_frames, hfov_deg=args.hfov,
-                                   height_m=args.height, keypoints=keypoints)
+        request = SetupRequest(None, chosen.background_mode(own_background is not None),
+                               read_image(background) if background is not None else None, args.background_frames,
+                               hfov_deg=args.hfov, height_m=args.height, keypoints=keypoints)
+        setup = find_setup(source, request).setup
         camera = setup.calibration.camera.enlarged(setup.factor, source.width, source.height)
         calibration = Calibration(setup.calibration.dims, setup.calibration.initial_pose, camera)
         note = setup.record

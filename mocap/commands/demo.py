@@ -19,23 +19,24 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import mocap.run
     from mocap.calibrate import Calibration, auto_calibrate
     from mocap.io.sequence import find_sequence
     from mocap.io.video import iter_frames, read_image
-    from mocap.pipeline import RunSetup, track_video
     from mocap.synth.datasets import default_sequence
 
     root = default_sequence(args.out / "sequence")
     seq = find_sequence(root)
-    calibration = Calibration.from_json(seq.calibration)
+    calibration = None              # the sequence's own
     if args.auto_calibrate:
         first = next(iter_frames(seq.frames, 0, 1))
-        calibration = auto_calibrate(first, read_image(seq.background), calibration.camera)
+        found = auto_calibrate(first, read_image(seq.background), Calibration.from_json(seq.calibration).camera)
         args.out.mkdir(parents=True, exist_ok=True)
-        calibration.to_json(args.out / "calibration.json")
+        calibration = str(args.out / "calibration.json")
+        found.to_json(calibration)
     print(f"tracking {root} ({'automatic' if args.auto_calibrate else 'true'} calibration)")
-    summary = track_video(seq.frames, RunSetup.from_files(calibration, seq.background), args.out, tracker_config(args),
-                          ground_truth=seq.ground_truth, fps=seq.fps(), max_frames=args.max_frames,
-                          overwrite=args.overwrite, write_overlay=not args.no_overlay)
+    options = mocap.run.OwnVideoOptions(calibration=calibration, max_frames=args.max_frames, overwrite=args.overwrite,
+                                        overlay=not args.no_overlay, tracker=tracker_config(args))
+    summary = mocap.run.track(root, args.out, options)
     print_summary(summary)
     return 0

@@ -59,8 +59,8 @@ def add_parser(subparsers) -> None:
 
 
 def options(args: argparse.Namespace):
-    """The :class:`mocap.own_video.OwnVideoOptions` the command line describes."""
-    from mocap.own_video import OwnVideoOptions
+    """The :class:`mocap.run.OwnVideoOptions` the command line describes."""
+    from mocap.run import OwnVideoOptions
 
     path = lambda p: None if p is None else str(p)
     return OwnVideoOptions(
@@ -72,7 +72,7 @@ def options(args: argparse.Namespace):
 
 
 def print_setup(account: dict) -> None:
-    """What the set-up found (:func:`mocap.own_video.track_own_video`'s ``on_setup``)."""
+    """What the set-up found (:func:`mocap.run.track`'s ``on_setup``)."""
     factor = account["working_factor"]
     print(f"working resolution {account['working_width']}x{account['working_height']} "
           f"(input {account['input_width']}x{account['input_height']} reduced {factor}x)")
@@ -86,8 +86,8 @@ def print_setup(account: dict) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import mocap.run
     from mocap.io.frames import CameraSource
-    from mocap.own_video import track_own_video
 
     live = args.camera is not None or args.camera_device is not None
     if (args.video is None) == (not live):
@@ -100,6 +100,6 @@ def run(args: argparse.Namespace) -> int:
             CameraSource.from_device(args.camera_device)
     else:
         source = args.video
-    summary = track_own_video(source, args.out, chosen, on_setup=print_setup)
+    summary = mocap.run.track(source, args.out, chosen, on_setup=print_setup)
     print_summary(summary)
     return 0

@@ -50,8 +50,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from mocap.many import track_many
-    from mocap.own_video import OwnVideoOptions
+    from mocap.run import OwnVideoOptions
+    from mocap.run.many import track_many
 
     options = OwnVideoOptions(no_background=args.no_background, hfov_deg=args.hfov, height_m=args.height,
                               work_width=args.work_width, colour=args.colour, start=args.start,

@@ -6,7 +6,7 @@ refuses two inputs that would write to the same output folder before anything ru
 one task per video (:func:`track_input`) to a local Dask cluster of single-threaded worker
 processes or to an existing cluster's scheduler. Each video goes to ``OUT/<name>/`` (its file
 name without the extension, or its folder's name), tracked by
-:func:`mocap.own_video.track_own_video` (what ``python -m mocap track`` calls): under the
+:func:`mocap.run.track` (what ``python -m mocap track`` calls): under the
 folder's lock, with a crash-exact checkpoint after every frame.
 
 What a crash leaves behind, and what happens next:
@@ -21,7 +21,7 @@ What a crash leaves behind, and what happens next:
 
 At the end ``OUT/summary.csv`` (:data:`SUMMARY_COLUMNS`, one row per input, from each
 video's ``run.json``) and ``OUT/summary.png`` are written atomically. ``OUT/track-many.json``
-keeps the options (:class:`mocap.own_video.OwnVideoOptions`), so that a rerun with other
+keeps the options (:class:`mocap.run.OwnVideoOptions`), so that a rerun with other
 options is refused instead of mixing results.
 """
 from __future__ import annotations
@@ -38,7 +38,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from mocap.files import write_bytes_atomic, write_text_atomic
-from mocap.own_video import OwnVideoOptions, track_own_video
+from mocap.run.options import OwnVideoOptions
 
 __all__ = ["PER_VIDEO_OPTIONS", "ManySummary", "SUMMARY_COLUMNS", "expand_inputs", "track_input", "track_many",
            "read_summary", "summary_row"]
@@ -52,7 +52,7 @@ SUMMARY_CSV, SUMMARY_PNG, OPTIONS_FILE = "summary.csv", "summary.png", "track-ma
 #: ``wall_seconds_this_session``), and for a failed video its one-line reason.
 SUMMARY_COLUMNS = ("input", "output", "status", "frames", "failed_frames", "fps", "background", "calibration",
                    "time_s", "reason")
-#: Options of :class:`mocap.own_video.OwnVideoOptions` that name one video's files or a window:
+#: Options of :class:`mocap.run.OwnVideoOptions` that name one video's files or a window:
 #: not for many videos (a sequence folder brings its own background, calibration, ground truth).
 PER_VIDEO_OPTIONS = ("background", "background_frames", "calibration", "ground_truth", "show")
 #: Seconds between two looks at the output folders for the progress bar.
@@ -174,16 +174,18 @@ def summary_row(source: str | Path, out_dir: str | Path, reason: str | None = No
 
 def track_input(source: str, out_dir: str, options: OwnVideoOptions) -> dict:
     """Track one input into ``out_dir`` as ``python -m mocap track`` would
-    (:func:`mocap.own_video.track_own_video`, no progress bar): the task a worker runs; its
+    (:func:`mocap.run.track`, no progress bar): the task a worker runs; its
     summary row.
 
     Resumes an unfinished run found in ``out_dir`` and does nothing to a finished one. Bad
     input (ValueError, OSError: a damaged video, nobody found, a folder another run holds)
     makes a ``failed`` row with the one-line reason instead of an error.
     """
+    import mocap.run
+
     if not _finished(Path(out_dir)):
         try:
-            track_own_video(source, out_dir, options, progress=False)
+            mocap.run.track(source, out_dir, options, progress=False)
         except (ValueError, OSError) as exc:
             return summary_row(source, out_dir, reason=_one_line(exc))
     return summary_row(source, out_dir)
@@ -197,7 +199,7 @@ def _one_line(exc: BaseException) -> str:
 def _clear_run(out_dir: Path) -> None:
     """Remove a video's run (journal, checkpoint, run.json) under its lock, to start it afresh."""
     from mocap.io.lock import FolderLock
-    from mocap.pipeline import STATE_FILE
+    from mocap.run.journal import STATE_FILE
 
     if not out_dir.is_dir():
         return

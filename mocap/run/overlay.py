@@ -1,12 +1,36 @@
-"""Pictures of the registration: the projected model drawn over the frame (paper Fig. 1)."""
+"""``overlay.mp4``: the projected model drawn over the input's own frames (paper Fig. 1), at the
+input's resolution up to :data:`OVERLAY_MAX_WIDTH` pixels wide (a wider input is reduced by the
+integer factor that brings it under: :func:`overlay_factor`).
+
+The overlay has one drawer, :func:`draw_pose`, whether it is written as frames come
+(:class:`OverlayWriter`, a fresh run) or redrawn at the end from ``poses.csv``
+(:func:`redraw_overlay`, a resumed run): both look the same.
+
+What a crash leaves behind: a hidden ``.overlay.tmp.mp4`` at most; ``overlay.mp4`` is moved
+into place when finished.
+"""
 from __future__ import annotations
+
+import math
+import os
+import platform
+from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from mocap.imaging.resample import downscale
 from mocap.imaging.visual import label_palette
+from mocap.io.pose_table import PoseTable
+from mocap.render.camera import Camera
+
+__all__ = ["EDGE_COLOUR", "OVERLAY_MAX_WIDTH", "OverlayGeometry", "OverlayWriter", "draw_model", "draw_pose",
+           "redraw_overlay"]
 
 #: RGB colour of the model's occluding edges.
 EDGE_COLOUR = np.array([255, 255, 0], np.uint8)
+#: Widest overlay, pixels: a wider input is reduced by an integer factor.
+OVERLAY_MAX_WIDTH = 1280
 
 
 def draw_model(frame: np.ndarray, labels: np.ndarray, edges: np.ndarray, n_classes: int = 2, *,
@@ -38,3 +62,110 @@ def draw_model(frame: np.ndarray, labels: np.ndarray, edges: np.ndarray, n_class
     out[model] = (1 - alpha) * out[model] + alpha * colours[model]
     out[edges] = EDGE_COLOUR
     return np.clip(out, 0, 255).astype(np.uint8)
+
+
+def draw_pose(frame: np.ndarray, pose: np.ndarray, model, camera: Camera) -> np.ndarray:
+    """The overlay picture: ``frame`` (uint8 RGB, shape (h, w, 3), ``camera``'s size) with the
+    model in ``pose`` (shape (23,), radians and metres) rendered by ``camera`` blended in, its
+    classes in their named colours (:func:`draw_model`)."""
+    from mocap.render import render
+
+    r = render(pose, model, camera)
+    return draw_model(frame, r.labels, r.edges, model.n_classes, class_names=model.class_names)
+
+
+def overlay_factor(width: int) -> int:
+    """Integer reduction of an input ``width`` (pixels) to at most :data:`OVERLAY_MAX_WIDTH`."""
+    return max(1, math.ceil(width / OVERLAY_MAX_WIDTH))
+
+
+@dataclass(frozen=True)
+class OverlayGeometry:
+    """Where the overlay is drawn: the input frames reduced by ``factor``, seen by ``camera``.
+
+    Attributes
+    ----------
+    factor : int
+        Input pixels per overlay pixel (:func:`overlay_factor`).
+    camera : Camera
+        The camera at the overlay's size.
+    """
+
+    factor: int
+    camera: Camera
+
+    @classmethod
+    def of(cls, working: Camera, work_factor: int, width: int, height: int) -> "OverlayGeometry":
+        """The overlay of ``width`` x ``height`` input frames tracked with the ``working`` camera
+        (the input reduced ``work_factor`` times)."""
+        factor = overlay_factor(width)
+        if factor == work_factor:
+            return cls(factor, working)
+        return cls(factor, working.enlarged(work_factor, width, height).working(width, height, factor))
+
+    def frame(self, frame: np.ndarray) -> np.ndarray:
+        """An input frame at the overlay's size."""
+        return downscale(frame, self.factor)
+
+
+class OverlayWriter:
+    """The overlay as frames come: written to ``overlay.mp4`` (``write``; moved into place by
+    :meth:`close`), and shown in a window when asked and a display exists."""
+
+    def __init__(self, out_dir: Path, fps: float, model, camera: Camera, *, show: bool = False,
+                 write: bool = True) -> None:
+        from mocap.io.video import VideoWriter
+
+        self.model, self.camera = model, camera
+        self.path, self.tmp = Path(out_dir) / "overlay.mp4", Path(out_dir) / ".overlay.tmp.mp4"
+        self.video = VideoWriter(self.tmp, fps) if write else None
+        self.figure = self.image = None
+        if show and (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") or platform.system() != "Linux"):
+            import matplotlib.pyplot as plt
+            plt.ion()
+            self.figure, ax = plt.subplots(num="mocap track")
+            ax.set_axis_off()
+            self.plt = plt
+        elif show:
+            print("no display: the live view is not shown (overlay.mp4 is written)")
+
+    def update(self, frame: np.ndarray, pose: np.ndarray | None, model=None) -> None:
+        """Add a frame at the overlay's size (``camera``'s), with the model in ``pose`` drawn (the
+        frame alone for None); ``model`` replaces the body model from now on (a new person's)."""
+        if model is not None:
+            self.model = model
+        picture = frame if pose is None else draw_pose(frame, pose, self.model, self.camera)
+        if self.video is not None:
+            self.video.write(picture)
+        if self.figure is not None:
+            if self.image is None:
+                self.image = self.figure.axes[0].imshow(picture)
+            else:
+                self.image.set_data(picture)
+            self.plt.pause(0.001)
+
+    def close(self) -> None:
+        """Finish the video (moved into place when it has frames) and the window."""
+        if self.video is not None:
+            self.video.close()
+            if self.video.frames:
+                os.replace(self.tmp, self.path)
+            self.video = None
+        if self.figure is not None:
+            self.plt.close(self.figure)
+
+
+def redraw_overlay(out_dir: Path, frames, table: PoseTable, models: list, geometry: OverlayGeometry,
+                   fps: float) -> None:
+    """``overlay.mp4`` drawn afresh from ``poses.csv``: ``frames`` are ``(index, input-size
+    frame)`` pairs from frame 0 (frames without a row are shown as they are); ``models`` are
+    the body models of the segments (column ``segment``, 0 without it)."""
+    segment = table.extra.get("segment", np.zeros(len(table)))
+    rows = {int(f): (p, int(s)) for f, p, s in zip(table.frames, table.poses, segment)}
+    writer = OverlayWriter(out_dir, fps, models[0], geometry.camera)
+    try:
+        for index, frame in frames:
+            pose, person = rows.get(index, (None, 0))
+            writer.update(geometry.frame(frame), pose, models[person])
+    finally:
+        writer.close()

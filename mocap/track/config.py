@@ -31,6 +31,23 @@ MIN_SKIN_BLOB_PIXELS = 2
 JUMPS_REFINED = 2
 #: Hypotheses whose joints are on average closer than this (metres) are merged, the better kept.
 MERGE_DISTANCE_M = 0.02
+#: Initial simplex step of the three root coordinates, metres (chosen with ``angle_step_deg`` on
+#: the six synthetic sequences with three seeds; see docs/research-log.md).
+POSITION_STEP_M = 0.05
+#: A frame with F above this is a region failure (F is in [0, 1]).
+REGION_FAILURE_THRESHOLD = 0.45
+#: A frame with mean edge distance above this (pixels) is an edge failure.
+EDGE_FAILURE_THRESHOLD_PX = 4.0
+#: Score of a hypothesis per unit of F (the region residual).
+REGION_WEIGHT = 50.0
+#: Score of a hypothesis per pixel of mean edge distance.
+EDGE_WEIGHT = 2.0
+#: Motion term between hypotheses of consecutive frames: half the mean squared joint
+#: displacement over ``MOTION_SIGMA_M**2`` (metres)...
+MOTION_SIGMA_M = 0.05
+#: ...at most this much (a truncated quadratic): a jump between branches or to a re-acquired arm
+#: costs a fixed price that a clearly better fit pays.
+MOTION_CAP = 8.0
 
 
 @dataclass(frozen=True)
@@ -47,17 +64,11 @@ class TrackerConfig(JsonConfig):
     edge_start : str
         ``"region_simplex"`` (paper) or ``"fresh"`` (a new simplex of :data:`FRESH_STEP_SCALE`
         times the initial steps around the region step's best pose; the paper's Fig. 8).
-    position_step_m : float, metres
-        Initial simplex step of the three root coordinates.
     angle_step_deg : float, degrees
-        Initial simplex step of the 20 angles (20 degrees and 5 cm were chosen on the six
-        synthetic sequences with three seeds; see docs/research-log.md).
+        Initial simplex step of the 20 angles (20 degrees and :data:`POSITION_STEP_M` were
+        chosen on the six synthetic sequences with three seeds; see docs/research-log.md).
     ftol : float
         Convergence: relative spread of the simplex values (the paper's test).
-    region_failure_threshold : float
-        A frame with F above this is a region failure (F is in [0, 1]).
-    edge_failure_threshold_px : float, pixels
-        A frame with mean edge distance above this is an edge failure.
     recovery : bool
         Beyond the paper: retry a failed frame from the last good pose with a wider simplex.
     mesh_resolution : int
@@ -89,24 +100,16 @@ class TrackerConfig(JsonConfig):
         each frame at once.
     offline : bool
         Decode the whole sequence at its end instead (the best path through every frame).
-    region_weight, edge_weight : float
-        Score of a hypothesis per unit of F and per pixel of mean edge distance.
     keypoint_weight : float
         Beyond the paper, only when 2D keypoints are given: score per pixel of keypoint
         distance D_k (:class:`mocap.cost.KeypointCost`). The registration steps add D_k at the
         same rate relative to their own cost: the region step minimises
-        ``F + keypoint_weight / region_weight * D_k``, the edge step
-        ``D_c + keypoint_weight / edge_weight * D_k``; and the keypoint source
+        ``F + keypoint_weight / REGION_WEIGHT * D_k``, the edge step
+        ``D_c + keypoint_weight / EDGE_WEIGHT * D_k`` (:data:`REGION_WEIGHT`, :data:`EDGE_WEIGHT`); and the keypoint source
         (:class:`mocap.track.proposals.KeypointArmSource`) joins the proposal stage. Without
         keypoints it changes nothing.
     prior_weight : float
         Score per nat of the pose prior's negative log-density (:mod:`mocap.body.prior`); 0: off.
-    motion_sigma_m : float, metres
-        Motion term between hypotheses of consecutive frames: half the mean squared joint
-        displacement over ``motion_sigma_m**2``...
-    motion_cap : float
-        ...at most this much (a truncated quadratic): a jump between branches or to a
-        re-acquired arm costs a fixed price that a clearly better fit pays.
     blob_arms : bool
         Proposal stage: both depth branches of the arm that reaches each hand blob
         (:class:`mocap.track.proposals.BlobArmSource`).
@@ -122,11 +125,8 @@ class TrackerConfig(JsonConfig):
     evaluations: int = 500
     split: str = "auto"
     edge_start: str = "region_simplex"
-    position_step_m: float = 0.05
     angle_step_deg: float = 20.0
     ftol: float = 1e-3
-    region_failure_threshold: float = 0.45
-    edge_failure_threshold_px: float = 4.0
     recovery: bool = True
     mesh_resolution: int = 0
     hand_reacquisition: bool = True
@@ -137,12 +137,8 @@ class TrackerConfig(JsonConfig):
     jump_evaluations: int = 80
     lag: int = 8
     offline: bool = False
-    region_weight: float = 50.0
-    edge_weight: float = 2.0
     keypoint_weight: float = 2.0
     prior_weight: float = 0.05
-    motion_sigma_m: float = 0.05
-    motion_cap: float = 8.0
     blob_arms: bool = False
     exemplars: bool = False
     proposals_refined: int = 2
@@ -164,19 +160,14 @@ class TrackerConfig(JsonConfig):
         split_budget(self.evaluations, self.split)          # validates the split
         if self.edge_start not in EDGE_STARTS:
             raise ValueError(f"edge_start must be one of {EDGE_STARTS}, got {self.edge_start!r}")
-        for name in ("position_step_m", "angle_step_deg",
-                     "edge_failure_threshold_px", "region_failure_threshold", "reacquisition_distance_px",
-                     "motion_sigma_m", "motion_cap"):
+        for name in ("angle_step_deg", "reacquisition_distance_px"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be a finite positive number, got {v!r}")
-        for name in ("ftol", "region_weight", "edge_weight", "keypoint_weight", "prior_weight"):
+        for name in ("ftol", "keypoint_weight", "prior_weight"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise ValueError(f"{name} must be finite and non-negative, got {v!r}")
-        if self.keypoint_weight > 0 and (self.region_weight == 0 or self.edge_weight == 0):
-            raise ValueError("keypoint_weight > 0 needs positive region_weight and edge_weight (the registration "
-                             "steps weigh the keypoint distance relative to them)")
 
     @classmethod
     def paper(cls, **changes) -> "TrackerConfig":
@@ -194,14 +185,14 @@ class TrackerConfig(JsonConfig):
 
     def keypoint_step_weights(self) -> tuple[float, float]:
         """Weight of the keypoint distance in the region step (units of F per pixel) and in the
-        edge step (pixels per pixel): ``keypoint_weight`` over ``region_weight`` and ``edge_weight``."""
+        edge step (pixels per pixel): ``keypoint_weight`` over :data:`REGION_WEIGHT` and :data:`EDGE_WEIGHT`."""
         if self.keypoint_weight == 0:
             return 0.0, 0.0
-        return self.keypoint_weight / self.region_weight, self.keypoint_weight / self.edge_weight
+        return self.keypoint_weight / REGION_WEIGHT, self.keypoint_weight / EDGE_WEIGHT
 
     def steps(self) -> np.ndarray:
         """Initial simplex steps, shape (23,): metres for the root, radians for the angles."""
-        return np.r_[np.full(3, self.position_step_m), np.full(N_PARAMETERS - 3, math.radians(self.angle_step_deg))]
+        return np.r_[np.full(3, POSITION_STEP_M), np.full(N_PARAMETERS - 3, math.radians(self.angle_step_deg))]
 
 
 def split_budget(total: int, split: str) -> tuple[int, int]:

@@ -16,7 +16,8 @@ import numpy as np
 from mocap.body.pose import JOINT_LIMITS, check_pose, clamp_to_limits
 from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.optimize import SimplexResult, initial_simplex, minimize_cost
-from mocap.track.config import FRESH_STEP_SCALE, TrackerConfig, split_budget
+from mocap.track.config import (EDGE_FAILURE_THRESHOLD_PX, FRESH_STEP_SCALE, REGION_FAILURE_THRESHOLD,
+                                TrackerConfig, split_budget)
 
 
 @dataclass(frozen=True)
@@ -54,8 +55,8 @@ class Registration:
     def failed(self, config: TrackerConfig) -> bool:
         """A residual peak: F above its threshold, or (when the edge step ran) the edge distance."""
         edge_checked = self.edge is not None and self.edge.evaluations > 0
-        return bool(self.region_residual > config.region_failure_threshold
-                    or (edge_checked and self.edge_residual > config.edge_failure_threshold_px))
+        return bool(self.region_residual > REGION_FAILURE_THRESHOLD
+                    or (edge_checked and self.edge_residual > EDGE_FAILURE_THRESHOLD_PX))
 
 
 def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: TrackerConfig, *,

@@ -6,10 +6,10 @@ budget, the others with ``hypothesis_evaluations``). Proposals compete with them
 from the last good pose when the leader fails, hand re-acquisition when a skin region is left
 unexplained, the leader's kinematic jumps (:mod:`mocap.body.jumps`), and the proposal stage's
 poses read from the current image (:class:`~mocap.track.proposals.ProposalSource`: hand blobs,
-exemplars, keypoints), each refined by a short registration. Every candidate gets a **unary score** (``region_weight * F + edge_weight * edge
+exemplars, keypoints), each refined by a short registration. Every candidate gets a **unary score** (``REGION_WEIGHT * F + EDGE_WEIGHT * edge
 distance + prior_weight * pose-prior energy``, plus ``keypoint_weight * keypoint distance`` on
 frames with 2D keypoints, which every registration of the frame then also adds); between consecutive frames a **motion term**
-(half the mean squared joint displacement over ``motion_sigma_m**2``) links them. The forward
+(half the mean squared joint displacement over ``MOTION_SIGMA_M**2``) links them. The forward
 Viterbi recursion (:func:`~mocap.track.decode.viterbi_step`) gives each candidate the cost of
 the best path to it; near-duplicates are merged and the ``beam`` cheapest survive.
 
@@ -39,8 +39,8 @@ from mocap.body.pose import check_pose, clamp_to_limits
 from mocap.body.prior import PosePrior, default_prior
 from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.render.camera import Camera
-from mocap.track.config import (JUMPS_REFINED, MERGE_DISTANCE_M, RECOVERY_STEP_SCALE,
-                                TrackerConfig)
+from mocap.track.config import (EDGE_WEIGHT, JUMPS_REFINED, MERGE_DISTANCE_M, MOTION_CAP, MOTION_SIGMA_M,
+                                RECOVERY_STEP_SCALE, REGION_WEIGHT, TrackerConfig)
 from mocap.track.decode import backtrack, viterbi_step
 from mocap.track.proposals import (BlobArmSource, KeypointArmSource, ProposalContext, ProposalSource, jump_proposals,
                                    reach_proposals, unexplained_hands)
@@ -255,7 +255,7 @@ class Tracker:
 
     def _hypothesis(self, reg: Registration, origin: str) -> _Hypothesis:
         cfg = self.config
-        unary = cfg.region_weight * reg.region_residual + cfg.edge_weight * reg.edge_residual
+        unary = REGION_WEIGHT * reg.region_residual + EDGE_WEIGHT * reg.edge_residual
         if not math.isnan(reg.keypoint_residual):
             unary += cfg.keypoint_weight * reg.keypoint_residual
         if self.prior is not None and cfg.prior_weight > 0:
@@ -269,7 +269,7 @@ class Tracker:
         a = np.array([h.joints for h in previous])
         b = np.array([h.joints for h in current])
         squared = ((a[:, None] - b[None]) ** 2).sum(axis=3).mean(axis=2)
-        return np.minimum(0.5 * squared / self.config.motion_sigma_m ** 2, self.config.motion_cap)
+        return np.minimum(0.5 * squared / MOTION_SIGMA_M ** 2, MOTION_CAP)
 
     def _select(self, hypotheses: list[_Hypothesis], cost: np.ndarray) -> list[int]:
         """Indices of the survivors: cheapest path first, near-duplicates merged, at most ``beam``."""

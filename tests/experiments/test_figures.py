@@ -47,7 +47,7 @@ def test_failure_figures_state_their_thresholds(tiny_results):
     from experiments.figures._common import threshold_text
     from experiments.results import Results
     res = Results(tiny_results)
-    assert threshold_text(res, "fail_F") == f"failure: F > {res.config.region_failure_threshold:g}"
+    assert threshold_text(res, "fail_F") == f"failure: F > {res.config.figure_failure_f:g}"
     assert "px" in threshold_text(res, "fail_D") and "mm" in threshold_text(res, "fail_gt")
 
 

@@ -9,7 +9,7 @@ from skimage.transform import downscale_local_mean
 from mocap.imaging.background import estimate_background
 from mocap.imaging.resample import downscale, working_factor
 from mocap.imaging.scene import SceneColours
-from mocap.own_video import choose_background
+from mocap.run.setup import choose_background
 
 #: Largest per-pixel error (0-255, any channel) of the estimated background, with noise sigma 2.
 BACKGROUND_ERROR_BOUND = 12

@@ -94,7 +94,7 @@ def test_segment_rejects_malformed_boxes(clip):
 
 
 def test_interrupted_segment_resumes_where_it_stopped(clip, capsys, monkeypatch):
-    import mocap.commands.segment as segment
+    import mocap.run.segment as segment
     root, scene = clip
     args = ["segment", str(root / "frames"), "--background", str(root / "background.png"), *_boxes(scene)]
     assert main([*args, "--out", str(root / "whole")]) == 0

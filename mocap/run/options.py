@@ -1,0 +1,142 @@
+"""What a person may set for a run, as one JSON-backed record, and the choices every command
+takes from it the same way (the background's mode, the keypoint source).
+
+:class:`OwnVideoOptions` is what ``python -m mocap track`` (and ``track-many``, ``calibrate``,
+``segment``, ``demo``) turn their command lines into; :func:`mocap.run.track` takes it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from mocap.config import JsonConfig
+from mocap.render.camera import DEFAULT_HFOV_DEG
+from mocap.track import TrackerConfig
+
+__all__ = ["BACKGROUND_MODES", "COLOUR_SOURCES", "OwnVideoOptions", "background_mode", "keypoint_source"]
+
+#: How the background is found: ``auto`` (estimate, use if the person moves enough), ``image``
+#: (a file), ``frames`` (median of frames A:B), ``none`` (colour-only foreground).
+BACKGROUND_MODES = ("auto", "image", "frames", "none")
+#: Where the colour classes are learnt: inside the calibrated model's projected parts, or from
+#: the detected face and a box under it (the paper's way).
+COLOUR_SOURCES = ("calibration", "face")
+
+
+def background_mode(image: bool, frames: bool, none: bool) -> str:
+    """The one choice of :data:`BACKGROUND_MODES` every command makes: an image (given, or a
+    sequence folder's own) first, then empty frames ``A:B``, then none asked for, else ``auto``."""
+    if image:
+        return "image"
+    if frames:
+        return "frames"
+    return "none" if none else "auto"
+
+
+@dataclass(frozen=True)
+class OwnVideoOptions(JsonConfig):
+    """What ``python -m mocap track`` lets a person set, as one JSON-backed record
+    (:func:`mocap.run.track`). Paths are strings (JSON); every field has the CLI's default.
+
+    Attributes
+    ----------
+    background : str or None
+        Image of the empty scene (input size).
+    background_frames : (int, int) or None
+        Frames ``A`` to ``B - 1`` of the video show the empty scene: their median.
+    no_background : bool
+        Colour-only foreground (no empty view).
+    calibration : str or None
+        ``calibration.json`` (:mod:`mocap.calibrate`), its camera at the input or the working size.
+    hfov_deg : float, degrees
+        Camera's horizontal field of view without a calibration.
+    height_m : float or None, metres
+        The person's stature (fixes the absolute scale).
+    work_width : int or None, pixels
+        Wanted working width (:func:`mocap.imaging.resample.working_factor`); None: chosen.
+    colour : {"calibration", "face"}
+        Where the colour classes are learnt (:data:`COLOUR_SOURCES`).
+    ground_truth : str or None
+        ``ground_truth.csv`` for accuracy metrics.
+    start : int
+        First frame to track.
+    max_frames : int or None
+        Track at most this many frames.
+    allow_damaged : bool
+        Track the frames of a damaged video that decode instead of stopping.
+    overlay : bool
+        Write ``overlay.mp4``.
+    show : bool
+        Show the overlay live in a window.
+    overwrite : bool
+        Start afresh instead of resuming a run in the output folder.
+    keypoints : str or None
+        2D keypoints: ``"mediapipe"`` (MediaPipe Pose, the optional extra ``keypoints``) or a
+        keypoint file (:mod:`mocap.io.keypoints`); the tracker adds them as a cue
+        (``tracker.keypoint_weight``).
+    tracker : TrackerConfig
+    """
+
+    background: str | None = None
+    background_frames: tuple[int, int] | None = None
+    no_background: bool = False
+    calibration: str | None = None
+    hfov_deg: float = DEFAULT_HFOV_DEG
+    height_m: float | None = None
+    work_width: int | None = None
+    colour: str = "calibration"
+    ground_truth: str | None = None
+    start: int = 0
+    max_frames: int | None = None
+    allow_damaged: bool = False
+    overlay: bool = True
+    show: bool = False
+    overwrite: bool = False
+    keypoints: str | None = None
+    tracker: TrackerConfig = field(default_factory=TrackerConfig)
+
+    def __post_init__(self) -> None:
+        for key in ("background", "calibration", "ground_truth", "keypoints"):
+            value = getattr(self, key)
+            if isinstance(value, Path):
+                object.__setattr__(self, key, str(value))
+        if isinstance(self.tracker, dict):
+            object.__setattr__(self, "tracker", TrackerConfig.from_dict(self.tracker))
+        given = [name for name, on in (("background", self.background is not None),
+                                       ("background_frames", self.background_frames is not None),
+                                       ("no_background", self.no_background)) if on]
+        if len(given) > 1:
+            raise ValueError(f"give one of background, background_frames and no_background, not {' and '.join(given)}")
+        if self.background_frames is not None:
+            a, b = self.background_frames
+            if a < 0 or b <= a:
+                raise ValueError(f"background frames must be A:B with 0 <= A < B, got {a}:{b}")
+        if self.colour not in COLOUR_SOURCES:
+            raise ValueError(f"colour must be one of {COLOUR_SOURCES}, got {self.colour!r}")
+        if isinstance(self.start, bool) or not isinstance(self.start, int) or self.start < 0:
+            raise ValueError(f"the start frame must be a non-negative integer, got {self.start!r}")
+        if self.max_frames is not None and self.max_frames < 1:
+            raise ValueError(f"max_frames must be at least 1, got {self.max_frames}")
+        if self.keypoints is not None and self.keypoints != "mediapipe" and not Path(self.keypoints).is_file():
+            raise FileNotFoundError(f"keypoint file not found: {self.keypoints} (or give --keypoints mediapipe)")
+        if self.work_width is not None and self.work_width < 16:
+            raise ValueError(f"the working width must be at least 16 pixels, got {self.work_width}")
+
+    def background_mode(self, sequence_background: bool = False) -> str:
+        """One of :data:`BACKGROUND_MODES` (:func:`background_mode`; ``sequence_background``: a
+        sequence folder's own ``background.png`` is used unless told otherwise)."""
+        return background_mode(self.background is not None or sequence_background,
+                               self.background_frames is not None, self.no_background)
+
+
+def keypoint_source(name: str | None):
+    """The :class:`~mocap.io.keypoints.KeypointSource` of ``OwnVideoOptions.keypoints``: None,
+    MediaPipe Pose for ``"mediapipe"`` (ValueError in one line without the extra), else a
+    keypoint file (FileNotFoundError, ValueError naming the line of a malformed one)."""
+    if name is None:
+        return None
+    if name == "mediapipe":
+        from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
+        return MediaPipeKeypoints()
+    from mocap.io.keypoints import KeypointFile
+    return KeypointFile(name)
