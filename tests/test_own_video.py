@@ -68,7 +68,7 @@ def test_uv_columns_are_the_camera_projection_in_input_pixels(sequence, tmp_path
     iio.imwrite(background, np.repeat(np.repeat(iio.imread(sequence / "background.png"), 2, 0), 2, 1))
     out = tmp_path / "run"
     assert main(["track", str(big), "--background", str(background), "--calibration",
-                 str(sequence / "calibration.json"), "--out", str(out), "--iterations", "60", "--no-overlay"]) == 0
+                 str(sequence / "calibration.json"), "--out", str(out), "--iterations", "60"]) == 0
     table = PoseTable.read(out / "poses.csv")
     camera = Calibration.from_json(sequence / "calibration.json").camera
     from mocap.body.skeleton import JOINT_NAMES
@@ -79,6 +79,9 @@ def test_uv_columns_are_the_camera_projection_in_input_pixels(sequence, tmp_path
     run = json.loads((out / "run.json").read_text())
     assert run["settings"]["working_resolution"]["factor"] == 2
     assert run["settings"]["own_video"]["background"]["mode"] == "image"
+    # the overlay is drawn on the input's own frames, at their size (not the working 160x120)
+    from mocap.io.video import iter_frames
+    assert next(iter_frames(out / "overlay.mp4")).shape == (240, 320, 3)
 
 
 @pytest.mark.slow

@@ -42,27 +42,24 @@ def add_parser(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from mocap.calibrate import Calibration, auto_calibrate
-    from mocap.io.frames import VideoSource
-    from mocap.io.sequence import find_sequence
     from mocap.io.video import read_image
     from mocap.render import Camera
     from mocap.run.options import OwnVideoOptions, keypoint_source
     from mocap.run.setup import SetupRequest, find_setup
+    from mocap.run.tracking import RunInput
 
     keypoints = keypoint_source(None if args.keypoints is None else str(args.keypoints))
-
-    seq = find_sequence(args.video)
-    source = VideoSource(seq.frames)
-    source.damaged_frames(args.allow_damaged)
+    # the background as track chooses it (given, the sequence folder's own, frames, none or auto)
     chosen = OwnVideoOptions(background=args.background, background_frames=args.background_frames,
                              no_background=args.no_background, hfov_deg=args.hfov, height_m=args.height)
-    own_background = seq.background if not args.no_background and args.background_frames is None else None
-    background = args.background or own_background
+    opened = RunInput.open(args.video, chosen)
+    source, background = opened.frames, opened.background
+    source.damaged_frames(args.allow_damaged)
     if background is not None and args.height is None:
         index = args.frame or 0
         frame = next(source.frames(index, index + 1), None)
         if frame is None:
-            raise ValueError(f"{seq.frames} has no frame {index}")
+            raise ValueError(f"{source.name} has no frame {index}")
         camera = Camera.default(frame.shape[1], frame.shape[0], hfov_deg=args.hfov)
         found = None if keypoints is None else keypoints.keypoints(index, frame)    # input size = camera size
         calibration = auto_calibrate(frame, read_image(background), camera, keypoints=found)
@@ -70,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         if args.frame is not None:
             raise ValueError("--frame needs --background IMG (without one the first usable frame is found)")
-        request = SetupRequest(None, chosen.background_mode(own_background is not None),
+        request = SetupRequest(None, chosen.background_mode(opened.sequence_background),
                                read_image(background) if background is not None else None, args.background_frames,
                                hfov_deg=args.hfov, height_m=args.height, keypoints=keypoints)
         setup = find_setup(source, request).setup

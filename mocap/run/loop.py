@@ -284,6 +284,26 @@ class RunLoop:
     frames; :meth:`finish` writes the outputs.
     """
 
+    #: The damage check's verdict (:class:`DamageCheck`).
+    damage: DamageCheck
+    #: The frames of this session.
+    span: Span
+    #: ``run.json`` ``settings``.
+    settings: dict
+    #: Mesh level of detail of the body models.
+    resolution: int
+    #: The ground truth, for ``run.json`` ``metrics``.
+    truth: PoseTable | None
+    #: The person tracked now, and who was tracked when.
+    person: Person
+    people: People
+    tracker: Tracker
+    #: The overlay is drawn as frames come (else redrawn at the end), and where.
+    overlay_now: bool
+    geometry: OverlayGeometry
+    #: When :meth:`run` started (``time.perf_counter``, seconds).
+    started: float
+
     def __init__(self, frames_in, setup: RunSetup, out_dir: Path, params: RunParams) -> None:
         self.frames_in, self.setup, self.out_dir, self.params = frames_in, setup, out_dir, params
         self.config = params.config

@@ -1,0 +1,32 @@
+"""The run's last words: one line on what to try when most frames failed (the options not used
+yet), and the overlay's size (the input's, at most 1280 pixels wide)."""
+import pytest
+
+from mocap.render import Camera
+from mocap.run.advice import RunFacts, what_to_try
+from mocap.run.overlay import OverlayGeometry
+
+
+def test_a_run_that_went_well_gets_no_advice():
+    assert what_to_try(RunFacts(frames=20, failures=10, background="estimated", calibration="automatic")) is None
+    assert what_to_try(RunFacts(frames=0, failures=0)) is None
+
+
+def test_advice_names_only_what_was_not_tried_in_one_line():
+    line = what_to_try(RunFacts(frames=20, failures=20, background="none", calibration="automatic"))
+    assert line.startswith("20 of 20 frames were marked failed") and "\n" not in line
+    assert all(option in line for option in ("--keypoints mediapipe", "--background IMG", "--height M"))
+    tried = what_to_try(RunFacts(frames=20, failures=11, keypoints="mediapipe", background="image", height_given=True,
+                                 calibration="automatic"))
+    assert not any(option in tried for option in ("--keypoints", "--background", "--height"))
+    given = what_to_try(RunFacts(frames=4, failures=3, background="estimated", calibration="given"))
+    assert "--height" not in given and "--keypoints mediapipe" in given
+
+
+@pytest.mark.parametrize("width, height, work, factor", [(640, 480, 4, 1), (2560, 1440, 16, 2), (1280, 720, 8, 1)])
+def test_overlay_is_drawn_at_the_input_size_up_to_1280_wide(width, height, work, factor):
+    full = Camera.default(width, height)
+    geometry = OverlayGeometry.of(full.working(width, height, work), work, width, height)
+    expected = full.working(width, height, factor)       # hand: the input reduced by the integer factor
+    assert geometry.factor == factor and geometry.camera.shape == (height // factor, width // factor)
+    assert (geometry.camera.fx, geometry.camera.cx) == pytest.approx((expected.fx, expected.cx))
