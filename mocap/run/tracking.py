@@ -58,17 +58,15 @@ class RunInput:
         if getattr(source, "live", False):
             if options.background_frames is not None:
                 raise ValueError("background frames need a video file, not a live camera")
+            _check_files(options.background, options.calibration)
             return cls(source, options.background, False, options.calibration, options.ground_truth,
                        source.fps or 25.0)
         seq = find_sequence(source)
-        frames = VideoSource(seq.frames, fps=seq.fps() if seq.meta is not None else None)
         own_background = seq.background if not options.no_background and options.background_frames is None else None
         background = options.background or own_background
         calibration = options.calibration or seq.calibration
-        for what, path in (("background", background), ("calibration", calibration)):
-            if path is not None and not Path(path).is_file():
-                frames.close()
-                raise FileNotFoundError(f"{what} file not found: {path}")
+        _check_files(background, calibration)
+        frames = VideoSource(seq.frames, fps=seq.fps() if seq.meta is not None else None)
         fps = (seq.fps(frames.fps or 25.0) if seq.meta is not None else frames.fps) or 25.0
         return cls(frames, background, own_background is not None, calibration,
                    options.ground_truth or seq.ground_truth, fps)
@@ -85,6 +83,13 @@ class RunInput:
         return SetupRequest(factor, options.background_mode(self.sequence_background),
                             read_image(self.background) if self.background else None, options.background_frames,
                             given, options.hfov_deg, options.height_m, progress=progress, keypoints=keypoints)
+
+
+def _check_files(background: str | None, calibration: str | None) -> None:
+    """FileNotFoundError for a named background or calibration file that is missing."""
+    for what, path in (("background", background), ("calibration", calibration)):
+        if path is not None and not Path(path).is_file():
+            raise FileNotFoundError(f"{what} file not found: {path}")
 
 
 def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *, progress: bool = True,
