@@ -56,12 +56,13 @@ def draw_model(frame: np.ndarray, labels: np.ndarray, edges: np.ndarray, n_class
     """
     if frame.ndim != 3 or frame.shape[:2] != labels.shape or labels.shape != edges.shape:
         raise ValueError(f"frame {frame.shape}, labels {labels.shape} and edges {edges.shape} must match")
-    out = frame.astype(np.float32)
-    colours = label_palette(n_classes, class_names)[labels].astype(np.float32)
-    model = labels > 0
-    out[model] = (1 - alpha) * out[model] + alpha * colours[model]
+    out = frame.copy()
+    model = np.nonzero(labels)                 # only the model's pixels are blended (a large frame's rest is copied)
+    colours = label_palette(n_classes, class_names)[labels[model]].astype(np.float32)
+    blended = (1 - alpha) * frame[model].astype(np.float32) + alpha * colours
+    out[model] = np.clip(blended, 0, 255).astype(np.uint8)
     out[edges] = EDGE_COLOUR
-    return np.clip(out, 0, 255).astype(np.uint8)
+    return out
 
 
 def draw_pose(frame: np.ndarray, pose: np.ndarray, model, camera: Camera) -> np.ndarray:
