@@ -282,9 +282,10 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
     auto : AutoCalibrationConfig, optional
     sample_frames, sample_limit : int
         Background estimation uses ``sample_frames`` frames spread over the first
-        ``sample_limit`` (chosen by number first, each reduced to the working resolution as it
-        is read: the set-up holds at most ``sample_frames`` working-size frames and one
-        input-size frame of a file); ``--background-frames A:B`` likewise.
+        ``sample_limit``, each reduced to the working resolution as it is read (the set-up
+        holds working-size frames and one input-size frame of a file): a long video's key
+        frames, decoded without the frames between them
+        (:meth:`mocap.io.frames.VideoSource.sample`); ``--background-frames A:B`` by number.
     search_frames : int
         Calibration looks at most this many frames into the video for a usable frame.
     progress : bool
@@ -395,7 +396,7 @@ def setup_own_video(source, factor: int | None = None, *, background_mode: str =
         record["background"] = {"mode": "none", "reason": "live camera without --background: colour-only foreground"}
 
     if background_mode == "auto" and not source.live:
-        sample = [downscale(f, factor) for _, f in frames_at(spread(0, min(sample_limit, count), sample_frames))]
+        sample = source.sample(sample_frames, min(sample_limit, count), lambda f: downscale(f, factor))
         background, record["background"] = choose_background(sample, imaging, face=face, face_frame=face_frame)
         del sample
 
@@ -588,6 +589,7 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
     ValueError, FileNotFoundError
         Bad options, missing files, a damaged video, no usable frame (one sentence each).
     """
+    from mocap._progress import compiling_announced
     from mocap.imaging.resample import working_factor
     from mocap.io.frames import VideoSource
     from mocap.io.sequence import find_sequence
@@ -618,11 +620,12 @@ def track_own_video(source, out_dir: str | Path, options: OwnVideoOptions | None
             given = Calibration.from_json(calibration)
             factor = factor or working_factor(width, height)
             given = dataclasses.replace(given, camera=given.camera.working(width, height, factor))
-        setup, consumed = setup_own_video(
-            frames_in, factor, background_mode=options.background_mode(seq_background is not None),
-            background_image=read_image(background) if background else None,
-            background_frames=options.background_frames, calibration=given, hfov_deg=options.hfov_deg,
-            height_m=options.height_m, progress=progress, keypoints=keypoints)
+        with compiling_announced(progress, "the set-up's kernels"):
+            setup, consumed = setup_own_video(
+                frames_in, factor, background_mode=options.background_mode(seq_background is not None),
+                background_image=read_image(background) if background else None,
+                background_frames=options.background_frames, calibration=given, hfov_deg=options.hfov_deg,
+                height_m=options.height_m, progress=progress, keypoints=keypoints)
         if live:
             frames_in.hold(consumed)
         setup = dataclasses.replace(setup, colour_from=options.colour,

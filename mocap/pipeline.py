@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mocap._progress import ProgressBar
 from mocap.calibrate import Calibration, colour_model_from_pose
 from mocap.imaging import ColourModel, ImagingConfig, learn_colour_model, prepare_frame
 from mocap.io.atomic import write_text_atomic
@@ -173,8 +174,6 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
     mocap.io.lock.FolderInUseError
         Another run writes to ``out_dir``.
     """
-    from tqdm import tqdm
-
     from mocap.body.mesh import resolution_for_image
     from mocap.imaging.resample import downscale
 
@@ -277,8 +276,8 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
     expected = total if total is not None or frames_in.live else frames_in.count_hint
     if max_frames is not None and expected is not None:
         expected = min(expected, start_frame + max_frames)
-    bar = tqdm(total=None if expected is None else expected - start_frame, initial=start - start_frame,
-               desc="tracking", unit="frame", disable=not progress)
+    bar = ProgressBar(total=None if expected is None else expected - start_frame, initial=start - start_frame,
+                      desc="tracking", unit="frame", disable=not progress)
     made = [] if checkpoint is not None else [journal, run_json, state_path, out_dir / "colour_model.json",
                                               out_dir / "overlay.mp4"]
 
