@@ -164,6 +164,16 @@ def test_research_log_commits_exist():
     assert missing == []
 
 
+#: Most bytes the README may take (6 KB: a first page, the rest in docs/).
+README_MAX_BYTES = 6 * 1024
+
+
+def test_readme_is_at_most_6_kb_and_says_how_to_open_the_notebooks():
+    text = (ROOT / "README.md").read_bytes()
+    assert len(text) <= README_MAX_BYTES, f"README.md is {len(text)} bytes; move detail to docs/"
+    assert b"jupyter lab notebooks/" in text and b"jupytext" in text
+
+
 def _written_by_commands() -> set[str]:
     """Relative paths the documentation's commands and the notebooks write: every ``--out`` of a
     bash block (README.md, docs/*.md), the API snippet's output folder, the calibration
