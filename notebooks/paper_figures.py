@@ -21,21 +21,30 @@
 # sequence, motion-capture clips) from the results of `python -m experiments.sweep`, without
 # running the tracker again.
 #
-# Make results first, e.g. `python -m experiments.sweep --quick` (a few minutes on two cores)
-# or the full sweep `python -m experiments.sweep --motion-dir ../shared/data/mocap`.
-# Set `MOCAP_RESULTS` to another results folder, `MOCAP_FIGURES_OUT` to another output
-# folder and `MOCAP_FIGURES_ONLY` to a comma-separated subset of the figures (the tests run
-# this notebook on a tiny sweep that way).
+# With no results in `experiments/results/quick/`, the next cell makes them first: it runs
+# `python -m experiments.sweep --quick` (a few minutes on two cores; run it in a terminal to
+# watch its progress). The full sweep: `python -m experiments.sweep --motion-dir ../shared/data/mocap`,
+# then `MOCAP_RESULTS=experiments/results/full`. Set `MOCAP_RESULTS` to another results folder,
+# `MOCAP_FIGURES_OUT` to another output folder and `MOCAP_FIGURES_ONLY` to a comma-separated
+# subset of the figures (the tests run this notebook on a tiny sweep that way).
 
 # %% tags=["parameters"]
 import os
 from pathlib import Path
 
 from experiments import RESULTS_DIR
+from experiments.sweep import CONFIG_FILE
 
 RESULTS = Path(os.environ.get("MOCAP_RESULTS", RESULTS_DIR / "quick"))
 OUT = Path(os.environ.get("MOCAP_FIGURES_OUT", RESULTS / "figures"))
 ONLY = os.environ.get("MOCAP_FIGURES_ONLY", "")
+
+if "MOCAP_RESULTS" not in os.environ and not (RESULTS / CONFIG_FILE).is_file():
+    from experiments.sweep import main as sweep   # no results yet: the quick sweep, into RESULTS
+
+    if sweep(["--quick", "--out", str(RESULTS)]) != 0:
+        raise RuntimeError("the quick sweep failed (see above); run `python -m experiments.sweep --quick` "
+                           "in a terminal")
 
 # %% [markdown]
 # ## What the sweep ran

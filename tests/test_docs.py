@@ -164,6 +164,45 @@ def test_research_log_commits_exist():
     assert missing == []
 
 
+#: Most bytes the README may take (6 KB: a first page, the rest in docs/).
+README_MAX_BYTES = 6 * 1024
+
+
+def test_readme_is_at_most_6_kb_and_says_how_to_open_the_notebooks():
+    text = (ROOT / "README.md").read_bytes()
+    assert len(text) <= README_MAX_BYTES, f"README.md is {len(text)} bytes; move detail to docs/"
+    assert b"jupyter lab notebooks/" in text and b"jupytext" in text
+
+
+def _written_by_commands() -> set[str]:
+    """Relative paths the documentation's commands and the notebooks write: every ``--out`` of a
+    bash block (README.md, docs/*.md), the API snippet's output folder, the calibration
+    notebook's file."""
+    written = set()
+    for name in RUN_FILES:
+        text = (ROOT / name).read_text(encoding="utf-8")           # as written, not as the tests run it
+        for block in parse_blocks(re.sub(r"(?m)^<!--\s*docs-test:.*-->$", "", text), name):
+            if block.language == "bash":
+                written.update(re.findall(r"--out\s+([\w.-]+(?:/[\w.-]+)*)", block.text))
+            elif block.language == "python":
+                written.update(re.findall(r"track\w*\([^,()]+(?:\(\))?,\s*\"([^\"]+)\"", block.text))
+    notebook = (ROOT / "notebooks" / "calibration.py").read_text(encoding="utf-8")
+    written.update(re.findall(r'"MOCAP_NOTEBOOK_OUT",\s*"([^"]+)"', notebook))
+    return {w for w in written if w.upper() != w}           # not placeholders (DIR, JSON)
+
+
+def test_what_the_commands_write_is_git_ignored():
+    written = _written_by_commands()
+    assert {"my_track", "my_clip", "my_calibration.json", "api-demo", "calibration-notebook.json"} <= written
+    probe = subprocess.run(["git", "rev-parse", "--git-dir"], cwd=ROOT, capture_output=True, text=True)
+    if probe.returncode != 0:
+        pytest.skip("not a git checkout")
+    ignored = subprocess.run(["git", "check-ignore", "--no-index", "--stdin"], cwd=ROOT, capture_output=True,
+                             text=True, input="\n".join(f"{w}/poses.csv" if "." not in w else w
+                                                        for w in sorted(written))).stdout.split()
+    assert sorted(w for w in written if (f"{w}/poses.csv" if "." not in w else w) not in ignored) == []
+
+
 # -- the code blocks run
 
 

@@ -20,7 +20,7 @@ from mocap.io.pose_table import PoseTable
 from mocap.run.many import SUMMARY_COLUMNS, read_summary
 
 from tests.conftest import REPO_ROOT
-from tests.dask_cluster import cluster_env, local_cluster, wait_for
+from tests.dask_cluster import cluster_env, local_cluster, make_certificates, tls_client_env, wait_for
 from tests.killpoints import CHECKPOINT_EVERY
 
 N_FRAMES = 6
@@ -193,3 +193,56 @@ def test_a_killed_worker_s_video_resumes_elsewhere_and_every_video_is_its_single
     for clip in clips:
         assert_same_track(out / clip.name, single_runs[clip.name])
     assert [r["status"] for r in assert_summary_matches_runs(out, inputs)] == ["finished"] * 3
+
+
+#: Tries to reach a TLS scheduler without the cluster's credentials, three ways; prints one line each.
+_UNINVITED = """
+import socket, ssl, sys
+from distributed import Client
+from distributed.security import Security
+address, ca, cert, key = sys.argv[1:5]
+host, port = address.removeprefix("tls://").split(":")
+
+def bare_tls():                      # trusts the scheduler, shows no certificate of its own
+    context = ssl.create_default_context(cafile=ca)
+    with context.wrap_socket(socket.create_connection((host, int(port)), timeout=5), server_hostname=host) as s:
+        s.sendall(b"hello")
+        s.recv(1)
+
+attempts = {"another authority's certificate": lambda: Client(address, timeout=5, security=Security(
+                tls_ca_file=ca, tls_client_cert=cert, tls_client_key=key, require_encryption=True)).close(),
+            "no certificate": bare_tls,
+            "plain TCP": lambda: Client(address.replace("tls://", "tcp://"), timeout=5).close()}
+for what, attempt in attempts.items():
+    try:
+        attempt()
+        print(what, "ACCEPTED")
+    except Exception as exc:
+        print(what, "refused:", type(exc).__name__, str(exc).replace(chr(10), " ")[:200])
+"""
+
+
+def test_track_many_runs_on_a_tls_cluster_that_refuses_clients_without_its_credentials(clips, single_runs, tmp_path):
+    """docs/cluster.md's TLS recipe on 127.0.0.1: a scheduler and a worker speaking only TLS with
+    certificates of the test's own authority; ``track-many`` gets its credentials from
+    ``DASK_DISTRIBUTED__COMM__TLS__*`` and tracks as a single run does; a client with another
+    authority's certificate, with none, or on plain TCP is refused by the scheduler."""
+    pytest.importorskip("distributed")
+    pytest.importorskip("cryptography")
+    certificates, stranger = make_certificates(tmp_path), make_certificates(tmp_path, "stranger")
+    inputs = [os.path.relpath(clips[0], tmp_path)]
+    with local_cluster(tmp_path, {"worker-a": {}}, certificates) as (address, processes):
+        assert address.startswith("tls://")
+        uninvited = subprocess.run([sys.executable, "-c", _UNINVITED, address, str(certificates["ca"]),
+                                    str(stranger["cert"]), str(stranger["key"])],
+                                   capture_output=True, text=True, env=cluster_env(), timeout=120)
+        many = subprocess.run([sys.executable, "-m", "mocap", "track-many", *inputs, "--out", "out", "--scheduler",
+                               address, "--no-progress", *TRACK_ARGS], cwd=tmp_path, capture_output=True, text=True,
+                              env={**cluster_env(), **tls_client_env(certificates)}, timeout=300)
+    lines = uninvited.stdout.splitlines()
+    assert [line.split(" refused: ")[0] for line in lines] == ["another authority's certificate", "no certificate",
+                                                               "plain TCP"], uninvited.stdout + uninvited.stderr
+    assert "UNKNOWN_CA" in lines[0]                   # the scheduler's verdict on the stranger's certificate
+    assert many.returncode == 0, many.stderr
+    assert "1 of 1 inputs finished" in many.stdout and f"on dask {address}" in many.stdout
+    assert_same_track(tmp_path / "out" / clips[0].name, single_runs[clips[0].name])

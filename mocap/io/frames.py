@@ -19,7 +19,7 @@ from pathlib import Path
 import imageio_ffmpeg
 import numpy as np
 
-from mocap.io.video import count_frames, iter_frames
+from mocap.io.video import count_frames, iter_frames, sample_frames
 from mocap.io.video_check import RunningCheck, VideoCheck, announced
 
 __all__ = ["VideoSource", "CameraSource", "camera_device"]
@@ -126,6 +126,12 @@ class VideoSource:
         """Frames ``start`` to ``stop`` (exclusive), or only the sorted ``indices`` among them,
         uint8 RGB, shape (height, width, 3) (:func:`mocap.io.video.iter_frames`)."""
         return iter_frames(self.path, start, stop, indices=indices)
+
+    def sample(self, count: int, stop: int, reduce) -> list:
+        """Up to ``count`` frames spread over frames ``0`` to ``stop - 1``, each passed through
+        ``reduce`` as it is read; a long video's are its key frames, read without decoding the
+        frames between them (:func:`mocap.io.video.sample_frames`)."""
+        return sample_frames(self.path, count, stop, reduce, fps=self.fps)
 
     def damaged_frames(self, allow: bool = False) -> list[int]:
         """The frame numbers of a damaged video (:class:`mocap.io.video_check.VideoCheck`),

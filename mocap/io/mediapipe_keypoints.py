@@ -11,10 +11,24 @@ MediaPipe's): ``head`` the midpoint of the ears (the centre of the head), should
 wrists their landmarks, ``*_hand`` the mean of the wrist, index and pinky landmarks (the palm's
 centre, where the model's hand joint is). ``neck`` has no landmark and is left absent. A joint
 whose landmarks are averaged takes their smallest visibility.
+
+What MediaPipe and its dependencies print about themselves does not reach the terminal: the
+Python warning of protobuf's deprecated ``SymbolDatabase.GetPrototype`` (ignored by a filter on
+that message and module alone, set where MediaPipe is imported) and the lines its native code
+writes to the process's stderr when its graph opens (TensorFlow Lite's delegate, absl's
+logging notice, the feedback manager's warning: :data:`NATIVE_NOISE`, dropped from what is
+written there while the graph opens, which the constructor waits for; any other line is passed
+on).
 """
 from __future__ import annotations
 
+import os
+import re
+import sys
+import tempfile
 import time
+import warnings
+from contextlib import contextmanager
 from types import MappingProxyType
 
 import numpy as np
@@ -56,7 +70,13 @@ class MediaPipeKeypoints:
             raise ValueError(MISSING_EXTRA) from None
         from mediapipe import __version__
 
-        self._pose = mp_pose.Pose(static_image_mode=False, model_complexity=1)
+        # protobuf 4's deprecation of what MediaPipe's result conversion calls (every frame)
+        warnings.filterwarnings("ignore", message=r"SymbolDatabase\.GetPrototype\(\) is deprecated",
+                                category=UserWarning, module=r"google\.protobuf\.symbol_database")
+
+        with _native_noise_dropped():       # the graph opens its calculators on threads of its own: waited for
+            self._pose = mp_pose.Pose(static_image_mode=False, model_complexity=1)
+            self._pose._graph.wait_until_idle()
         self.milliseconds: list[float] = []
         self.description = f"mediapipe {__version__} pose, model complexity 1"
 
@@ -101,3 +121,33 @@ class MediaPipeKeypoints:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+#: Lines MediaPipe's native code writes to stderr when its graph starts (regular expressions).
+NATIVE_NOISE = (r"INFO: Created TensorFlow Lite XNNPACK delegate",
+                r"WARNING: All log messages before absl::InitializeLog\(\) is called",
+                r"W\d{4} .*inference_feedback_manager\.cc:\d+\] Feedback manager requires")
+
+
+@contextmanager
+def _native_noise_dropped():
+    """Within the block, what is written to file descriptor 2 (native code's stderr, and
+    Python's) goes to a temporary file; after it, the lines that are not :data:`NATIVE_NOISE`
+    are written to ``sys.stderr`` (nothing is lost, only delayed)."""
+    noise = re.compile("|".join(NATIVE_NOISE))
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as caught:
+        os.dup2(caught.fileno(), 2)
+        try:
+            yield
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+            caught.seek(0)
+            kept = [line for line in caught.read().decode("utf-8", "replace").splitlines(keepends=True)
+                    if not noise.search(line)]
+            if kept:
+                sys.stderr.write("".join(kept))
+                sys.stderr.flush()

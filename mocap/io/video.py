@@ -17,8 +17,8 @@ import numpy as np
 
 from mocap.io.video_check import ffmpeg_failure
 
-__all__ = ["IMAGE_SUFFIXES", "read_image", "iter_frames", "count_frames", "frame_rate",
-           "image_files", "VideoWriter"]
+__all__ = ["IMAGE_SUFFIXES", "read_image", "iter_frames", "sample_frames", "spread_numbers", "count_frames",
+           "frame_rate", "image_files", "VideoWriter"]
 
 #: Suffixes (lower case) of the image files a frame folder may hold.
 IMAGE_SUFFIXES: tuple[str, ...] = (".png", ".jpg", ".jpeg")
@@ -206,6 +206,86 @@ def iter_frames(source: str | Path, start: int = 0, stop: int | None = None, *,
     finally:
         if reader is not None:
             reader.close()
+
+
+def spread_numbers(start: int, stop: int, count: int) -> list[int]:
+    """Up to ``count`` frame numbers spread evenly over ``start`` to ``stop - 1`` (sorted, unique)."""
+    if stop <= start:
+        return []
+    return sorted({int(i) for i in np.linspace(start, stop - 1, min(count, stop - start)).round()})
+
+
+#: A video with at most this many frames (before the sample's ``stop``) times the sample's size
+#: is sampled by number, decoding every frame up to the last chosen one (as cheap as seeking there).
+SAMPLE_BY_NUMBER_RATIO = 4
+
+
+def sample_frames(source: str | Path, count: int, stop: int, reduce, *, fps: float | None = None) -> list[np.ndarray]:
+    """Up to ``count`` frames spread over frames ``0`` to ``stop - 1``, each passed through
+    ``reduce`` as it is read, without decoding every frame of a long video.
+
+    A folder of images, and a video of at most :data:`SAMPLE_BY_NUMBER_RATIO` times ``count``
+    frames (or of unknown frame rate), give the frames chosen by number
+    (:func:`spread_numbers`, :func:`iter_frames`). A longer video gives its key frames among the
+    first ``stop / fps`` seconds, decoded alone (ffmpeg's ``-skip_frame nokey``: the other
+    frames' packets are read and dropped, never decoded), ``count`` of them spread by order when
+    there are more; when there are fewer (an encoder that puts one every 10 s), the rest are
+    the first frames of the video after the first, every second one (its first seconds). The frames come in no
+    particular order.
+
+    Parameters
+    ----------
+    source : str or Path
+        Video file or folder of images.
+    count : int
+        Frames wanted (> 0).
+    stop : int
+        Frames from ``stop`` on are not sampled (for a video's key frames: ``stop / fps``
+        seconds).
+    reduce : callable
+        Applied to each frame (uint8 RGB, shape (H, W, 3), input size) as it is read: at most
+        one input-size frame is held, and the reduced key frames until they are chosen.
+    fps : float, optional
+        The video's frame rate (frames per second); None: sampled by number.
+
+    Returns
+    -------
+    list
+        ``reduce``'s results, at most ``count``.
+
+    Raises
+    ------
+    FileNotFoundError, ValueError
+        As :func:`iter_frames`.
+    """
+    if count <= 0:
+        raise ValueError(f"count must be positive, got {count}")
+    source = Path(source)
+    _check_exists(source)
+    if source.is_dir() or not fps or stop <= SAMPLE_BY_NUMBER_RATIO * count:
+        return [reduce(frame) for frame in iter_frames(source, indices=spread_numbers(0, stop, count))]
+    keys = []
+    reader = None
+    try:
+        reader = imageio_ffmpeg.read_frames(str(source), input_params=["-skip_frame", "nokey", "-t", f"{stop / fps:.6f}"],
+                                            output_params=["-map", "0:v:0", "-fps_mode", "passthrough"])
+        meta = next(reader)
+        width, height = (int(v) for v in meta["size"])
+        for data in reader:
+            frame = np.frombuffer(data, np.uint8)
+            if frame.size != width * height * 3:
+                raise ValueError(f"a key frame has {frame.size} bytes, not {width}x{height}x3")
+            keys.append(reduce(frame.reshape(height, width, 3)))
+    except _DECODE_ERRORS as exc:
+        raise ValueError(ffmpeg_failure(source, str(exc))) from None
+    finally:
+        if reader is not None:
+            reader.close()
+    if len(keys) >= count:
+        return [keys[i] for i in spread_numbers(0, len(keys), count)]
+    rest = count - len(keys)           # frame 0 is a key frame: the others from frame 1 on
+    first = [reduce(frame) for frame in iter_frames(source, indices=range(1, 2 * rest + 1, 2))]
+    return keys + first
 
 
 #: Most terms of an ffmpeg ``select`` expression (ffmpeg refuses expressions much longer).

@@ -33,15 +33,24 @@ def mediapipe_available():
         pytest.skip(reason)
 
 
-def test_mediapipe_finds_the_visible_joints_of_a_real_clip(shared_data, mediapipe_available):
+def test_mediapipe_finds_the_visible_joints_of_a_real_clip(shared_data, mediapipe_available, capfd):
+    import warnings
+
     from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
     from mocap.io.video import iter_frames
 
-    with MediaPipeKeypoints() as source:
-        for i, frame in enumerate(iter_frames(shared_data / "video" / "intel_asl_no.mkv")):
-            k = source.keypoints(i, frame)          # video mode: the frames before it, in order
-            if i == 30:
-                break
+    capfd.readouterr()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")             # every warning shown, as `python -W always` would
+        with MediaPipeKeypoints() as source:
+            for i, frame in enumerate(iter_frames(shared_data / "video" / "intel_asl_no.mkv")):
+                k = source.keypoints(i, frame)          # video mode: the frames before it, in order
+                if i == 30:
+                    break
+    # nothing of MediaPipe's own reaches the terminal: no Python warning (protobuf's deprecation),
+    # no native log line (TensorFlow Lite, absl) on the process's stderr
+    assert [str(w.message) for w in caught] == []
+    assert capfd.readouterr().err == ""
     found = k.as_mapping()
     for name, (u, v) in ANNOTATED.items():
         assert name in found, f"{name} not found"

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mocap.io.video import (VideoWriter, count_frames, frame_rate, image_files, iter_frames,
-                            read_image)
+                            read_image, sample_frames)
 
 
 @pytest.fixture()
@@ -127,6 +127,41 @@ def test_video_errors(tmp_path):
             video.write(np.zeros((4, 4, 3), np.float32))
     with pytest.raises(FileNotFoundError):
         VideoWriter(tmp_path / "nowhere" / "x.mp4", fps=5)
+
+
+def _keyed_clip(path, frames: int, key_every: int, fps: int = 25):
+    """A 32x24 test pattern clip with a key frame exactly every ``key_every`` frames (x264, no
+    scene-cut key frames)."""
+    import subprocess
+
+    import imageio_ffmpeg
+    subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-y", "-f", "lavfi", "-i",
+                    f"testsrc=size=32x24:rate={fps}", "-frames:v", str(frames), "-c:v", "libx264", "-g", str(key_every),
+                    "-keyint_min", str(key_every), "-sc_threshold", "0", "-pix_fmt", "yuv420p", str(path)], check=True)
+    return path
+
+
+def test_sample_frames_reads_key_frames_of_a_long_video_and_fills_with_its_first_frames(tmp_path):
+    clip = _keyed_clip(tmp_path / "clip.mp4", 300, 20)
+    every = list(iter_frames(clip))                  # the reference: every frame decoded in order
+    assert len(every) == 300
+
+    def same(got, numbers):
+        assert len(got) == len(numbers)
+        for frame, n in zip(got, numbers):
+            assert np.array_equal(frame, every[n]), n
+
+    # key frames 0, 20, ..., 280 (15) among the first 300: 6 of them spread by order
+    same(sample_frames(clip, 6, 300, lambda f: f, fps=25), [20 * k for k in (0, 3, 6, 8, 11, 14)])
+    # only the first 100 frames (4 s): key frames 0..80, then the first frames after frame 0, every second one
+    same(sample_frames(clip, 8, 100, lambda f: f, fps=25), [0, 20, 40, 60, 80, 1, 3, 5])
+    # each frame goes through ``reduce`` as it is read
+    assert [f.shape for f in sample_frames(clip, 3, 300, lambda f: f[::2, ::2], fps=25)] == [(12, 16, 3)] * 3
+    # a short span (at most 4x the count), or no frame rate: chosen by number
+    same(sample_frames(clip, 10, 40, lambda f: f, fps=25), sorted({int(i) for i in np.linspace(0, 39, 10).round()}))
+    same(sample_frames(clip, 5, 300, lambda f: f), sorted({int(i) for i in np.linspace(0, 299, 5).round()}))
+    with pytest.raises(ValueError, match="count"):
+        sample_frames(clip, 0, 300, lambda f: f, fps=25)
 
 
 @pytest.mark.shared_data

@@ -1,0 +1,159 @@
+"""``python -m experiments.first_frame``: seconds from the command to the first tracked row of ``poses.csv``.
+
+Runs ``python -m mocap track CLIP --max-frames 1 --no-overlay`` as a newcomer would, several
+times, and times each run from its start to the moment ``poses.csv`` holds a row (polled every
+10 ms), with the moments its set-up lines appear (face search, working resolution, background,
+calibration, the tracking bar) as the breakdown. The runs use a copy of the ``mocap`` package
+in a temporary folder, so that the first run compiles every kernel it calls as on a fresh clone
+(its time is reported apart) and the later ones load them from that copy's Numba cache;
+``NUMBA_DEBUG_CACHE`` counts, for every run, the kernels loaded from the cache and the kernels
+compiled and saved to it.
+
+The clip, unless ``--clip`` names one, is the 60-s 1280x720 clip of ``docs/own-video.md``:
+``../shared/data/video/intel_asl_no.mkv`` looped for 60 s at 25 frames/s, scaled to 1280x960 and
+cropped to 1280x720 (x264 ``veryfast``, 1,500 frames; without ``../shared/data``, a synthetic
+actor's frames looped the same way), made with the ffmpeg of imageio-ffmpeg into ``--work``.
+
+Prints one line per run and the load average (1 min) before each: the machine's load moves
+these seconds, so compare runs of one call.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import imageio_ffmpeg
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED_CLIP = ROOT.parent / "shared" / "data" / "video" / "intel_asl_no.mkv"
+#: The clip: seconds, frames per second, size.
+SECONDS, FPS, WIDTH, HEIGHT = 60, 25, 1280, 720
+#: What the command prints as its set-up goes, in order: the breakdown's stages.
+MARKERS = {"face search": "looking for a face", "compiling notice": "compiling", "set-up done": "working resolution",
+           "tracking bar": "tracking"}
+
+
+def make_clip(path: Path, seconds: int = SECONDS) -> Path:
+    """The 60-s 1280x720 clip (see the module), written to ``path``."""
+    ffmpeg = imageio_ffmpeg.get_ffmpeg_exe()
+    if SHARED_CLIP.is_file():
+        source = ["-stream_loop", "-1", "-i", str(SHARED_CLIP)]
+    else:
+        from mocap.synth import generate_sequence
+        seq = generate_sequence("gestures-1", path.parent / "synthetic", frames=25, seed=0, progress=False)
+        source = ["-stream_loop", "-1", "-framerate", str(FPS), "-i", str(seq / "frames" / "%06d.png")]
+    subprocess.run([ffmpeg, "-v", "error", "-y", *source, "-t", str(seconds), "-r", str(FPS), "-vf",
+                    f"scale={WIDTH}:{WIDTH * 3 // 4},crop={WIDTH}:{HEIGHT}:0:{(WIDTH * 3 // 4 - HEIGHT) // 2}",
+                    "-c:v", "libx264", "-preset", "veryfast", "-pix_fmt", "yuv420p", str(path)], check=True)
+    return path
+
+
+class _Stream(threading.Thread):
+    """Reads a pipe to its end, keeping the text and when each marker first appeared."""
+
+    def __init__(self, pipe, start: float) -> None:
+        super().__init__(daemon=True)
+        self.pipe, self.start_time = pipe, start
+        self.text, self.seen = "", {}
+
+    def run(self) -> None:
+        for chunk in iter(lambda: self.pipe.read1(4096), b""):
+            now = time.perf_counter() - self.start_time
+            self.text += chunk.decode("utf-8", "replace")
+            for name, marker in MARKERS.items():
+                if name not in self.seen and marker in self.text:
+                    self.seen[name] = now
+
+
+def time_run(package_root: Path, clip: Path, out: Path) -> dict:
+    """One ``track`` run from ``package_root``: seconds to the first row and to the end, the
+    breakdown, and the Numba cache's loads and saves."""
+    shutil.rmtree(out, ignore_errors=True)
+    env = {**os.environ, "PYTHONPATH": str(package_root), "NUMBA_DEBUG_CACHE": "1"}
+    journal = out / "poses.csv"
+    load = os.getloadavg()[0]
+    start = time.perf_counter()
+    process = subprocess.Popen([sys.executable, "-m", "mocap", "track", str(clip), "--max-frames", "1",
+                                "--no-overlay", "--out", str(out)], cwd=package_root, env=env,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    streams = [_Stream(process.stdout, start), _Stream(process.stderr, start)]
+    for s in streams:
+        s.start()
+    first_row = None
+    while first_row is None and process.poll() is None:
+        if journal.is_file() and journal.read_bytes().count(b"\n") >= 2:
+            first_row = time.perf_counter() - start
+        else:
+            time.sleep(0.01)
+    process.wait()
+    end = time.perf_counter() - start
+    for s in streams:
+        s.join()
+    if process.returncode != 0:
+        raise RuntimeError(f"track failed ({process.returncode}): {streams[1].text[-2000:]}")
+    if first_row is None and journal.is_file() and journal.read_bytes().count(b"\n") >= 2:
+        first_row = end                  # written in the last 10 ms
+    text = streams[0].text + streams[1].text
+    seen = {**streams[0].seen, **streams[1].seen}
+    return {"first_row_s": first_row, "end_s": end, "load": load, "seen": seen,
+            "loaded": len(re.findall(r"\[cache\] data loaded from", text)),
+            "saved": len(re.findall(r"\[cache\] data saved to", text))}
+
+
+def describe(name: str, run: dict) -> str:
+    stages = ", ".join(f"{k} {v:.1f} s" for k, v in sorted(run["seen"].items(), key=lambda kv: kv[1]))
+    return (f"{name:<14} first row {run['first_row_s']:5.2f} s, exit {run['end_s']:5.2f} s | load {run['load']:.2f} | "
+            f"kernels: {run['loaded']} loaded from the cache, {run['saved']} compiled | {stages}")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m experiments.first_frame", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--clip", type=Path, help="a video to track (default: the 60-s 1280x720 clip, made in --work)")
+    parser.add_argument("--work", type=Path, help="folder for the clip, the package copy and the runs "
+                                                  "(default: a temporary folder, removed after)")
+    parser.add_argument("--runs", type=int, default=3, help="runs after the compiling one (default 3)")
+    args = parser.parse_args(argv)
+    if args.runs < 1:
+        parser.error("--runs must be at least 1")
+    temporary = None
+    if args.work is None:
+        temporary = tempfile.TemporaryDirectory(prefix="first-frame-")
+        args.work = Path(temporary.name)
+    args.work.mkdir(parents=True, exist_ok=True)
+    try:
+        clip = args.clip or args.work / "clip_60s_1280x720.mp4"
+        if not clip.is_file():
+            print(f"making {clip} ...", flush=True)
+            make_clip(clip)
+        copy = args.work / "package"
+        shutil.rmtree(copy, ignore_errors=True)
+        shutil.copytree(ROOT / "mocap", copy / "mocap", ignore=shutil.ignore_patterns("__pycache__"))
+        print(f"clip {clip}; `python -m mocap track CLIP --max-frames 1 --no-overlay` from a fresh copy of mocap/ "
+              f"({os.cpu_count()} cores)", flush=True)
+        compiled = time_run(copy, clip, args.work / "run")
+        print(describe("compiling run", compiled), flush=True)
+        cached = []
+        for k in range(args.runs):
+            cached.append(time_run(copy, clip, args.work / "run"))
+            print(describe(f"cached run {k + 1}", cached[-1]), flush=True)
+        best = min(r["first_row_s"] for r in cached)
+        print(f"first row: {best:.2f} s at best from the cache (median "
+              f"{sorted(r['first_row_s'] for r in cached)[len(cached) // 2]:.2f} s), "
+              f"{compiled['first_row_s']:.2f} s when compiling; cache used from the second run: "
+              f"{'yes' if all(r['saved'] == 0 and r['loaded'] > 0 for r in cached) else 'NO'}")
+    finally:
+        if temporary is not None:
+            temporary.cleanup()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
