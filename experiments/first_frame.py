@@ -14,8 +14,9 @@ The clip, unless ``--clip`` names one, is the 60-s 1280x720 clip of ``docs/own-v
 cropped to 1280x720 (x264 ``veryfast``, 1,500 frames; without ``../shared/data``, a synthetic
 actor's frames looped the same way), made with the ffmpeg of imageio-ffmpeg into ``--work``.
 
-Prints one line per run and the load average (1 min) before each: the machine's load moves
-these seconds, so compare runs of one call.
+Prints one line per run: the seconds to the first row and the CPU seconds the command's process
+(its threads, not its ffmpeg children) had used by then, which a loaded machine moves less than
+the wall-clock seconds; the load average (1 min) before each run: compare runs of one call.
 """
 from __future__ import annotations
 
@@ -37,8 +38,8 @@ SHARED_CLIP = ROOT.parent / "shared" / "data" / "video" / "intel_asl_no.mkv"
 #: The clip: seconds, frames per second, size.
 SECONDS, FPS, WIDTH, HEIGHT = 60, 25, 1280, 720
 #: What the command prints as its set-up goes, in order: the breakdown's stages.
-MARKERS = {"face search": "looking for a face", "compiling notice": "compiling", "set-up done": "working resolution",
-           "tracking bar": "tracking"}
+MARKERS = {"face search": "looking for a face", "set-up says compiling": "compiling the set-up's kernels",
+           "set-up done": "working resolution", "tracking bar": "tracking", "bar says compiling": "(compiling, first run only)"}
 
 
 def make_clip(path: Path, seconds: int = SECONDS) -> Path:
@@ -73,6 +74,16 @@ class _Stream(threading.Thread):
                     self.seen[name] = now
 
 
+def cpu_seconds(pid: int) -> float | None:
+    """CPU seconds (user + system, all threads) process ``pid`` has used so far, from Linux's
+    ``/proc/PID/stat`` (None elsewhere); its ffmpeg children are not counted."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return None
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def time_run(package_root: Path, clip: Path, out: Path) -> dict:
     """One ``track`` run from ``package_root``: seconds to the first row and to the end, the
     breakdown, and the Numba cache's loads and saves."""
@@ -87,10 +98,10 @@ def time_run(package_root: Path, clip: Path, out: Path) -> dict:
     streams = [_Stream(process.stdout, start), _Stream(process.stderr, start)]
     for s in streams:
         s.start()
-    first_row = None
+    first_row = cpu = None
     while first_row is None and process.poll() is None:
         if journal.is_file() and journal.read_bytes().count(b"\n") >= 2:
-            first_row = time.perf_counter() - start
+            first_row, cpu = time.perf_counter() - start, cpu_seconds(process.pid)
         else:
             time.sleep(0.01)
     process.wait()
@@ -103,14 +114,15 @@ def time_run(package_root: Path, clip: Path, out: Path) -> dict:
         first_row = end                  # written in the last 10 ms
     text = streams[0].text + streams[1].text
     seen = {**streams[0].seen, **streams[1].seen}
-    return {"first_row_s": first_row, "end_s": end, "load": load, "seen": seen,
+    return {"first_row_s": first_row, "cpu_s": cpu, "end_s": end, "load": load, "seen": seen,
             "loaded": len(re.findall(r"\[cache\] data loaded from", text)),
             "saved": len(re.findall(r"\[cache\] data saved to", text))}
 
 
 def describe(name: str, run: dict) -> str:
     stages = ", ".join(f"{k} {v:.1f} s" for k, v in sorted(run["seen"].items(), key=lambda kv: kv[1]))
-    return (f"{name:<14} first row {run['first_row_s']:5.2f} s, exit {run['end_s']:5.2f} s | load {run['load']:.2f} | "
+    cpu = "" if run["cpu_s"] is None else f" ({run['cpu_s']:.2f} s of CPU)"
+    return (f"{name:<14} first row {run['first_row_s']:5.2f} s{cpu}, exit {run['end_s']:5.2f} s | load {run['load']:.2f} | "
             f"kernels: {run['loaded']} loaded from the cache, {run['saved']} compiled | {stages}")
 
 

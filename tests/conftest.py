@@ -8,6 +8,20 @@ import pytest
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = REPO_ROOT.parent / "shared" / "data"
+#: Test files that share a session fixture costing a minute (the tiny sweep of
+#: tests/experiments/conftest.py): one pytest-xdist group, so that one worker makes it once.
+SHARED_SESSION_GROUPS = {f"tests/experiments/{name}.py": "tiny-sweep"
+                         for name in ("test_figures", "test_sweep", "test_sweep_cluster")}
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Under pytest-xdist's ``--dist loadgroup`` (pyproject.toml's addopts), a test file's tests
+    run on one worker, in order (its module fixtures are made once; the docs' blocks of a file
+    build on each other), and the files of :data:`SHARED_SESSION_GROUPS` together."""
+    for item in items:
+        name = Path(str(item.fspath)).resolve().relative_to(REPO_ROOT).as_posix()
+        item.add_marker(pytest.mark.xdist_group(SHARED_SESSION_GROUPS.get(name, name)))
 
 
 @pytest.fixture(scope="session")

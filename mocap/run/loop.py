@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 import mocap.run.journal as journalling
+from mocap._progress import ProgressBar
 from mocap.body import BodyModel
 from mocap.calibrate import Calibration
 from mocap.files import write_text_atomic
@@ -445,17 +446,15 @@ class RunLoop:
 
     def run(self) -> None:
         """Track the session's frames (Ctrl-C ends a live run and keeps what was tracked)."""
-        from tqdm import tqdm
-
         span, frames_in = self.span, self.frames_in
         geometry = self._open_overlay()
         reader = FrameReader(frames_in, self.setup, span,
                              Colours(self.people.segment, self.person.colour_model, self.person.scene),
                              keypoints=self.params.keypoints, full=self.params.newcomer is not None,
                              overlay=geometry if self.overlay is not None else None)
-        self.bar = tqdm(total=None if span.expected is None else span.expected - span.first,
-                        initial=span.start - span.first, desc="tracking", unit="frame",
-                        disable=not self.params.progress)
+        self.bar = ProgressBar(total=None if span.expected is None else span.expected - span.first,
+                               initial=span.start - span.first, desc="tracking", unit="frame",
+                               disable=not self.params.progress)
         self.started = time.perf_counter()
         interrupted, last = False, None
         try:

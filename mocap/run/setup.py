@@ -133,9 +133,10 @@ class SetupRequest:
     auto : AutoCalibrationConfig or None
     sample_frames, sample_limit : int
         Background estimation uses ``sample_frames`` frames spread over the first
-        ``sample_limit`` (each reduced to the working resolution as it is read: the set-up
-        holds at most ``sample_frames`` working-size frames and one input-size frame of a
-        file); ``background_frames`` likewise.
+        ``sample_limit``, each reduced to the working resolution as it is read (the set-up
+        holds working-size frames and one input-size frame of a file): a long video's key
+        frames, decoded without the frames between them
+        (:meth:`mocap.io.frames.VideoSource.sample`); ``background_frames`` by number.
     search_frames : int
         Calibration looks at most this many frames into the video for a face.
     progress : bool
@@ -355,8 +356,8 @@ def find_background(access: FrameAccess, request: SetupRequest, factor: int, fac
     if source.live:
         return BackgroundFound(None, {"mode": "none",
                                       "reason": "live camera without --background: colour-only foreground"})
-    sample = [downscale(f, factor) for _, f in access.at(spread(0, min(request.sample_limit, access.count),
-                                                               request.sample_frames))]
+    sample = source.sample(request.sample_frames, min(request.sample_limit, access.count),
+                           lambda frame: downscale(frame, factor))
     face_frame = downscale(face.frame, factor) if face.face_input is not None else None
     return BackgroundFound(*choose_background(sample, imaging, face=face.face, face_frame=face_frame))
 

@@ -12,6 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from mocap._progress import compiling_announced
 from mocap.calibrate import Calibration
 from mocap.imaging.resample import working_factor
 from mocap.io.frames import CameraSource, VideoSource
@@ -128,7 +129,8 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
     opened = RunInput.open(source, options)
     frames_in = opened.frames
     try:
-        found = find_setup(frames_in, opened.request(options, progress, keypoints))
+        with compiling_announced(progress, "the set-up's kernels"):
+            found = find_setup(frames_in, opened.request(options, progress, keypoints))
         if frames_in.live:
             frames_in.hold(found.consumed)
         setup = dataclasses.replace(found.setup, colour_from=options.colour,
