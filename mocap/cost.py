@@ -22,22 +22,28 @@ Degenerate cases (documented, finite, never NaN):
   (default: the distance map's truncation value, i.e. its maximum).
 - D_k: a joint nearer than the near plane counts the image's diagonal as its distance; with no
   keypoint present D_k is 0 (no evidence).
+
+Gradients (the paper's future work, issue 30): :meth:`EdgeCost.gradient` differentiates eq. (2)
+with respect to the 23 pose parameters from one render (see :class:`EdgeGradient`).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
 from mocap._numba import jit
-from mocap.body.kinematics import segment_transforms_into
+from mocap.body.kinematics import (PARAMETER_MOVES, parameter_axes_into, point_jacobian_into,
+                                   segment_transforms_into)
+from mocap.body.mesh import edge_faces
 from mocap.body.model import BodyModel
-from mocap.body.pose import check_pose
+from mocap.body.pose import N_PARAMETERS, check_pose
 from mocap.body.skeleton import JOINT_NAMES, SEGMENT_NAMES
 from mocap.labels import MAX_CLASSES, UNKNOWN
 from mocap.render.camera import Camera
-from mocap.render.rasterize import (EDGE_DEPTH_GAP_M, Buffers, Scene, check_edge_gap, occluding_edge_sum_and_clear,
-                                    render_scene_into)
+from mocap.render.rasterize import (EDGE_DEPTH_GAP_M, Buffers, Scene, check_edge_gap, occluding_edge_marks_into,
+                                    occluding_edge_sum_and_clear, render_scene_into)
 
 #: F when neither the image nor the model has a pixel of any class.
 EMPTY_REGION_COST = 1.0
@@ -92,6 +98,45 @@ class EdgeKernelArgs(NamedTuple):
     marks: np.ndarray
     edge_gap: float
     no_edge_penalty: float
+
+
+class EdgeGradientArgs(NamedTuple):
+    """Second argument of :func:`edge_gradient_kernel` (:meth:`EdgeCost.gradient_args`).
+
+    Attributes
+    ----------
+    cost : EdgeKernelArgs
+    gradient_u, gradient_v : ndarray, shape (height * width,), float64, pixels per pixel
+        Flat central-difference gradient of the distance map along u (columns) and v (rows).
+    edges, edge_faces : ndarray, shape (E, 2), int64
+        Mesh edges (vertex pairs) and the two triangles sharing each
+        (:func:`~mocap.body.mesh.edge_faces`).
+    moves : ndarray, shape (23, 8), bool
+        :data:`~mocap.body.kinematics.PARAMETER_MOVES`.
+    points : ndarray, shape (V, 3), float64
+        Scratch: the posed vertices in camera coordinates, metres.
+    facing : ndarray, shape (T,), int8
+        Scratch: 1 front-facing, 0 back-facing, -1 not projectable (a vertex nearer than the near plane).
+    axes, pivots : ndarray, shape (23, 3), float64
+        Scratch (:func:`~mocap.body.kinematics.parameter_axes_into`).
+    jacobian : ndarray, shape (3, 23), float64
+        Scratch for one point's dX/dq.
+    spacing : float, pixels
+        Distance between contour samples along a projected contour edge (at most).
+    """
+
+    cost: EdgeKernelArgs
+    gradient_u: np.ndarray
+    gradient_v: np.ndarray
+    edges: np.ndarray
+    edge_faces: np.ndarray
+    moves: np.ndarray
+    points: np.ndarray
+    facing: np.ndarray
+    axes: np.ndarray
+    pivots: np.ndarray
+    jacobian: np.ndarray
+    spacing: float
 
 
 class KeypointKernelArgs(NamedTuple):
@@ -229,6 +274,115 @@ def edge_cost_kernel(pose, args):
     if n == 0:
         return args.no_edge_penalty
     return total / n
+
+
+@jit
+def _bilinear(image, width, height, u, v):
+    """Bilinear interpolation of the flat ``image`` at pixel coordinates (u, v) (pixel centres at
+    half-integers), clamped at the image border."""
+    x, y = u - 0.5, v - 0.5
+    x0, y0 = np.floor(x), np.floor(y)
+    fx, fy = x - x0, y - y0
+    i0 = min(max(np.int64(x0), 0), width - 1)
+    i1 = min(max(np.int64(x0) + 1, 0), width - 1)
+    j0 = min(max(np.int64(y0), 0), height - 1)
+    j1 = min(max(np.int64(y0) + 1, 0), height - 1)
+    top = (1.0 - fx) * image[j0 * width + i0] + fx * image[j0 * width + i1]
+    bottom = (1.0 - fx) * image[j1 * width + i0] + fx * image[j1 * width + i1]
+    return (1.0 - fy) * top + fy * bottom
+
+
+@jit
+def _marked_near(marks, width, height, px, py):
+    """Whether pixel (px, py) or one of its 4-neighbours is marked (False outside the image)."""
+    if px < 0 or py < 0 or px >= width or py >= height:
+        return False
+    i = py * width + px
+    if marks[i]:
+        return True
+    return ((px > 0 and marks[i - 1]) or (px + 1 < width and marks[i + 1]) or (py > 0 and marks[i - width])
+            or (py + 1 < height and marks[i + width]))
+
+
+@jit
+def _pose_vertices(scene, transforms, points, facing, triangles):
+    """Camera coordinates of every vertex into ``points`` and each triangle's facing into
+    ``facing`` (1 front, 0 back, -1 a vertex nearer than the near plane), from the float projection."""
+    cam, offsets = scene.camera, scene.vertices
+    for i in range(offsets.shape[0]):
+        s = scene.vertex_segment[i]
+        for r in range(3):
+            points[i, r] = (transforms[s, r, 0] * offsets[i, 0] + transforms[s, r, 1] * offsets[i, 1]
+                            + transforms[s, r, 2] * offsets[i, 2] + transforms[s, r, 3])
+    for t in range(triangles.shape[0]):
+        a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+        if points[a, 2] < cam[4] or points[b, 2] < cam[4] or points[c, 2] < cam[4]:
+            facing[t] = -1
+            continue
+        ua, va = cam[0] * points[a, 0] / points[a, 2], cam[1] * points[a, 1] / points[a, 2]
+        ub, vb = cam[0] * points[b, 0] / points[b, 2], cam[1] * points[b, 1] / points[b, 2]
+        uc, vc = cam[0] * points[c, 0] / points[c, 2], cam[1] * points[c, 1] / points[c, 2]
+        facing[t] = 1 if (ub - ua) * (vc - va) - (uc - ua) * (vb - va) < 0.0 else 0
+
+
+@jit
+def edge_gradient_kernel(pose, args, gradient):
+    """Compiled gradient of eq. (2) for an unchecked float64 (23,) pose and an
+    :class:`EdgeGradientArgs`, into ``gradient`` (23,); leaves the buffers cleared.
+
+    Returns ``(D_c, contour mean, samples)``: eq. (2) from the render's edge pixels, pixels;
+    the mean of the bilinearly interpolated distance over the visible contour samples (the
+    smooth function whose gradient is written, pixels; the penalty with no sample); their number.
+    """
+    c = args.cost
+    scene, buffers = c.scene, c.buffers
+    width, height, cam = scene.width, scene.height, scene.camera
+    render_scene_into(pose, scene, buffers)
+    total, n = occluding_edge_marks_into(scene, buffers, c.edge_gap, c.distance, c.marks)
+    value = c.no_edge_penalty if n == 0 else total / n
+    transforms, points, jac = buffers.transforms, args.points, args.jacobian
+    _pose_vertices(scene, transforms, points, args.facing, scene.triangles)
+    parameter_axes_into(pose, transforms, args.axes, args.pivots)
+    for k in range(gradient.shape[0]):
+        gradient[k] = 0.0
+    sum_value = 0.0
+    samples = 0
+    for e in range(args.edges.shape[0]):
+        fa, fb = args.facing[args.edge_faces[e, 0]], args.facing[args.edge_faces[e, 1]]
+        if fa < 0 or fb < 0 or fa == fb:
+            continue                                   # not a contour generator
+        a, b = args.edges[e, 0], args.edges[e, 1]
+        seg = scene.vertex_segment[a]
+        ua, va = cam[0] * points[a, 0] / points[a, 2] + cam[2], cam[1] * points[a, 1] / points[a, 2] + cam[3]
+        ub, vb = cam[0] * points[b, 0] / points[b, 2] + cam[2], cam[1] * points[b, 1] / points[b, 2] + cam[3]
+        n_s = max(np.int64(np.ceil(np.sqrt((ub - ua) ** 2 + (vb - va) ** 2) / args.spacing)), 1)
+        for j in range(n_s):
+            t = (j + 0.5) / n_s
+            x = (1.0 - t) * points[a, 0] + t * points[b, 0]
+            y = (1.0 - t) * points[a, 1] + t * points[b, 1]
+            z = (1.0 - t) * points[a, 2] + t * points[b, 2]
+            iz = 1.0 / z
+            u, v = cam[0] * x * iz + cam[2], cam[1] * y * iz + cam[3]
+            if not _marked_near(c.marks, width, height, np.int64(np.floor(u)), np.int64(np.floor(v))):
+                continue                               # hidden, or not an occluding edge in the render
+            samples += 1
+            sum_value += _bilinear(c.distance, width, height, u, v)
+            gu = _bilinear(args.gradient_u, width, height, u, v)
+            gv = _bilinear(args.gradient_v, width, height, u, v)
+            # d(u, v)/dX of the pinhole projection, folded with the distance gradient
+            wx, wy = gu * cam[0] * iz, gv * cam[1] * iz
+            wz = -(wx * x + wy * y) * iz
+            point_jacobian_into(x, y, z, seg, args.axes, args.pivots, args.moves, jac)
+            for k in range(gradient.shape[0]):
+                gradient[k] += wx * jac[0, k] + wy * jac[1, k] + wz * jac[2, k]
+    box = buffers.box
+    for py in range(box[1], box[3] + 1):
+        c.marks[py * width + box[0]: py * width + box[2] + 1] = False
+    if samples == 0:
+        return value, c.no_edge_penalty, 0
+    for k in range(gradient.shape[0]):
+        gradient[k] /= samples
+    return value, sum_value / samples, samples
 
 
 @jit
@@ -400,6 +554,7 @@ class EdgeCost:
         self._scene = Scene.of(model, camera)
         self._buffers = Buffers.of(model, camera)
         self._marks = np.zeros(camera.width * camera.height, np.bool_)
+        self._gradient_args: EdgeGradientArgs | None = None
 
     def __call__(self, pose) -> float:
         return float(self.evaluate_unchecked(check_pose(pose)))
@@ -412,6 +567,81 @@ class EdgeCost:
         """Second argument of :func:`edge_cost_kernel` (for compiled optimiser loops)."""
         return EdgeKernelArgs(self._scene, self._buffers, self._distance, self._marks, self.edge_gap,
                               self.no_edge_penalty)
+
+    def gradient(self, pose) -> EdgeGradient:
+        """D_c and its gradient with respect to the 23 pose parameters, from one render.
+
+        Parameters
+        ----------
+        pose : array_like, shape (23,)
+            Metres and radians.
+
+        Returns
+        -------
+        EdgeGradient
+            See there for what is differentiated (the contour mean) and how.
+        """
+        out = np.zeros(N_PARAMETERS)
+        value, contour_value, samples = self.gradient_unchecked(check_pose(pose), out)
+        return EdgeGradient(float(value), float(contour_value), out, int(samples))
+
+    def gradient_unchecked(self, pose: np.ndarray, out: np.ndarray) -> tuple[float, float, int]:
+        """As :meth:`gradient` without validation, the gradient written into ``out`` (float64 (23,)):
+        returns ``(value, contour_value, samples)``. For optimiser loops."""
+        return edge_gradient_kernel(pose, self.gradient_args(), out)
+
+    def gradient_args(self) -> EdgeGradientArgs:
+        """Second argument of :func:`edge_gradient_kernel` (built on first use, then kept)."""
+        if self._gradient_args is None:
+            h, w = self.camera.shape
+            gv, gu = np.gradient(self._distance.reshape(h, w).astype(np.float64))
+            mesh = self.model.mesh
+            edges, faces = edge_faces(mesh.triangles)
+            self._gradient_args = EdgeGradientArgs(
+                self.kernel_args(), np.ascontiguousarray(gu).ravel(), np.ascontiguousarray(gv).ravel(), edges, faces,
+                PARAMETER_MOVES, np.empty((len(mesh.vertices), 3)), np.empty(len(mesh.triangles), np.int8),
+                np.empty((N_PARAMETERS, 3)), np.empty((N_PARAMETERS, 3)), np.empty((3, N_PARAMETERS)),
+                CONTOUR_SPACING_PX)
+        return self._gradient_args
+
+
+@dataclass(frozen=True)
+class EdgeGradient:
+    """Gradient of the mean edge distance (eq. 2) at one pose (:meth:`EdgeCost.gradient`).
+
+    Eq. (2) averages the distance map over the model's occluding-edge *pixels*, a set that
+    changes by whole pixels: as a function of the pose it is piecewise constant. Its gradient is
+    taken as that of its continuous counterpart, the mean of the distance map over the model's
+    occluding contour: the mesh edges between a front- and a back-facing triangle, sampled every
+    ``spacing`` pixels or less once projected, kept where the rendered occluding-edge mask marks
+    the sample's pixel or a 4-neighbour (visible, and an occluding edge by the render's depth-gap
+    rule), with the distance and its gradient read by bilinear interpolation. Each sample moves
+    with its body segment (analytic Jacobian of :mod:`mocap.body.kinematics`) through the
+    pinhole projection. The change of the visible set and of the sample count is not
+    differentiated.
+
+    Attributes
+    ----------
+    value : float, pixels
+        D_c (eq. 2) at the pose, exactly as :class:`EdgeCost` computes it.
+    contour_value : float, pixels
+        The contour mean whose gradient ``gradient`` is (the ``no_edge_penalty`` without any
+        visible sample).
+    gradient : ndarray, shape (23,), float64
+        d contour_value / dq: pixels per metre (root positions), pixels per radian (angles);
+        zero without a visible sample.
+    samples : int
+        Visible contour samples.
+    """
+
+    value: float
+    contour_value: float
+    gradient: np.ndarray
+    samples: int
+
+
+#: Largest distance between two contour samples of :meth:`EdgeCost.gradient`, pixels.
+CONTOUR_SPACING_PX = 1.0
 
 
 class KeypointCost:

@@ -12,6 +12,7 @@ compiled kernel                                            twin                 
 ``cost`` (region counts, eq. 1; edge mean, eq. 2)          :func:`naive_non_overlapping_ratio`, ``tests/test_cost.py``
                                                            :func:`naive_mean_edge_distance`
 ``cost`` (keypoint distance D_k)                           :func:`naive_keypoint_distance`   ``tests/test_cost.py``
+``cost`` (gradient of eq. 2 over the occluding contour)    :func:`naive_edge_gradient`       ``tests/test_cost_gradient.py``
 ``synth.shading`` (surface samples)                        :func:`naive_surface_samples`     ``tests/synth/test_sequence.py``
 ``imaging.background`` (change mask)                       :func:`naive_change_mask`         ``tests/imaging/test_background.py``
 ``imaging.colour`` (HSV, classification)                   :func:`naive_hsv`,                ``tests/imaging/test_colour.py``
@@ -170,6 +171,75 @@ def naive_mean_edge_distance(distance, edges, penalty):
     """Eq. (2) by a plain loop."""
     values = [distance[i, j] for i in range(edges.shape[0]) for j in range(edges.shape[1]) if edges[i, j]]
     return float(sum(values) / len(values)) if values else float(penalty)
+
+
+def naive_edge_gradient(pose, model, camera, distance, edge_gap, spacing=1.0, h=1e-6):
+    """The contour mean of :class:`mocap.cost.EdgeGradient` and its gradient, written plainly:
+    posed vertices by :func:`naive_segment_transforms`, facing by cross products, the contour
+    edges from a dictionary of edges, visibility from :func:`mocap.render.render`'s edge mask,
+    bilinear reads by ``scipy.ndimage.map_coordinates`` of ``np.gradient``'s maps, and each
+    sample's dX/dq by central differences of the kinematics (step ``h``), not by joint axes.
+
+    Returns (contour_value, gradient (23,), samples).
+    """
+    from scipy import ndimage
+
+    from mocap.body.skeleton import SEGMENT_NAMES
+    from mocap.render import render
+
+    mesh = model.mesh
+    mask = render(pose, model, camera, edge_gap=edge_gap).edges
+    gv, gu = np.gradient(np.asarray(distance, np.float64))
+    fx, fy, cx, cy = camera.fx, camera.fy, camera.cx, camera.cy
+
+    def posed(q):
+        tr = naive_segment_transforms(q, model.skeleton.offsets)
+        return np.array([tr[SEGMENT_NAMES[s]][0] @ v + tr[SEGMENT_NAMES[s]][1]
+                         for v, s in zip(mesh.vertices, mesh.vertex_segment)])
+
+    pts = posed(pose)
+    uv = np.c_[fx * pts[:, 0] / pts[:, 2] + cx, fy * pts[:, 1] / pts[:, 2] + cy]
+    owners = {}
+    for t, tri in enumerate(mesh.triangles):
+        for a, b in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
+            owners.setdefault((min(a, b), max(a, b)), []).append(t)
+    a, b, c = (uv[mesh.triangles[:, i]] for i in range(3))
+    front = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1]) < 0
+    # sample parameters of every contour edge, and the camera point of a sample for any pose
+    samples = []
+    for (i, j), (t0, t1) in owners.items():
+        if front[t0] == front[t1]:
+            continue
+        n = max(int(np.ceil(np.linalg.norm(uv[j] - uv[i]) / spacing)), 1)
+        samples += [(i, j, (k + 0.5) / n) for k in range(n)]
+
+    def sample_points(q):
+        p = posed(q)
+        return np.array([(1 - t) * p[i] + t * p[j] for i, j, t in samples])
+
+    x = sample_points(pose)
+    u, v = fx * x[:, 0] / x[:, 2] + cx, fy * x[:, 1] / x[:, 2] + cy
+    h_img, w_img = mask.shape
+    keep = np.zeros(len(u), bool)
+    for n, (px, py) in enumerate(zip(np.floor(u).astype(int), np.floor(v).astype(int))):
+        if 0 <= px < w_img and 0 <= py < h_img:
+            near = [(py, px), (py, px - 1), (py, px + 1), (py - 1, px), (py + 1, px)]
+            keep[n] = any(0 <= r < h_img and 0 <= s < w_img and mask[r, s] for r, s in near)
+    if not keep.any():
+        return float(np.max(distance)), np.zeros(23), 0
+    rows, cols = v[keep] - 0.5, u[keep] - 0.5
+    read = lambda img: ndimage.map_coordinates(img, [rows, cols], order=1, mode="nearest")
+    value = float(read(np.asarray(distance, np.float64)).mean())
+    du, dv = read(gu), read(gv)
+    grad = np.zeros(23)
+    for k in range(23):
+        e = np.zeros(23)
+        e[k] = h
+        xp, xm = sample_points(pose + e)[keep], sample_points(pose - e)[keep]
+        dudq = (fx * xp[:, 0] / xp[:, 2] - fx * xm[:, 0] / xm[:, 2]) / (2 * h)
+        dvdq = (fy * xp[:, 1] / xp[:, 2] - fy * xm[:, 1] / xm[:, 2]) / (2 * h)
+        grad[k] = np.mean(du * dudq + dv * dvdq)
+    return value, grad, int(keep.sum())
 
 
 def naive_keypoint_distance(pose, model, camera, uv, confidence):
