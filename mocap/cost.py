@@ -334,18 +334,39 @@ def edge_gradient_kernel(pose, args, gradient):
     the mean of the bilinearly interpolated distance over the visible contour samples (the
     smooth function whose gradient is written, pixels; the penalty with no sample); their number.
     """
+    value, mean, _, samples = edge_normal_equations_kernel(pose, args, gradient, gradient[:0], args.jacobian[:0, :0])
+    return value, mean, samples
+
+
+@jit
+def edge_normal_equations_kernel(pose, args, gradient, rhs, normal):
+    """:func:`edge_gradient_kernel`, and, when ``rhs`` (23,) and ``normal`` (23, 23) are not
+    empty, the Gauss–Newton normal equations of the contour's mean squared distance: with
+    r_s the distance at sample s and J_s its gradient (per parameter), ``rhs`` = mean r_s J_s and
+    ``normal`` = mean J_s^T J_s (zero without a sample).
+
+    Returns ``(D_c, contour mean, contour mean square, samples)`` (pixels, pixels, pixels²).
+    """
     c = args.cost
     scene, buffers = c.scene, c.buffers
     width, height, cam = scene.width, scene.height, scene.camera
+    want_normal = normal.shape[0] > 0
+    n_par = gradient.shape[0]
     render_scene_into(pose, scene, buffers)
     total, n = occluding_edge_marks_into(scene, buffers, c.edge_gap, c.distance, c.marks)
     value = c.no_edge_penalty if n == 0 else total / n
     transforms, points, jac = buffers.transforms, args.points, args.jacobian
     _pose_vertices(scene, transforms, points, args.facing, scene.triangles)
     parameter_axes_into(pose, transforms, args.axes, args.pivots)
-    for k in range(gradient.shape[0]):
+    for k in range(n_par):
         gradient[k] = 0.0
+        if want_normal:
+            rhs[k] = 0.0
+            for j in range(n_par):
+                normal[k, j] = 0.0
+    row = np.empty(n_par)
     sum_value = 0.0
+    sum_square = 0.0
     samples = 0
     for e in range(args.edges.shape[0]):
         fa, fb = args.facing[args.edge_faces[e, 0]], args.facing[args.edge_faces[e, 1]]
@@ -366,23 +387,37 @@ def edge_gradient_kernel(pose, args, gradient):
             if not _marked_near(c.marks, width, height, np.int64(np.floor(u)), np.int64(np.floor(v))):
                 continue                               # hidden, or not an occluding edge in the render
             samples += 1
-            sum_value += _bilinear(c.distance, width, height, u, v)
+            r = _bilinear(c.distance, width, height, u, v)
+            sum_value += r
+            sum_square += r * r
             gu = _bilinear(args.gradient_u, width, height, u, v)
             gv = _bilinear(args.gradient_v, width, height, u, v)
             # d(u, v)/dX of the pinhole projection, folded with the distance gradient
             wx, wy = gu * cam[0] * iz, gv * cam[1] * iz
             wz = -(wx * x + wy * y) * iz
             point_jacobian_into(x, y, z, seg, args.axes, args.pivots, args.moves, jac)
-            for k in range(gradient.shape[0]):
-                gradient[k] += wx * jac[0, k] + wy * jac[1, k] + wz * jac[2, k]
+            for k in range(n_par):
+                row[k] = wx * jac[0, k] + wy * jac[1, k] + wz * jac[2, k]
+                gradient[k] += row[k]
+            if want_normal:
+                for k in range(n_par):
+                    if row[k] != 0.0:
+                        rhs[k] += r * row[k]
+                        for i in range(k, n_par):
+                            normal[k, i] += row[k] * row[i]
     box = buffers.box
     for py in range(box[1], box[3] + 1):
         c.marks[py * width + box[0]: py * width + box[2] + 1] = False
     if samples == 0:
-        return value, c.no_edge_penalty, 0
-    for k in range(gradient.shape[0]):
+        return value, c.no_edge_penalty, c.no_edge_penalty ** 2, 0
+    for k in range(n_par):
         gradient[k] /= samples
-    return value, sum_value / samples, samples
+        if want_normal:
+            rhs[k] /= samples
+            for i in range(k, n_par):
+                normal[k, i] /= samples
+                normal[i, k] = normal[k, i]
+    return value, sum_value / samples, sum_square / samples, samples
 
 
 @jit

@@ -87,3 +87,54 @@ def test_edge_gradient_without_a_visible_contour_is_zero_and_the_penalty(smooth_
 def test_edge_gradient_checks_the_pose(smooth_cost):
     with pytest.raises(ValueError):
         smooth_cost[0].gradient(np.zeros(22))
+
+
+# ------------------------------------------------------------------ the gradient step
+def test_gauss_newton_lowers_eq2_within_its_bounds_and_budget(smooth_cost):
+    from mocap.body import JOINT_LIMITS
+    from mocap.optimize import minimize_edge_gauss_newton
+
+    cost, _ = smooth_cost
+    lower, upper = JOINT_LIMITS[:, 0].copy(), JOINT_LIMITS[:, 1].copy()
+    scale = np.r_[np.full(3, 0.05), np.full(20, np.deg2rad(20.0))]
+    target = cost(_target_pose())
+    for seed in (0, 1):
+        q = _start_pose(seed)
+        got = minimize_edge_gauss_newton(cost, q, lower, upper, budget=15, scale=scale)
+        assert got.start_fun == pytest.approx(cost(q))
+        # within 15 renders it gets at least 90 % of the way down to the target pose's eq. (2)
+        # (measured: below the target's own value from all of 4 start poses)
+        assert got.fun == pytest.approx(cost(got.x)) and got.fun < target + 0.1 * (got.start_fun - target)
+        assert 2 <= got.evaluations <= 15 and got.accepted >= 1
+    # a box that pins the right elbow: the result never leaves it
+    q = _start_pose(0)
+    k = P["r_elbow_flex"]
+    lower[k], upper[k] = q[k] - 0.01, q[k] + 0.01
+    got = minimize_edge_gauss_newton(cost, q, lower, upper, budget=10, scale=scale)
+    assert lower[k] <= got.x[k] <= upper[k]
+    assert (got.x >= lower).all() and (got.x <= upper).all()
+    with pytest.raises(ValueError, match="at least 1"):
+        minimize_edge_gauss_newton(cost, q, lower, upper, budget=0, scale=scale)
+    with pytest.raises(ValueError, match="EdgeCost"):
+        minimize_edge_gauss_newton(object(), q, lower, upper, budget=3, scale=scale)
+
+
+def test_registration_gradient_step_takes_its_share_and_never_raises_eq2():
+    from mocap.cost import RegionCost
+    from mocap.track import TrackerConfig, register
+    from mocap.track.config import gradient_budget
+
+    cost, _ = _smooth_edge_cost()
+    region = RegionCost(render(_target_pose(), MODEL, CAMERA).labels, MODEL, CAMERA)
+    config = TrackerConfig.paper(evaluations=300, gradient_step=True)
+    assert TrackerConfig.from_dict(config.to_dict()).gradient_step is True
+    with pytest.raises(ValueError, match="gradient_step"):
+        TrackerConfig(gradient_step="yes")
+    got = register(region, cost, _start_pose(2), config)
+    n_gradient = gradient_budget(150)
+    assert got.gradient is not None and 1 <= got.gradient.evaluations <= n_gradient
+    assert got.edge.evaluations <= 150 - n_gradient
+    assert got.evaluations <= 300
+    assert got.edge_residual == pytest.approx(got.gradient.fun) and got.gradient.fun <= got.gradient.start_fun
+    assert got.gradient.start_fun == pytest.approx(cost(got.edge.x))
+    assert register(region, cost, _start_pose(2), TrackerConfig.paper(evaluations=300)).gradient is None
