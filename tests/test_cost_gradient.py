@@ -138,3 +138,46 @@ def test_registration_gradient_step_takes_its_share_and_never_raises_eq2():
     assert got.edge_residual == pytest.approx(got.gradient.fun) and got.gradient.fun <= got.gradient.start_fun
     assert got.gradient.start_fun == pytest.approx(cost(got.edge.x))
     assert register(region, cost, _start_pose(2), TrackerConfig.paper(evaluations=300)).gradient is None
+
+
+# ------------------------------------------------------------------ eq. 1
+PAPER_MODEL = BodyModel.build(MODEL.dims.without_extensions(), resolution=8)
+
+
+def _region_cost(model):
+    from mocap.cost import RegionCost
+    return RegionCost(render(_target_pose(), model, CAMERA).labels, model, CAMERA)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_region_gradient_matches_finite_differences_of_eq1(seed):
+    # F counts whole pixels; its central differences over steps that move the boundary by about
+    # a pixel (as for eq. 2) average that staircase over the ~400 boundary pixels. On the paper's
+    # two-class model (large classes: F is smooth enough at that scale) the two agree (measured
+    # over 8 start poses: cosine 0.966-0.999, norm ratio 1.00-1.06, one pose near the optimum at
+    # 1.36: there F's ratios of small mismatch counts are far from linear over the step). The
+    # four-class model's hair class is a few dozen pixels, too small for differences of one
+    # pixel's motion to be a derivative (cosine 0.81-0.999 over the same poses).
+    cost = _region_cost(PAPER_MODEL)
+    q = _start_pose(seed)
+    got = cost.gradient(q)
+    assert got.value == pytest.approx(cost(q)) and got.samples > 100
+    h = np.r_[np.full(3, 0.01), np.full(20, 0.03)]
+    fd = np.array([(cost(q + h[k] * e) - cost(q - h[k] * e)) / (2 * h[k]) for k, e in enumerate(np.eye(23))])
+    cosine = got.gradient @ fd / np.linalg.norm(got.gradient) / np.linalg.norm(fd)
+    assert cosine > 0.97
+    assert np.linalg.norm(got.gradient) / np.linalg.norm(fd) == pytest.approx(1.0, abs=0.15)
+
+
+def test_region_gradient_is_flat_where_no_boundary_moves():
+    from mocap.cost import RegionCost
+
+    cost = _region_cost(MODEL)
+    q = neutral_pose()
+    q[P["root_x"]] = 5.0                                            # out of view: no boundary at all
+    got = cost.gradient(q)
+    assert got.value == pytest.approx(cost(q)) and got.samples == 0 and not got.gradient.any()
+    exact = cost.gradient(_target_pose())                           # F = 0: a minimum, gradient 0
+    assert exact.value == 0.0 and not exact.gradient.any()
+    blank = RegionCost(np.zeros(CAMERA.shape, np.uint8), MODEL, CAMERA)
+    assert not blank.gradient(_start_pose(0)).gradient.any()        # F = 1 whatever the model does
