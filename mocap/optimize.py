@@ -182,12 +182,14 @@ def _nm_run_costs(kind, region_args, edge_args, keypoint_args, keypoint_weight, 
 
 
 @jit
-def _gn_run_edge(args, q, lower, upper, scale, budget, lam0, best, info):
+def _gn_run_edge(args, region_args, region_weight, q, lower, upper, scale, budget, lam0, best, info):
     """Levenberg–Marquardt on the contour's mean squared distance (see :func:`minimize_edge_gauss_newton`).
 
     ``q`` (23,) is the start (clipped into the bounds, then the current point); ``best`` (23,)
-    receives the evaluated point of lowest eq. (2); ``info`` (4,) float: eq. (2) at the best,
-    at the start, evaluations, accepted steps."""
+    receives the evaluated point of lowest score; ``info`` (4,) float: eq. (2) at the best,
+    at the start, evaluations, accepted steps. With ``region_weight`` > 0 every point also
+    renders F (``region_args``, one more evaluation) and the score is eq. (2) +
+    ``region_weight`` F for the choice of the best and for accepting a step."""
     n = q.shape[0]
     grad = np.zeros(n)
     rhs, normal = np.zeros(n), np.zeros((n, n))
@@ -198,11 +200,16 @@ def _gn_run_edge(args, q, lower, upper, scale, budget, lam0, best, info):
         q[k] = min(max(q[k], lower[k]), upper[k])
     value, _, square, samples = edge_normal_equations_kernel(q, args, grad, rhs, normal)
     evaluations, accepted = 1, 0
+    score = value
+    if region_weight > 0.0:
+        score += region_weight * region_cost_kernel(q, region_args)
+        evaluations += 1
     best[:] = q
-    best_value = value
+    best_value, best_score = value, score
     info[1] = value
     lam = lam0
-    while evaluations < budget and samples > 0 and lam < 1e10:
+    per_point = 2 if region_weight > 0.0 else 1
+    while evaluations + per_point <= budget and samples > 0 and lam < 1e10:
         top = 0.0
         for k in range(n):
             top = max(top, normal[k, k])
@@ -223,12 +230,16 @@ def _gn_run_edge(args, q, lower, upper, scale, budget, lam0, best, info):
             break                                       # converged (or pinned by the bounds)
         t_value, _, t_square, t_samples = edge_normal_equations_kernel(trial, args, grad, t_rhs, t_normal)
         evaluations += 1
-        if t_value < best_value:
-            best_value = t_value
+        t_score = t_value
+        if region_weight > 0.0:
+            t_score += region_weight * region_cost_kernel(trial, region_args)
+            evaluations += 1
+        if t_score < best_score:
+            best_value, best_score = t_value, t_score
             best[:] = trial
-        if t_samples > 0 and t_square < square:
+        if t_samples > 0 and (t_square < square if region_weight == 0.0 else t_score < score):
             q[:] = trial
-            square, samples = t_square, t_samples
+            square, samples, score = t_square, t_samples, t_score
             rhs[:] = t_rhs
             normal[:, :] = t_normal
             lam = max(lam * 0.3, 1e-7)
@@ -456,7 +467,8 @@ class GaussNewtonResult:
     start_fun : float, pixels
         Eq. (2) at the start.
     evaluations : int
-        Renders (each gives the value, the gradient and the normal equations), the start's included.
+        Renders (each gives the value, the gradient and the normal equations; with a region
+        weight, a second render gives F), the start's included.
     accepted : int
         Steps that lowered the contour's mean squared distance.
     """
@@ -473,7 +485,8 @@ class GaussNewtonResult:
 GAUSS_NEWTON_DAMPING = 1e-2
 
 
-def minimize_edge_gauss_newton(cost, x0, lower, upper, *, budget: int, scale) -> GaussNewtonResult:
+def minimize_edge_gauss_newton(cost, x0, lower, upper, *, budget: int, scale, region_cost=None,
+                               region_weight: float = 0.0) -> GaussNewtonResult:
     """Bounded Gauss–Newton (Levenberg–Marquardt) refinement of eq. (2), compiled.
 
     The residuals are the distance map at the visible occluding-contour samples of
@@ -482,7 +495,10 @@ def minimize_edge_gauss_newton(cost, x0, lower, upper, *, budget: int, scale) ->
     ``(J^T J + lam diag(J^T J)) delta = -J^T r``. The step is shortened so that no parameter
     moves by more than its ``scale``, then clipped into the bounds; it is kept when it lowers
     the mean squared contour distance (damping / 0.3), else the damping grows tenfold. Every
-    evaluated point is scored by eq. (2) itself and the lowest is returned.
+    evaluated point is scored by eq. (2) itself and the lowest is returned. With a
+    ``region_cost`` and a positive ``region_weight`` every point also renders F (one more
+    evaluation) and the score, for accepting a step and for the result, is eq. (2) +
+    ``region_weight`` F.
 
     Parameters
     ----------
@@ -492,9 +508,13 @@ def minimize_edge_gauss_newton(cost, x0, lower, upper, *, budget: int, scale) ->
     lower, upper : array_like, shape (23,)
         Bounds (the joint limits).
     budget : int
-        Renders at most (>= 1).
+        Renders at most (>= 1; the start is always evaluated, so with a region weight a budget
+        of 1 still takes its 2 renders).
     scale : array_like, shape (23,)
         Largest move per step of each parameter (> 0; metres, radians).
+    region_cost : RegionCost, optional
+    region_weight : float
+        Pixels of eq. (2) per unit of F in the score (0: eq. 2 alone).
 
     Returns
     -------
@@ -514,7 +534,15 @@ def minimize_edge_gauss_newton(cost, x0, lower, upper, *, budget: int, scale) ->
     if scale.shape != x0.shape or not np.all(np.isfinite(scale)) or np.any(scale <= 0):
         raise ValueError("scale must be finite, positive and one per parameter")
     best, info = np.empty(N_PARAMETERS), np.zeros(4)
-    _gn_run_edge(cost.gradient_args(), x0, lower, upper, scale, budget, GAUSS_NEWTON_DAMPING, best, info)
+    if region_cost is None or region_weight == 0.0:
+        region_args, region_weight = _DummyArgs.region(cost), 0.0
+    else:
+        from mocap.cost import RegionCost
+        if not isinstance(region_cost, RegionCost) or not (np.isfinite(region_weight) and region_weight > 0):
+            raise ValueError("region_cost must be a RegionCost and region_weight finite and positive")
+        region_args = region_cost.kernel_args()
+    _gn_run_edge(cost.gradient_args(), region_args, float(region_weight), x0, lower, upper, scale, budget,
+                 GAUSS_NEWTON_DAMPING, best, info)
     return GaussNewtonResult(best, float(info[0]), float(info[1]), int(info[2]), int(info[3]))
 
 

@@ -113,6 +113,12 @@ def test_gauss_newton_lowers_eq2_within_its_bounds_and_budget(smooth_cost):
     got = minimize_edge_gauss_newton(cost, q, lower, upper, budget=10, scale=scale)
     assert lower[k] <= got.x[k] <= upper[k]
     assert (got.x >= lower).all() and (got.x <= upper).all()
+    # scored with F as well: every point takes two renders, and the score never rises
+    region = _region_cost(MODEL)
+    guarded = minimize_edge_gauss_newton(cost, q, lower, upper, budget=9, scale=scale, region_cost=region,
+                                         region_weight=25.0)
+    assert guarded.evaluations % 2 == 0 and guarded.evaluations <= 9
+    assert guarded.fun + 25.0 * region(guarded.x) <= guarded.start_fun + 25.0 * region(q) + 1e-12
     with pytest.raises(ValueError, match="at least 1"):
         minimize_edge_gauss_newton(cost, q, lower, upper, budget=0, scale=scale)
     with pytest.raises(ValueError, match="EdgeCost"):
@@ -132,7 +138,8 @@ def test_registration_gradient_step_takes_its_share_and_never_raises_eq2():
         TrackerConfig(gradient_step="yes")
     got = register(region, cost, _start_pose(2), config)
     n_gradient = gradient_budget(150)
-    assert got.gradient is not None and 1 <= got.gradient.evaluations <= n_gradient
+    assert n_gradient == 15 and gradient_budget(30) == 0                # too few to take a step: none
+    assert got.gradient is not None and 2 <= got.gradient.evaluations <= n_gradient
     assert got.edge.evaluations <= 150 - n_gradient
     assert got.evaluations <= 300
     assert got.edge_residual == pytest.approx(got.gradient.fun) and got.gradient.fun <= got.gradient.start_fun

@@ -34,6 +34,9 @@ JUMPS_REFINED = 2
 GRADIENT_SHARE = 0.1
 #: Largest move per Gauss–Newton iteration of the gradient step, relative to the initial simplex steps.
 GRADIENT_SCALE = 1.0
+#: Pixels of edge distance per unit of F in the gradient step's score (eq. 2 + this x eq. 1): the
+#: tracker's hypothesis score's ratio (50 per unit of F against 2 per pixel).
+GRADIENT_REGION_WEIGHT = 25.0
 #: Hypotheses whose joints are on average closer than this (metres) are merged, the better kept.
 MERGE_DISTANCE_M = 0.02
 
@@ -214,12 +217,17 @@ class TrackerConfig(JsonConfig):
         return np.r_[np.full(3, self.position_step_m), np.full(N_PARAMETERS - 3, math.radians(self.angle_step_deg))]
 
 
+#: Fewest evaluations the gradient step runs with: its start and one step, each rendering the
+#: edge distance and F.
+MIN_GRADIENT_EVALUATIONS = 4
+
+
 def gradient_budget(edge_evaluations: int) -> int:
     """Evaluations the gradient step takes out of the edge step's ``edge_evaluations`` when it is
-    on: :data:`GRADIENT_SHARE` of them, at least 1 when there are any."""
-    if edge_evaluations <= 0:
-        return 0
-    return min(edge_evaluations, max(1, int(round(GRADIENT_SHARE * edge_evaluations))))
+    on: :data:`GRADIENT_SHARE` of them, or 0 (the edge step keeps them all) when that is fewer
+    than :data:`MIN_GRADIENT_EVALUATIONS`."""
+    n = int(round(GRADIENT_SHARE * max(edge_evaluations, 0)))
+    return n if n >= MIN_GRADIENT_EVALUATIONS else 0
 
 
 def split_budget(total: int, split: str) -> tuple[int, int]:

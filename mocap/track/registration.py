@@ -13,8 +13,10 @@ Gauss–Newton (Levenberg–Marquardt) descent on the analytic gradient of eq. (
 (:func:`~mocap.optimize.minimize_edge_gauss_newton`, :meth:`EdgeCost.gradient
 <mocap.cost.EdgeCost.gradient>`), within the joint limits; it takes
 :data:`~mocap.track.config.GRADIENT_SHARE` of the edge step's evaluations (one iteration is one
-render, counted as one evaluation) and keeps, of every pose it evaluates and the edge step's
-best, the one of lowest eq. (2). (scipy's L-BFGS-B on the same gradient measured 9x the
+render, counted as one evaluation, and one more for F) and keeps, of every pose it evaluates and
+the edge step's best, the one of lowest eq. (2) + :data:`~mocap.track.config.GRADIENT_REGION_WEIGHT`
+F, accepting a step only when it lowers that score. (Descending eq. (2) alone raised F and the
+frames over the residual thresholds: docs/research-log.md.) (scipy's L-BFGS-B on the same gradient measured 9x the
 simplex's time per frame for a worse residual: docs/research-log.md.)
 """
 from __future__ import annotations
@@ -26,7 +28,8 @@ import numpy as np
 from mocap.body.pose import JOINT_LIMITS, check_pose, clamp_to_limits
 from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.optimize import GaussNewtonResult, SimplexResult, initial_simplex, minimize_cost, minimize_edge_gauss_newton
-from mocap.track.config import FRESH_STEP_SCALE, GRADIENT_SCALE, TrackerConfig, gradient_budget, split_budget
+from mocap.track.config import (FRESH_STEP_SCALE, GRADIENT_REGION_WEIGHT, GRADIENT_SCALE, TrackerConfig, gradient_budget,
+                                split_budget)
 
 
 @dataclass(frozen=True)
@@ -125,7 +128,8 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
     gradient = None
     if n_gradient > 0:
         gradient = minimize_edge_gauss_newton(edge_cost, pose, lower, upper, budget=n_gradient,
-                                              scale=steps * GRADIENT_SCALE)
+                                              scale=steps * GRADIENT_SCALE, region_cost=region_cost,
+                                              region_weight=GRADIENT_REGION_WEIGHT)
         pose = gradient.x.copy()
     keypoint_residual = keypoint_cost(pose) if keypoint_cost is not None else float("nan")
     return Registration(pose.copy(), region_cost(pose), edge_cost(pose), edge_after_region, region, edge,
