@@ -15,9 +15,10 @@ Gauss–Newton (Levenberg–Marquardt) descent on the analytic gradient of eq. (
 :data:`~mocap.track.config.GRADIENT_SHARE` of the edge step's evaluations (one iteration is one
 render, counted as one evaluation, and one more for F) and keeps, of every pose it evaluates and
 the edge step's best, the one of lowest eq. (2) + :data:`~mocap.track.config.GRADIENT_REGION_WEIGHT`
-F, accepting a step only when it lowers that score. (Descending eq. (2) alone raised F and the
-frames over the residual thresholds: docs/research-log.md.) (scipy's L-BFGS-B on the same gradient measured 9x the
-simplex's time per frame for a worse residual: docs/research-log.md.)
+F, accepting a step only when it lowers that score. Given keypoints it does not run (its score
+has no keypoint term). Descending eq. (2) alone raised F and the frames over the residual
+thresholds, and scipy's L-BFGS-B on the same gradient took 9x the simplex's time per frame:
+docs/research-log.md.
 """
 from __future__ import annotations
 
@@ -103,7 +104,7 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
     lower, upper = limits[:, 0], limits[:, 1]
     total = config.evaluations if evaluations is None else int(evaluations)
     n_region, n_edge = split_budget(total, config.split)
-    n_gradient = gradient_budget(n_edge) if config.gradient_step else 0
+    n_gradient = gradient_budget(n_edge) if config.gradient_step and keypoint_cost is None else 0
     n_edge -= n_gradient
     steps = config.steps() * step_scale
     region_kw, edge_kw = config.keypoint_step_weights() if keypoint_cost is not None else (0.0, 0.0)
