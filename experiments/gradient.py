@@ -155,6 +155,7 @@ def main(argv=None) -> int:
     p.add_argument("--unseen-seeds", default="29", help="comma-separated seeds never used for tuning (tabled apart)")
     p.add_argument("--sequences", default=",".join(SEQUENCE_NAMES))
     p.add_argument("--tracking", action="store_true", help="also track with the default tracker, step off and on")
+    p.add_argument("--tracking-seeds", default="0,1,2,3,4", help="seeds of the tracking comparison (the unseen apart)")
     p.add_argument("--bench", type=Path, default=None, help="a `python -m mocap bench --json` output file")
     p.add_argument("--out", type=Path, default=RESULTS_DIR / "ambiguity", help="results folder")
     p.add_argument("--report", action="store_true", help="write the section into experiments/REPORT.md")
@@ -162,10 +163,12 @@ def main(argv=None) -> int:
     try:
         seeds = [int(s) for s in args.seeds.split(",") if s.strip()]
         unseen = [int(s) for s in args.unseen_seeds.split(",") if s.strip()]
+        tracking_seeds = [int(s) for s in args.tracking_seeds.split(",") if s.strip()]
     except ValueError:
-        seeds = unseen = []
+        seeds = unseen = tracking_seeds = []
     sequences = [s for s in args.sequences.split(",") if s]
-    if not seeds or not sequences or set(sequences) - set(SEQUENCE_NAMES) or set(seeds) & set(unseen):
+    if (not seeds or not sequences or set(sequences) - set(SEQUENCE_NAMES) or set(seeds) & set(unseen)
+            or (args.tracking and (not tracking_seeds or set(tracking_seeds) & set(unseen)))):
         print(f"error: need seeds, sequences of {', '.join(SEQUENCE_NAMES)}, and unseen seeds apart from the others",
               file=sys.stderr)
         return 2
@@ -188,12 +191,13 @@ def main(argv=None) -> int:
     tracking = None
     if args.tracking:
         from experiments.tracking import summarise
+        tracking_groups = dict(zip(groups, [tracking_seeds] + ([unseen] if unseen else [])))
         tracking = {g: {n: summarise([r for s in ss for r in tracking_rows(n, s, sequences, args.out)])
-                        for n in ("default", "gradient")} for g, ss in groups.items()}
+                        for n in ("default", "gradient")} for g, ss in tracking_groups.items()}
     ratios = bench_ratios(args.bench) if args.bench is not None else {}
     text = ["## The paper's future work: a gradient step (issue 30)", "",
             f"`python -m experiments.gradient --seeds {args.seeds} --unseen-seeds {args.unseen_seeds}"
-            + (" --tracking" if args.tracking else "") + (" --bench FILE" if args.bench else "") + " --report` "
+            + (f" --tracking --tracking-seeds {args.tracking_seeds}" if args.tracking else "") + (" --bench FILE" if args.bench else "") + " --report` "
             "(six sequences at full length, 160x120, true calibration; registration from the true pose one frame "
             "earlier with the default tracker's budget, 500 evaluations; the step takes 10 % of the edge step's "
             "evaluations, one Gauss–Newton iteration per render; CPU time of the registration, one thread).", ""]
@@ -201,7 +205,9 @@ def main(argv=None) -> int:
         text += [f"From the true pose one frame earlier, {g}:", "", truth_table(truth[g], at_truth[g]), ""]
         if tracking:
             from experiments.tracking import table
-            text += [f"Tracking, {g}:", "", table(tracking[g]), ""]
+            label = g if g not in tracking_groups or g.startswith("unseen") else "tuning seeds " + ",".join(
+                map(str, tracking_seeds))
+            text += [f"Tracking (the default tracker; `gradient`: with the step), {label}:", "", table(tracking[g]), ""]
     judged = list(groups)[-1]
     text += [f"Verdict ({judged}):", "", *verdict(truth[judged], at_truth[judged], tracking[judged] if tracking else None, ratios), ""]
     print("\n".join(text))
