@@ -247,7 +247,7 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
 
 
 def register_from_truth(prepared, model, camera, true_poses: np.ndarray, config: TrackerConfig, lag: int,
-                        every: int = 1) -> tuple[np.ndarray, np.ndarray]:
+                        every: int = 1, details: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Register frames one by one, each from the true pose ``lag`` frames earlier.
 
     Parameters
@@ -263,6 +263,11 @@ def register_from_truth(prepared, model, camera, true_poses: np.ndarray, config:
         from frame 0's truth).
     every : int
         Register every ``every``-th frame only (>= 1).
+    details : dict, optional
+        Filled with per registered frame: ``seconds`` (the registration's CPU time: the process's,
+        so that other work on a shared machine does not count; the registration is single-threaded),
+        ``edge_residual`` (eq. 2 at the result, pixels), ``region_residual`` (eq. 1) and
+        ``failed`` (the paper's residual thresholds, :meth:`~mocap.track.Registration.failed`).
 
     Returns
     -------
@@ -275,8 +280,19 @@ def register_from_truth(prepared, model, camera, true_poses: np.ndarray, config:
     tracker = Tracker(model, camera, config, true_poses[0])     # only for its model and costs
     frames = np.arange(0, min(len(prepared), len(true_poses)), every)
     poses = np.empty((len(frames), true_poses.shape[1]))
+    rows = []
+    if len(frames):      # once untimed: the kernels compile (or load from the cache) on first use
+        register(*tracker.costs(prepared[frames[0]]), true_poses[0], config)
     for k, f in enumerate(frames):
-        poses[k] = register(*tracker.costs(prepared[f]), true_poses[max(f - lag, 0)], config).pose
+        region, edge = tracker.costs(prepared[f])
+        started = time.process_time()         # CPU time: a shared machine's waits are not counted
+        result = register(region, edge, true_poses[max(f - lag, 0)], config)
+        rows.append((time.process_time() - started, result.edge_residual, result.region_residual,
+                     result.failed(config)))
+        poses[k] = result.pose
+    if details is not None:
+        for name, column in zip(("seconds", "edge_residual", "region_residual", "failed"), zip(*rows)):
+            details[name] = list(column)
     return frames, poses
 
 
@@ -287,14 +303,56 @@ def measure_from_truth(sequence: str, config: TrackerConfig, root: Path, seed: i
     truth_poses, truth_joints = loaded.ground_truth.poses, loaded.ground_truth.joints
     row = {"sequence": sequence, "frames": len(prepared)}
     for lag in lags:
+        details: dict = {}
         frames, poses = register_from_truth(prepared, loaded.model, loaded.calibration.camera, truth_poses,
-                                            config, lag)
+                                            config, lag, details=details)
         joints = np.array([loaded.model.joint_positions(q) for q in poses])
         start = truth_joints[np.maximum(frames - lag, 0)]
         row[f"lag{lag}_start_mpjpe_mm"] = mpjpe(start, truth_joints[frames])
         row[f"lag{lag}_mpjpe_mm"] = mpjpe(joints, truth_joints[frames])
         row[f"lag{lag}_failure_rate"] = failure_rate(joints, truth_joints[frames])
+        row[f"lag{lag}_frame_mpjpe_mm"] = mpjpe(joints, truth_joints[frames], per_frame=True).tolist()
+        row[f"lag{lag}_frame_start_mpjpe_mm"] = mpjpe(start, truth_joints[frames], per_frame=True).tolist()
+        row[f"lag{lag}_ms_per_frame"] = 1e3 * float(np.mean(details["seconds"]))
+        row[f"lag{lag}_edge_residual_px"] = float(np.mean(details["edge_residual"]))
+        row[f"lag{lag}_region_residual"] = float(np.mean(details["region_residual"]))
+        row[f"lag{lag}_residual_failures"] = int(np.sum(details["failed"]))
     return row
+
+
+def summary(rows: list[dict], lags: tuple[int, ...] | None) -> dict:
+    """One machine-readable object over every sequence and seed of a run (``--json``).
+
+    With lags (``--from-truth``), for the first lag: ``median_mm`` and ``mean_mm``, the median and
+    mean MPJPE over all registered frames; ``start_median_mm``, the same of the start poses;
+    ``ms_per_frame``, the registration's mean CPU time per frame (one thread); ``edge_residual_px``, the
+    mean edge distance (eq. 2) at the results; ``region_residual``, the mean F (eq. 1);
+    ``residual_failures``, frames over the paper's residual thresholds; ``failure_rate``, frames
+    over 100 mm. Tracking rows give ``median_mm`` over the frames, the frame-weighted
+    ``failure_rate`` and ``ms_per_frame`` (tracking alone). Both also give ``frames`` and
+    ``per_sequence`` (each row's sequence, seed and MPJPE).
+    """
+    if lags:
+        lag = lags[0]
+        errors = np.concatenate([r[f"lag{lag}_frame_mpjpe_mm"] for r in rows])
+        starts = np.concatenate([r[f"lag{lag}_frame_start_mpjpe_mm"] for r in rows])
+        frames = np.array([len(r[f"lag{lag}_frame_mpjpe_mm"]) for r in rows], dtype=np.float64)
+        weighted = lambda key: float(np.dot(frames, [r[key] for r in rows]) / frames.sum())
+        return {"lag": lag, "frames": int(frames.sum()), "median_mm": float(np.median(errors)),
+                "mean_mm": float(np.mean(errors)), "start_median_mm": float(np.median(starts)),
+                "failure_rate": float(np.mean(errors > DEFAULT_FAILURE_MM)),
+                "ms_per_frame": weighted(f"lag{lag}_ms_per_frame"),
+                "edge_residual_px": weighted(f"lag{lag}_edge_residual_px"),
+                "region_residual": weighted(f"lag{lag}_region_residual"),
+                "residual_failures": int(sum(r[f"lag{lag}_residual_failures"] for r in rows)),
+                "per_sequence": [{"sequence": r["sequence"], "seed": r["seed"], "mpjpe_mm": r[f"lag{lag}_mpjpe_mm"]}
+                                 for r in rows]}
+    errors = np.concatenate([r["frame_mpjpe_mm"] for r in rows])
+    frames = np.array([r["frames"] for r in rows], dtype=np.float64)
+    return {"frames": int(frames.sum()), "median_mm": float(np.median(errors)), "mean_mm": float(np.mean(errors)),
+            "failure_rate": float(np.mean(errors > DEFAULT_FAILURE_MM)),
+            "ms_per_frame": float(np.dot(frames, [r["tracking_ms_per_frame"] for r in rows]) / frames.sum()),
+            "per_sequence": [{"sequence": r["sequence"], "seed": r["seed"], "mpjpe_mm": r["mpjpe_mm"]} for r in rows]}
 
 
 def config_key(config: TrackerConfig) -> str:
@@ -375,6 +433,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"comma-separated model extensions to leave out: {', '.join(EXTENSIONS)}")
     p.add_argument("--two-way", action="store_true",
                    help="track forwards and backwards and keep, per frame, the pose of lower F (offline)")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object (median_mm, ms_per_frame, ... over every sequence and seed) "
+                        "instead of the tables")
     return p
 
 
@@ -424,7 +485,9 @@ def main(argv=None) -> int:
             path = args.out / "units" / f"{name}-s{seed}-{key}{suffix}.json"
             if path.is_file():
                 cached = read_json(path)["result"]
-                if lags is not None or "cost_equivalent_failure_rate" in cached:   # older files lack it
+                # older files lack the newer fields
+                if ("cost_equivalent_failure_rate" in cached if lags is None
+                        else f"lag{lags[0]}_frame_mpjpe_mm" in cached):
                     rows.append(cached)
                     continue
             print(f"{'tracking' if lags is None else 'registering'} {name} (seed {seed}) ...", file=sys.stderr,
@@ -433,12 +496,17 @@ def main(argv=None) -> int:
                    else measure_from_truth(name, config, args.out, seed, lags, without))
             write_json(path, {"config": config.to_dict(), "result": row})
             rows.append(row)
+        every += [{**r, "seed": seed} for r in rows]
+        if args.json:
+            continue
         print(f"configuration {key} ({config.evaluations} evaluations per frame"
               f"{', tracked both ways' if args.two_way else ''}{', without ' + ', '.join(without) if without else ''}), "
               f"seed {seed}\n")
         print(table(rows) if lags is None else table_from_truth(rows, lags))
         print()
-        every += [{**r, "seed": seed} for r in rows]
+    if args.json:
+        print(json.dumps({"configuration": key, "seeds": list(seeds), "sequences": list(names), **summary(every, lags)}))
+        return 0
     if len(seeds) > 1 and lags is None:
         print(f"pooled over seeds {', '.join(map(str, seeds))}\n")
         print(pooled_table(every))

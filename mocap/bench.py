@@ -6,6 +6,9 @@ mean edge distance) — the costs as an optimiser calls them (``evaluate_uncheck
 validation, ~1.7 µs) — of the default model (four colour classes: hair region and lower body),
 and the same three of the paper's model (two classes, no hair region, no lower body) as
 ``render_paper``, ``cost_region_paper``, ``cost_edge_paper``, measured in the same run,
+``gradient_region`` and ``gradient_edge`` (one value and gradient of eq. 1 and of eq. 2,
+:meth:`mocap.cost.RegionCost.gradient`, :meth:`mocap.cost.EdgeCost.gradient`, of the default
+model: one render each, the occluding-contour samples and, for eq. 1, the seams),
 ``llvmpipe_render`` (the same mesh through OpenGL on Mesa llvmpipe + read-back, when the
 ``bench`` extra is installed), ``prepare_frame`` and its parts ``prepare_background``,
 ``prepare_colour``, ``prepare_edges``, ``prepare_distance``, ``frame_100`` / ``frame_500`` (a
@@ -131,6 +134,15 @@ def render_rows(sizes: Sequence[tuple[int, int]], *, min_runs: int, min_seconds:
                                                                             min_runs=min_runs, min_seconds=min_seconds)))
             rows.append(_row("cost_edge" + suffix, size, tri, time_calls(lambda i: edge.evaluate_unchecked(pick(i)),
                                                                           min_runs=min_runs, min_seconds=min_seconds)))
+            if suffix == "":
+                gradient = np.zeros(len(neutral_pose()))
+                edge.gradient_args()                     # built once per frame, not per call
+                region.gradient_args()
+                rows.append(_row("gradient_region", size, tri, time_calls(
+                    lambda i: region.gradient_unchecked(pick(i), gradient), min_runs=min_runs,
+                    min_seconds=min_seconds)))
+                rows.append(_row("gradient_edge", size, tri, time_calls(
+                    lambda i: edge.gradient_unchecked(pick(i), gradient), min_runs=min_runs, min_seconds=min_seconds)))
         model = full
         tri = model.mesh.n_triangles
         if with_llvmpipe:

@@ -22,22 +22,29 @@ Degenerate cases (documented, finite, never NaN):
   (default: the distance map's truncation value, i.e. its maximum).
 - D_k: a joint nearer than the near plane counts the image's diagonal as its distance; with no
   keypoint present D_k is 0 (no evidence).
+
+Gradients (the paper's future work, issue 30): :meth:`EdgeCost.gradient` and
+:meth:`RegionCost.gradient` differentiate eq. (2) and eq. (1) with respect to the 23 pose
+parameters from one render each (see :class:`EdgeGradient` and :class:`RegionGradient`).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
 from mocap._numba import jit
-from mocap.body.kinematics import segment_transforms_into
+from mocap.body.kinematics import (PARAMETER_MOVES, parameter_axes_into, point_jacobian_into,
+                                   segment_transforms_into)
+from mocap.body.mesh import edge_faces
 from mocap.body.model import BodyModel
-from mocap.body.pose import check_pose
+from mocap.body.pose import N_PARAMETERS, check_pose
 from mocap.body.skeleton import JOINT_NAMES, SEGMENT_NAMES
 from mocap.labels import MAX_CLASSES, UNKNOWN
 from mocap.render.camera import Camera
-from mocap.render.rasterize import (EDGE_DEPTH_GAP_M, Buffers, Scene, check_edge_gap, occluding_edge_sum_and_clear,
-                                    render_scene_into)
+from mocap.render.rasterize import (EDGE_DEPTH_GAP_M, Buffers, Scene, check_edge_gap, occluding_edge_marks_into,
+                                    occluding_edge_sum_and_clear, render_scene_into)
 
 #: F when neither the image nor the model has a pixel of any class.
 EMPTY_REGION_COST = 1.0
@@ -92,6 +99,81 @@ class EdgeKernelArgs(NamedTuple):
     marks: np.ndarray
     edge_gap: float
     no_edge_penalty: float
+
+
+class EdgeGradientArgs(NamedTuple):
+    """Second argument of :func:`edge_gradient_kernel` (:meth:`EdgeCost.gradient_args`).
+
+    Attributes
+    ----------
+    cost : EdgeKernelArgs
+    gradient_u, gradient_v : ndarray, shape (height * width,), float64, pixels per pixel
+        Flat central-difference gradient of the distance map along u (columns) and v (rows).
+    edges, edge_faces : ndarray, shape (E, 2), int64
+        Mesh edges (vertex pairs) and the two triangles sharing each
+        (:func:`~mocap.body.mesh.edge_faces`).
+    moves : ndarray, shape (23, 8), bool
+        :data:`~mocap.body.kinematics.PARAMETER_MOVES`.
+    points : ndarray, shape (V, 3), float64
+        Scratch: the posed vertices in camera coordinates, metres.
+    facing : ndarray, shape (T,), int8
+        Scratch: 1 front-facing, 0 back-facing, -1 not projectable (a vertex nearer than the near plane).
+    axes, pivots : ndarray, shape (23, 3), float64
+        Scratch (:func:`~mocap.body.kinematics.parameter_axes_into`).
+    jacobian : ndarray, shape (3, 23), float64
+        Scratch for one point's dX/dq.
+    spacing : float, pixels
+        Distance between contour samples along a projected contour edge (at most).
+    """
+
+    cost: EdgeKernelArgs
+    gradient_u: np.ndarray
+    gradient_v: np.ndarray
+    edges: np.ndarray
+    edge_faces: np.ndarray
+    moves: np.ndarray
+    points: np.ndarray
+    facing: np.ndarray
+    axes: np.ndarray
+    pivots: np.ndarray
+    jacobian: np.ndarray
+    spacing: float
+
+
+class RegionGradientArgs(NamedTuple):
+    """Second argument of :func:`region_gradient_kernel` (:meth:`RegionCost.gradient_args`).
+
+    Attributes
+    ----------
+    cost : RegionKernelArgs
+    edges, edge_faces, moves, points, facing, axes, pivots, jacobian, spacing
+        As in :class:`EdgeGradientArgs`.
+    model_rate, overlap_rate : ndarray, shape (m + 1, 23), float64
+        Scratch: d|B_c|/dq and d|A_c ∩ B_c|/dq, pixels per parameter unit.
+    part_segment : ndarray, shape (P,), int64
+        Segment carrying each part (index of the render's part buffer - 1).
+    edge_gap : float, metres
+        Depth step that makes a boundary between two parts an occluding contour
+        (:data:`~mocap.render.rasterize.EDGE_DEPTH_GAP_M`); smaller steps are seams.
+    jacobian_other : ndarray, shape (3, 23), float64
+        Scratch.
+    """
+
+    cost: RegionKernelArgs
+    edges: np.ndarray
+    edge_faces: np.ndarray
+    moves: np.ndarray
+    points: np.ndarray
+    facing: np.ndarray
+    axes: np.ndarray
+    pivots: np.ndarray
+    jacobian: np.ndarray
+    spacing: float
+    model_rate: np.ndarray
+    overlap_rate: np.ndarray
+    part_segment: np.ndarray
+    edge_gap: float
+    jacobian_other: np.ndarray
 
 
 class KeypointKernelArgs(NamedTuple):
@@ -232,6 +314,347 @@ def edge_cost_kernel(pose, args):
 
 
 @jit
+def _bilinear(image, width, height, u, v):
+    """Bilinear interpolation of the flat ``image`` at pixel coordinates (u, v) (pixel centres at
+    half-integers), clamped at the image border."""
+    x, y = u - 0.5, v - 0.5
+    x0, y0 = np.floor(x), np.floor(y)
+    fx, fy = x - x0, y - y0
+    i0 = min(max(np.int64(x0), 0), width - 1)
+    i1 = min(max(np.int64(x0) + 1, 0), width - 1)
+    j0 = min(max(np.int64(y0), 0), height - 1)
+    j1 = min(max(np.int64(y0) + 1, 0), height - 1)
+    top = (1.0 - fx) * image[j0 * width + i0] + fx * image[j0 * width + i1]
+    bottom = (1.0 - fx) * image[j1 * width + i0] + fx * image[j1 * width + i1]
+    return (1.0 - fy) * top + fy * bottom
+
+
+@jit
+def _marked_near(marks, width, height, px, py):
+    """Whether pixel (px, py) or one of its 4-neighbours is marked (False outside the image)."""
+    if px < 0 or py < 0 or px >= width or py >= height:
+        return False
+    i = py * width + px
+    if marks[i]:
+        return True
+    return ((px > 0 and marks[i - 1]) or (px + 1 < width and marks[i + 1]) or (py > 0 and marks[i - width])
+            or (py + 1 < height and marks[i + width]))
+
+
+@jit
+def _pose_vertices(scene, transforms, points, facing, triangles):
+    """Camera coordinates of every vertex into ``points`` and each triangle's facing into
+    ``facing`` (1 front, 0 back, -1 a vertex nearer than the near plane), from the float projection."""
+    cam, offsets = scene.camera, scene.vertices
+    for i in range(offsets.shape[0]):
+        s = scene.vertex_segment[i]
+        for r in range(3):
+            points[i, r] = (transforms[s, r, 0] * offsets[i, 0] + transforms[s, r, 1] * offsets[i, 1]
+                            + transforms[s, r, 2] * offsets[i, 2] + transforms[s, r, 3])
+    for t in range(triangles.shape[0]):
+        a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+        if points[a, 2] < cam[4] or points[b, 2] < cam[4] or points[c, 2] < cam[4]:
+            facing[t] = -1
+            continue
+        ua, va = cam[0] * points[a, 0] / points[a, 2], cam[1] * points[a, 1] / points[a, 2]
+        ub, vb = cam[0] * points[b, 0] / points[b, 2], cam[1] * points[b, 1] / points[b, 2]
+        uc, vc = cam[0] * points[c, 0] / points[c, 2], cam[1] * points[c, 1] / points[c, 2]
+        facing[t] = 1 if (ub - ua) * (vc - va) - (uc - ua) * (vb - va) < 0.0 else 0
+
+
+@jit
+def edge_gradient_kernel(pose, args, gradient):
+    """Compiled gradient of eq. (2) for an unchecked float64 (23,) pose and an
+    :class:`EdgeGradientArgs`, into ``gradient`` (23,); leaves the buffers cleared.
+
+    Returns ``(D_c, contour mean, samples)``: eq. (2) from the render's edge pixels, pixels;
+    the mean of the bilinearly interpolated distance over the visible contour samples (the
+    smooth function whose gradient is written, pixels; the penalty with no sample); their number.
+    """
+    value, mean, _, samples = edge_normal_equations_kernel(pose, args, gradient, gradient[:0], args.jacobian[:0, :0])
+    return value, mean, samples
+
+
+@jit
+def edge_normal_equations_kernel(pose, args, gradient, rhs, normal):
+    """:func:`edge_gradient_kernel`, and, when ``rhs`` (23,) and ``normal`` (23, 23) are not
+    empty, the Gauss–Newton normal equations of the contour's mean squared distance: with
+    r_s the distance at sample s and J_s its gradient (per parameter), ``rhs`` = mean r_s J_s and
+    ``normal`` = mean J_s^T J_s (zero without a sample).
+
+    Returns ``(D_c, contour mean, contour mean square, samples)`` (pixels, pixels, pixels²).
+    """
+    c = args.cost
+    scene, buffers = c.scene, c.buffers
+    width, height, cam = scene.width, scene.height, scene.camera
+    want_normal = normal.shape[0] > 0
+    n_par = gradient.shape[0]
+    render_scene_into(pose, scene, buffers)
+    total, n = occluding_edge_marks_into(scene, buffers, c.edge_gap, c.distance, c.marks)
+    value = c.no_edge_penalty if n == 0 else total / n
+    transforms, points, jac = buffers.transforms, args.points, args.jacobian
+    _pose_vertices(scene, transforms, points, args.facing, scene.triangles)
+    parameter_axes_into(pose, transforms, args.axes, args.pivots)
+    for k in range(n_par):
+        gradient[k] = 0.0
+        if want_normal:
+            rhs[k] = 0.0
+            for j in range(n_par):
+                normal[k, j] = 0.0
+    row = np.empty(n_par)
+    sum_value = 0.0
+    sum_square = 0.0
+    samples = 0
+    for e in range(args.edges.shape[0]):
+        fa, fb = args.facing[args.edge_faces[e, 0]], args.facing[args.edge_faces[e, 1]]
+        if fa < 0 or fb < 0 or fa == fb:
+            continue                                   # not a contour generator
+        a, b = args.edges[e, 0], args.edges[e, 1]
+        seg = scene.vertex_segment[a]
+        ua, va = cam[0] * points[a, 0] / points[a, 2] + cam[2], cam[1] * points[a, 1] / points[a, 2] + cam[3]
+        ub, vb = cam[0] * points[b, 0] / points[b, 2] + cam[2], cam[1] * points[b, 1] / points[b, 2] + cam[3]
+        n_s = max(np.int64(np.ceil(np.sqrt((ub - ua) ** 2 + (vb - va) ** 2) / args.spacing)), 1)
+        for j in range(n_s):
+            t = (j + 0.5) / n_s
+            x = (1.0 - t) * points[a, 0] + t * points[b, 0]
+            y = (1.0 - t) * points[a, 1] + t * points[b, 1]
+            z = (1.0 - t) * points[a, 2] + t * points[b, 2]
+            iz = 1.0 / z
+            u, v = cam[0] * x * iz + cam[2], cam[1] * y * iz + cam[3]
+            if not _marked_near(c.marks, width, height, np.int64(np.floor(u)), np.int64(np.floor(v))):
+                continue                               # hidden, or not an occluding edge in the render
+            samples += 1
+            r = _bilinear(c.distance, width, height, u, v)
+            sum_value += r
+            sum_square += r * r
+            gu = _bilinear(args.gradient_u, width, height, u, v)
+            gv = _bilinear(args.gradient_v, width, height, u, v)
+            # d(u, v)/dX of the pinhole projection, folded with the distance gradient
+            wx, wy = gu * cam[0] * iz, gv * cam[1] * iz
+            wz = -(wx * x + wy * y) * iz
+            point_jacobian_into(x, y, z, seg, args.axes, args.pivots, args.moves, jac)
+            for k in range(n_par):
+                row[k] = wx * jac[0, k] + wy * jac[1, k] + wz * jac[2, k]
+                gradient[k] += row[k]
+            if want_normal:
+                for k in range(n_par):
+                    if row[k] != 0.0:
+                        rhs[k] += r * row[k]
+                        for i in range(k, n_par):
+                            normal[k, i] += row[k] * row[i]
+    box = buffers.box
+    for py in range(box[1], box[3] + 1):
+        c.marks[py * width + box[0]: py * width + box[2] + 1] = False
+    if samples == 0:
+        return value, c.no_edge_penalty, c.no_edge_penalty ** 2, 0
+    for k in range(n_par):
+        gradient[k] /= samples
+        if want_normal:
+            rhs[k] /= samples
+            for i in range(k, n_par):
+                normal[k, i] /= samples
+                normal[i, k] = normal[k, i]
+    return value, sum_value / samples, sum_square / samples, samples
+
+
+@jit
+def _label_share(target, width, height, u, v, label, count_unknown):
+    """Bilinear share of the target pixels around (u, v) whose label is ``label`` (with
+    ``count_unknown``: whose label is not UNKNOWN), pixel centres at half-integers, clamped."""
+    x, y = u - 0.5, v - 0.5
+    x0, y0 = np.floor(x), np.floor(y)
+    fx, fy = x - x0, y - y0
+    share = 0.0
+    for dj in range(2):
+        j = min(max(np.int64(y0) + dj, 0), height - 1)
+        wy = fy if dj == 1 else 1.0 - fy
+        for di in range(2):
+            i = min(max(np.int64(x0) + di, 0), width - 1)
+            wx = fx if di == 1 else 1.0 - fx
+            t = target[j * width + i]
+            hit = (t != UNKNOWN) if count_unknown else (t == label)
+            if hit:
+                share += wx * wy
+    return share
+
+
+@jit
+def _pixel_point(idx, width, depth_buf, cam):
+    """Camera point (metres) of the surface seen at the centre of flat pixel ``idx``."""
+    z = 1.0 / depth_buf[idx]
+    u, v = idx % width + 0.5, idx // width + 0.5
+    return z * (u - cam[2]) / cam[0], z * (v - cam[3]) / cam[1], z
+
+
+@jit
+def _seam_rates(scene, buffers, args, target, ignore_unknown):
+    """Add to the class rates of :func:`region_gradient_kernel` the seams: boundaries between two
+    parts of different classes with no occluding depth step (a part's cut such as face and hair,
+    or where two parts meet), found between 4-neighbour pixels. Such a seam moves with both
+    surfaces: its normal speed is that of the two pixels' surface points, averaged; one pixel of
+    it moving by one pixel turns one pixel of area from one class to the other. Returns the
+    seam pixel pairs counted."""
+    part_buf, depth_buf = buffers.part_ids, buffers.inverse_depth
+    width, height, cam = scene.width, scene.height, scene.camera
+    box = buffers.box
+    d_model, d_overlap = args.model_rate, args.overlap_rate
+    jac, jac_b = args.jacobian, args.jacobian_other
+    n_par = d_model.shape[1]
+    count = 0
+    for y in range(box[1], box[3] + 1):
+        for x in range(box[0], box[2] + 1):
+            a = y * width + x
+            pa = part_buf[a]
+            if pa == 0:
+                continue
+            for k2 in range(2):
+                if k2 == 0:
+                    if x + 1 > box[2]:
+                        continue
+                    b = a + 1
+                    nu, nv = 1.0, 0.0
+                else:
+                    if y + 1 > box[3]:
+                        continue
+                    b = a + width
+                    nu, nv = 0.0, 1.0
+                pb = part_buf[b]
+                if pb == 0 or pb == pa:
+                    continue
+                ca, cb = np.int64(scene.part_label[pa - 1]), np.int64(scene.part_label[pb - 1])
+                if ca == cb:
+                    continue
+                za, zb = depth_buf[a], depth_buf[b]
+                if abs(za - zb) > args.edge_gap * za * zb:
+                    continue                           # an occluding contour: the mesh samples have it
+                count += 1
+                xa, ya, wa = _pixel_point(a, width, depth_buf, cam)
+                xb, yb, wb = _pixel_point(b, width, depth_buf, cam)
+                point_jacobian_into(xa, ya, wa, args.part_segment[pa - 1], args.axes, args.pivots, args.moves, jac)
+                point_jacobian_into(xb, yb, wb, args.part_segment[pb - 1], args.axes, args.pivots, args.moves, jac_b)
+                ua_x, ua_y, ua_z = nu * cam[0] / wa, nv * cam[1] / wa, -(nu * cam[0] * xa + nv * cam[1] * ya) / (wa * wa)
+                ub_x, ub_y, ub_z = nu * cam[0] / wb, nv * cam[1] / wb, -(nu * cam[0] * xb + nv * cam[1] * yb) / (wb * wb)
+                # target shares at the seam: the mean of the two pixels (bilinear at their midpoint)
+                ta, tb = target[a], target[b]
+                counted = 1.0 if not ignore_unknown else 0.5 * ((ta != UNKNOWN) + (tb != UNKNOWN))
+                hit_a = 0.5 * ((ta == ca) + (tb == ca))
+                hit_b = 0.5 * ((ta == cb) + (tb == cb))
+                for k in range(n_par):
+                    speed = 0.5 * (ua_x * jac[0, k] + ua_y * jac[1, k] + ua_z * jac[2, k]
+                                   + ub_x * jac_b[0, k] + ub_y * jac_b[1, k] + ub_z * jac_b[2, k])
+                    d_model[ca, k] += counted * speed
+                    d_overlap[ca, k] += hit_a * speed
+                    d_model[cb, k] -= counted * speed
+                    d_overlap[cb, k] -= hit_b * speed
+    return count
+
+
+@jit
+def region_gradient_kernel(pose, args, gradient):
+    """Compiled gradient of eq. (1) for an unchecked float64 (23,) pose and a
+    :class:`RegionGradientArgs`, into ``gradient`` (23,); leaves the buffers cleared.
+
+    Returns ``(F, boundary samples)``. See :class:`RegionGradient` for the method.
+    """
+    c = args.cost
+    scene, buffers = c.scene, c.buffers
+    width, height, cam = scene.width, scene.height, scene.camera
+    part_buf, depth_buf = buffers.part_ids, buffers.inverse_depth
+    n_par = gradient.shape[0]
+    d_model, d_overlap = args.model_rate, args.overlap_rate
+    d_model[:, :] = 0.0
+    d_overlap[:, :] = 0.0
+    render_scene_into(pose, scene, buffers)
+    transforms, points, jac = buffers.transforms, args.points, args.jacobian
+    _pose_vertices(scene, transforms, points, args.facing, scene.triangles)
+    parameter_axes_into(pose, transforms, args.axes, args.pivots)
+    samples = 0
+    for e in range(args.edges.shape[0]):
+        f0, f1 = args.edge_faces[e, 0], args.edge_faces[e, 1]
+        fa, fb = args.facing[f0], args.facing[f1]
+        if fa < 0 or fb < 0 or fa == fb:
+            continue                                   # not a contour generator
+        front = f0 if fa == 1 else f1
+        part = scene.triangle_part[front]
+        c_in = np.int64(scene.part_label[part])
+        a, b = args.edges[e, 0], args.edges[e, 1]
+        w = scene.triangles[front, 0] + scene.triangles[front, 1] + scene.triangles[front, 2] - a - b
+        seg = scene.vertex_segment[a]
+        ua, va = cam[0] * points[a, 0] / points[a, 2] + cam[2], cam[1] * points[a, 1] / points[a, 2] + cam[3]
+        ub, vb = cam[0] * points[b, 0] / points[b, 2] + cam[2], cam[1] * points[b, 1] / points[b, 2] + cam[3]
+        uw, vw = cam[0] * points[w, 0] / points[w, 2] + cam[2], cam[1] * points[w, 1] / points[w, 2] + cam[3]
+        length = np.sqrt((ub - ua) ** 2 + (vb - va) ** 2)
+        if length == 0.0:
+            continue
+        nu, nv = (vb - va) / length, -(ub - ua) / length   # unit normal, turned outwards below
+        if nu * (uw - ua) + nv * (vw - va) > 0.0:
+            nu, nv = -nu, -nv
+        n_s = max(np.int64(np.ceil(length / args.spacing)), 1)
+        ds = length / n_s
+        for j in range(n_s):
+            t = (j + 0.5) / n_s
+            x = (1.0 - t) * points[a, 0] + t * points[b, 0]
+            y = (1.0 - t) * points[a, 1] + t * points[b, 1]
+            z = (1.0 - t) * points[a, 2] + t * points[b, 2]
+            iz = 1.0 / z
+            u, v = cam[0] * x * iz + cam[2], cam[1] * y * iz + cam[3]
+            # the part itself just inside, something of another class (not nearer) just outside
+            pi, qi = np.int64(np.floor(u - 0.75 * nu)), np.int64(np.floor(v - 0.75 * nv))
+            po, qo = np.int64(np.floor(u + 0.75 * nu)), np.int64(np.floor(v + 0.75 * nv))
+            if pi < 0 or qi < 0 or pi >= width or qi >= height or part_buf[qi * width + pi] != part + 1:
+                continue
+            c_out = np.int64(0)
+            if 0 <= po < width and 0 <= qo < height:
+                o = qo * width + po
+                if part_buf[o] != 0:
+                    if depth_buf[o] > iz:
+                        continue                       # a nearer surface covers the outside
+                    c_out = np.int64(scene.part_label[part_buf[o] - 1])
+            if c_out == c_in:
+                continue                               # the boundary moves within one class: flat
+            samples += 1
+            counted = _label_share(c.target, width, height, u, v, 0, True) if c.ignore_unknown else 1.0
+            hit_in = _label_share(c.target, width, height, u, v, c_in, False)
+            hit_out = _label_share(c.target, width, height, u, v, c_out, False) if c_out > 0 else 0.0
+            wx, wy = nu * cam[0] * iz, nv * cam[1] * iz
+            wz = -(wx * x + wy * y) * iz
+            point_jacobian_into(x, y, z, seg, args.axes, args.pivots, args.moves, jac)
+            for k in range(n_par):
+                normal_speed = (wx * jac[0, k] + wy * jac[1, k] + wz * jac[2, k]) * ds
+                d_model[c_in, k] += counted * normal_speed
+                d_overlap[c_in, k] += hit_in * normal_speed
+                if c_out > 0:
+                    d_model[c_out, k] -= counted * normal_speed
+                    d_overlap[c_out, k] -= hit_out * normal_speed
+    samples += _seam_rates(scene, buffers, args, c.target, c.ignore_unknown)
+    _region_counts_and_clear(part_buf, depth_buf, scene.part_label, width, buffers.box, c.target, c.n_classes,
+                             c.model_count, c.overlap_count, c.ignore_unknown)
+    value = _non_overlapping_ratio(c.target_count, c.model_count, c.overlap_count, c.n_classes)
+    for k in range(n_par):
+        gradient[k] = 0.0
+    used = 0
+    for cl in range(1, c.n_classes + 1):
+        union = c.target_count[cl] + c.model_count[cl] - c.overlap_count[cl]
+        if union == 0:
+            continue
+        used += 1
+        miss = union - c.overlap_count[cl]
+        for k in range(n_par):
+            d_union = d_model[cl, k] - d_overlap[cl, k]
+            if miss == 0:
+                gradient[k] -= d_union / (union + 1.0)
+            else:
+                gradient[k] += (d_union - d_overlap[cl, k]) / miss - d_union / union
+    if used == 0 or value == 0.0:
+        for k in range(n_par):
+            gradient[k] = 0.0
+        return value, samples
+    for k in range(n_par):
+        gradient[k] *= value / used
+    return value, samples
+
+
+@jit
 def keypoint_cost_kernel(pose, args):
     """Compiled D_k(pose), pixels, for an unchecked float64 (23,) pose and a
     :class:`KeypointKernelArgs` (0 with no keypoint)."""
@@ -305,6 +728,13 @@ class LabelRenderer:
         return self._labels
 
 
+def _part_segments(mesh) -> np.ndarray:
+    """Segment of each mesh part (0 for a part without triangles), int64 (parts,)."""
+    out = np.zeros(int(mesh.triangle_part.max()) + 1, np.int64)
+    out[mesh.triangle_part] = mesh.vertex_segment[mesh.triangles[:, 0]]
+    return out
+
+
 def _check_image(image: np.ndarray, camera: Camera, what: str) -> None:
     if not isinstance(image, np.ndarray) or image.shape != camera.shape:
         shape = getattr(image, "shape", None)
@@ -353,6 +783,7 @@ class RegionCost:
         self._model_count = np.zeros(m + 1, np.int64)
         self._overlap_count = np.zeros(m + 1, np.int64)
         self.ignore_unknown = bool(ignore_unknown)
+        self._gradient_args: RegionGradientArgs | None = None
 
     def __call__(self, pose) -> float:
         return float(self.evaluate_unchecked(check_pose(pose)))
@@ -365,6 +796,42 @@ class RegionCost:
         """Second argument of :func:`region_cost_kernel` (for compiled optimiser loops)."""
         return RegionKernelArgs(self._scene, self._buffers, self._target, self.target_count, self.n_classes,
                                 self._model_count, self._overlap_count, self.ignore_unknown)
+
+    def gradient(self, pose) -> RegionGradient:
+        """F and its gradient with respect to the 23 pose parameters, from one render.
+
+        Parameters
+        ----------
+        pose : array_like, shape (23,)
+            Metres and radians.
+
+        Returns
+        -------
+        RegionGradient
+            See there for the method (boundary motion times the change of each class's union
+            and intersection; flat where no boundary moves a class).
+        """
+        out = np.zeros(N_PARAMETERS)
+        value, samples = self.gradient_unchecked(check_pose(pose), out)
+        return RegionGradient(float(value), out, int(samples))
+
+    def gradient_unchecked(self, pose: np.ndarray, out: np.ndarray) -> tuple[float, int]:
+        """As :meth:`gradient` without validation, the gradient written into ``out`` (float64 (23,)):
+        returns ``(value, samples)``. For optimiser loops."""
+        return region_gradient_kernel(pose, self.gradient_args(), out)
+
+    def gradient_args(self) -> RegionGradientArgs:
+        """Second argument of :func:`region_gradient_kernel` (built on first use, then kept)."""
+        if self._gradient_args is None:
+            mesh = self.model.mesh
+            edges, faces = edge_faces(mesh.triangles)
+            m = self.n_classes
+            self._gradient_args = RegionGradientArgs(
+                self.kernel_args(), edges, faces, PARAMETER_MOVES, np.empty((len(mesh.vertices), 3)),
+                np.empty(len(mesh.triangles), np.int8), np.empty((N_PARAMETERS, 3)), np.empty((N_PARAMETERS, 3)),
+                np.empty((3, N_PARAMETERS)), CONTOUR_SPACING_PX, np.zeros((m + 1, N_PARAMETERS)),
+                np.zeros((m + 1, N_PARAMETERS)), _part_segments(mesh), EDGE_DEPTH_GAP_M, np.empty((3, N_PARAMETERS)))
+        return self._gradient_args
 
 
 class EdgeCost:
@@ -400,6 +867,7 @@ class EdgeCost:
         self._scene = Scene.of(model, camera)
         self._buffers = Buffers.of(model, camera)
         self._marks = np.zeros(camera.width * camera.height, np.bool_)
+        self._gradient_args: EdgeGradientArgs | None = None
 
     def __call__(self, pose) -> float:
         return float(self.evaluate_unchecked(check_pose(pose)))
@@ -412,6 +880,121 @@ class EdgeCost:
         """Second argument of :func:`edge_cost_kernel` (for compiled optimiser loops)."""
         return EdgeKernelArgs(self._scene, self._buffers, self._distance, self._marks, self.edge_gap,
                               self.no_edge_penalty)
+
+    def gradient(self, pose) -> EdgeGradient:
+        """D_c and its gradient with respect to the 23 pose parameters, from one render.
+
+        Parameters
+        ----------
+        pose : array_like, shape (23,)
+            Metres and radians.
+
+        Returns
+        -------
+        EdgeGradient
+            See there for what is differentiated (the contour mean) and how.
+        """
+        out = np.zeros(N_PARAMETERS)
+        value, contour_value, samples = self.gradient_unchecked(check_pose(pose), out)
+        return EdgeGradient(float(value), float(contour_value), out, int(samples))
+
+    def gradient_unchecked(self, pose: np.ndarray, out: np.ndarray) -> tuple[float, float, int]:
+        """As :meth:`gradient` without validation, the gradient written into ``out`` (float64 (23,)):
+        returns ``(value, contour_value, samples)``. For optimiser loops."""
+        return edge_gradient_kernel(pose, self.gradient_args(), out)
+
+    def gradient_args(self) -> EdgeGradientArgs:
+        """Second argument of :func:`edge_gradient_kernel` (built on first use, then kept)."""
+        if self._gradient_args is None:
+            h, w = self.camera.shape
+            gv, gu = np.gradient(self._distance.reshape(h, w).astype(np.float64))
+            mesh = self.model.mesh
+            edges, faces = edge_faces(mesh.triangles)
+            self._gradient_args = EdgeGradientArgs(
+                self.kernel_args(), np.ascontiguousarray(gu).ravel(), np.ascontiguousarray(gv).ravel(), edges, faces,
+                PARAMETER_MOVES, np.empty((len(mesh.vertices), 3)), np.empty(len(mesh.triangles), np.int8),
+                np.empty((N_PARAMETERS, 3)), np.empty((N_PARAMETERS, 3)), np.empty((3, N_PARAMETERS)),
+                CONTOUR_SPACING_PX)
+        return self._gradient_args
+
+
+@dataclass(frozen=True)
+class EdgeGradient:
+    """Gradient of the mean edge distance (eq. 2) at one pose (:meth:`EdgeCost.gradient`).
+
+    Eq. (2) averages the distance map over the model's occluding-edge *pixels*, a set that
+    changes by whole pixels: as a function of the pose it is piecewise constant. Its gradient is
+    taken as that of its continuous counterpart, the mean of the distance map over the model's
+    occluding contour: the mesh edges between a front- and a back-facing triangle, sampled every
+    ``spacing`` pixels or less once projected, kept where the rendered occluding-edge mask marks
+    the sample's pixel or a 4-neighbour (visible, and an occluding edge by the render's depth-gap
+    rule), with the distance and its gradient read by bilinear interpolation. Each sample moves
+    with its body segment (analytic Jacobian of :mod:`mocap.body.kinematics`) through the
+    pinhole projection. The change of the visible set and of the sample count is not
+    differentiated.
+
+    Attributes
+    ----------
+    value : float, pixels
+        D_c (eq. 2) at the pose, exactly as :class:`EdgeCost` computes it.
+    contour_value : float, pixels
+        The contour mean whose gradient ``gradient`` is (the ``no_edge_penalty`` without any
+        visible sample).
+    gradient : ndarray, shape (23,), float64
+        d contour_value / dq: pixels per metre (root positions), pixels per radian (angles);
+        zero without a visible sample.
+    samples : int
+        Visible contour samples.
+    """
+
+    value: float
+    contour_value: float
+    gradient: np.ndarray
+    samples: int
+
+
+@dataclass(frozen=True)
+class RegionGradient:
+    """Gradient of the non-overlapping ratio F (eq. 1) at one pose (:meth:`RegionCost.gradient`).
+
+    F counts whole pixels, so as a function of the pose it is piecewise constant; its gradient
+    is that of the areas it counts moving with the silhouette's boundary, as OpenDR and de La
+    Gorce et al. (PAMI 2011) differentiate a rendered region: the model's occluding contour (mesh
+    edges between a front- and a back-facing triangle, :class:`EdgeGradient`) is sampled every
+    pixel or less; a sample counts where the render shows its own part just inside it and
+    background or a part of another colour class, not nearer, just outside (elsewhere the
+    boundary is hidden, or moves between pixels of one class: flat). Moving outwards by one
+    pixel, a sample's length ``ds`` of boundary turns that much area from the outside class to
+    the inside one: |B_in| grows and |B_out| shrinks by ``ds`` (times the share of target pixels
+    there that are not unknown, with ``ignore_unknown``), |A_in ∩ B_in| grows by ``ds`` times the
+    share of target pixels of the inside class there (bilinear), |A_out ∩ B_out| shrinks by
+    ``ds`` times that of the outside class. The outward normal speed of each sample under each
+    parameter (analytic Jacobians of :mod:`mocap.body.kinematics`, pinhole projection) carries
+    these into d|B_c|/dq and d|A_c ∩ B_c|/dq, and those through eq. (1) (the empty-union and
+    exact-match rules of :class:`RegionCost` included) into dF/dq. Boundaries between two parts
+    of different classes with no occluding depth step (seams: the face and hair cut, a neck
+    entering the torso) are not contours; they are found in the render, between 4-neighbour
+    pixels, and move with the average of the two surface points seen there.
+
+    The gradient is zero where no boundary moves a class: a model out of view, or F = 0.
+
+    Attributes
+    ----------
+    value : float
+        F at the pose, exactly as :class:`RegionCost` computes it.
+    gradient : ndarray, shape (23,), float64
+        dF/dq: per metre (root positions), per radian (angles).
+    samples : int
+        Boundary samples that moved a class.
+    """
+
+    value: float
+    gradient: np.ndarray
+    samples: int
+
+
+#: Largest distance between two contour samples of :meth:`EdgeCost.gradient`, pixels.
+CONTOUR_SPACING_PX = 1.0
 
 
 class KeypointCost:

@@ -12,6 +12,8 @@ compiled kernel                                            twin                 
 ``cost`` (region counts, eq. 1; edge mean, eq. 2)          :func:`naive_non_overlapping_ratio`, ``tests/test_cost.py``
                                                            :func:`naive_mean_edge_distance`
 ``cost`` (keypoint distance D_k)                           :func:`naive_keypoint_distance`   ``tests/test_cost.py``
+``cost`` (gradient of eq. 2 over the occluding contour)    :func:`naive_edge_gradient`       ``tests/test_cost_gradient.py``
+``cost`` (gradient of eq. 1, boundary motion)              :func:`naive_region_gradient`     ``tests/test_cost_gradient.py``
 ``synth.shading`` (surface samples)                        :func:`naive_surface_samples`     ``tests/synth/test_sequence.py``
 ``imaging.background`` (change mask)                       :func:`naive_change_mask`         ``tests/imaging/test_background.py``
 ``imaging.colour`` (HSV, classification)                   :func:`naive_hsv`,                ``tests/imaging/test_colour.py``
@@ -170,6 +172,213 @@ def naive_mean_edge_distance(distance, edges, penalty):
     """Eq. (2) by a plain loop."""
     values = [distance[i, j] for i in range(edges.shape[0]) for j in range(edges.shape[1]) if edges[i, j]]
     return float(sum(values) / len(values)) if values else float(penalty)
+
+
+def naive_edge_gradient(pose, model, camera, distance, edge_gap, spacing=1.0, h=1e-6):
+    """The contour mean of :class:`mocap.cost.EdgeGradient` and its gradient, written plainly:
+    posed vertices by :func:`naive_segment_transforms`, facing by cross products, the contour
+    edges from a dictionary of edges, visibility from :func:`mocap.render.render`'s edge mask,
+    bilinear reads by ``scipy.ndimage.map_coordinates`` of ``np.gradient``'s maps, and each
+    sample's dX/dq by central differences of the kinematics (step ``h``), not by joint axes.
+
+    Returns (contour_value, gradient (23,), samples).
+    """
+    from scipy import ndimage
+
+    from mocap.body.skeleton import SEGMENT_NAMES
+    from mocap.render import render
+
+    mesh = model.mesh
+    mask = render(pose, model, camera, edge_gap=edge_gap).edges
+    gv, gu = np.gradient(np.asarray(distance, np.float64))
+    fx, fy, cx, cy = camera.fx, camera.fy, camera.cx, camera.cy
+
+    def posed(q):
+        tr = naive_segment_transforms(q, model.skeleton.offsets)
+        return np.array([tr[SEGMENT_NAMES[s]][0] @ v + tr[SEGMENT_NAMES[s]][1]
+                         for v, s in zip(mesh.vertices, mesh.vertex_segment)])
+
+    pts = posed(pose)
+    uv = np.c_[fx * pts[:, 0] / pts[:, 2] + cx, fy * pts[:, 1] / pts[:, 2] + cy]
+    owners = {}
+    for t, tri in enumerate(mesh.triangles):
+        for a, b in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
+            owners.setdefault((min(a, b), max(a, b)), []).append(t)
+    a, b, c = (uv[mesh.triangles[:, i]] for i in range(3))
+    front = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1]) < 0
+    # sample parameters of every contour edge, and the camera point of a sample for any pose
+    samples = []
+    for (i, j), (t0, t1) in owners.items():
+        if front[t0] == front[t1]:
+            continue
+        n = max(int(np.ceil(np.linalg.norm(uv[j] - uv[i]) / spacing)), 1)
+        samples += [(i, j, (k + 0.5) / n) for k in range(n)]
+
+    def sample_points(q):
+        p = posed(q)
+        return np.array([(1 - t) * p[i] + t * p[j] for i, j, t in samples])
+
+    x = sample_points(pose)
+    u, v = fx * x[:, 0] / x[:, 2] + cx, fy * x[:, 1] / x[:, 2] + cy
+    h_img, w_img = mask.shape
+    keep = np.zeros(len(u), bool)
+    for n, (px, py) in enumerate(zip(np.floor(u).astype(int), np.floor(v).astype(int))):
+        if 0 <= px < w_img and 0 <= py < h_img:
+            near = [(py, px), (py, px - 1), (py, px + 1), (py - 1, px), (py + 1, px)]
+            keep[n] = any(0 <= r < h_img and 0 <= s < w_img and mask[r, s] for r, s in near)
+    if not keep.any():
+        return float(np.max(distance)), np.zeros(23), 0
+    rows, cols = v[keep] - 0.5, u[keep] - 0.5
+    read = lambda img: ndimage.map_coordinates(img, [rows, cols], order=1, mode="nearest")
+    value = float(read(np.asarray(distance, np.float64)).mean())
+    du, dv = read(gu), read(gv)
+    grad = np.zeros(23)
+    for k in range(23):
+        e = np.zeros(23)
+        e[k] = h
+        xp, xm = sample_points(pose + e)[keep], sample_points(pose - e)[keep]
+        dudq = (fx * xp[:, 0] / xp[:, 2] - fx * xm[:, 0] / xm[:, 2]) / (2 * h)
+        dvdq = (fy * xp[:, 1] / xp[:, 2] - fy * xm[:, 1] / xm[:, 2]) / (2 * h)
+        grad[k] = np.mean(du * dudq + dv * dvdq)
+    return value, grad, int(keep.sum())
+
+
+def naive_region_gradient(pose, model, camera, target, edge_gap, ignore_unknown=True, spacing=1.0, h=1e-6):
+    """dF/dq of :class:`mocap.cost.RegionGradient`, written plainly: the render of
+    :func:`mocap.render.render` (parts, depth, labels), the contour samples of
+    :func:`naive_edge_gradient`'s construction with their outward normal from the front
+    triangle's third vertex, seams from array comparisons, every point's motion by central
+    differences of :func:`naive_segment_transforms` (step ``h``), target shares by
+    ``scipy.ndimage.map_coordinates``, and eq. (1)'s derivative from the class counts.
+
+    Returns (F, gradient (23,), samples).
+    """
+    from scipy import ndimage
+
+    from mocap.body.skeleton import SEGMENT_NAMES
+    from mocap.labels import UNKNOWN
+    from mocap.render import render
+
+    mesh, m = model.mesh, model.n_classes
+    rendering = render(pose, model, camera, edge_gap=edge_gap)
+    parts, depth, labels = rendering.parts.astype(int), rendering.depth.astype(np.float64), rendering.labels
+    h_img, w_img = parts.shape
+    fx, fy, cx, cy = camera.fx, camera.fy, camera.cx, camera.cy
+    target = np.asarray(target)
+    part_label = np.asarray(model.part_label, int)
+    part_segment = np.zeros(int(mesh.triangle_part.max()) + 1, int)
+    part_segment[mesh.triangle_part] = mesh.vertex_segment[mesh.triangles[:, 0]]
+
+    def transforms(q):
+        tr = naive_segment_transforms(q, model.skeleton.offsets)
+        return [tr[name] for name in SEGMENT_NAMES]
+
+    base = transforms(pose)
+    moved = [(transforms(pose + h * e), transforms(pose - h * e)) for e in np.eye(23)]
+
+    def pixel_speed(point, segment, normal):
+        """d(normal . uv)/dq of a camera point carried rigidly by ``segment``."""
+        r, t = base[segment]
+        local = r.T @ (point - t)
+        out = np.empty(23)
+        for k, (plus, minus) in enumerate(moved):
+            uv = []
+            for tr in (plus, minus):
+                x = tr[segment][0] @ local + tr[segment][1]
+                uv.append(np.array([fx * x[0] / x[2], fy * x[1] / x[2]]))
+            out[k] = normal @ (uv[0] - uv[1]) / (2 * h)
+        return out
+
+    share = lambda image, u, v: float(ndimage.map_coordinates(image.astype(np.float64), [[v - 0.5], [u - 0.5]],
+                                                             order=1, mode="nearest")[0])
+    d_model, d_overlap = np.zeros((m + 1, 23)), np.zeros((m + 1, 23))
+
+    def add(c_in, c_out, speed, counted, hit_in, hit_out):
+        d_model[c_in] += counted * speed
+        d_overlap[c_in] += hit_in * speed
+        if c_out > 0:
+            d_model[c_out] -= counted * speed
+            d_overlap[c_out] -= hit_out * speed
+
+    known = (target != UNKNOWN) if ignore_unknown else np.ones(target.shape, bool)
+    # occluding contour samples
+    pts = np.array([base[s][0] @ v + base[s][1] for v, s in zip(mesh.vertices, mesh.vertex_segment)])
+    uv = np.c_[fx * pts[:, 0] / pts[:, 2] + cx, fy * pts[:, 1] / pts[:, 2] + cy]
+    a, b, c = (uv[mesh.triangles[:, i]] for i in range(3))
+    front = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1]) < 0
+    owners = {}
+    for t, tri in enumerate(mesh.triangles):
+        for i, j in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
+            owners.setdefault((min(i, j), max(i, j)), []).append(t)
+    samples = 0
+    for (i, j), (t0, t1) in owners.items():
+        if front[t0] == front[t1]:
+            continue
+        f = t0 if front[t0] else t1
+        part = mesh.triangle_part[f]
+        c_in = part_label[part]
+        w = int(sum(mesh.triangles[f]) - i - j)
+        d = uv[j] - uv[i]
+        length = np.linalg.norm(d)
+        normal = np.array([d[1], -d[0]]) / length
+        if normal @ (uv[w] - uv[i]) > 0:
+            normal = -normal
+        n = max(int(np.ceil(length / spacing)), 1)
+        for k in range(n):
+            s = (k + 0.5) / n
+            x = (1 - s) * pts[i] + s * pts[j]
+            u, v = fx * x[0] / x[2] + cx, fy * x[1] / x[2] + cy
+            pin, qin = int(np.floor(u - 0.75 * normal[0])), int(np.floor(v - 0.75 * normal[1]))
+            pout, qout = int(np.floor(u + 0.75 * normal[0])), int(np.floor(v + 0.75 * normal[1]))
+            if not (0 <= pin < w_img and 0 <= qin < h_img) or parts[qin, pin] != part + 1:
+                continue
+            c_out = 0
+            if 0 <= pout < w_img and 0 <= qout < h_img and parts[qout, pout] != 0:
+                if depth[qout, pout] < x[2]:
+                    continue
+                c_out = part_label[parts[qout, pout] - 1]
+            if c_out == c_in:
+                continue
+            samples += 1
+            speed = pixel_speed(x, mesh.vertex_segment[i], normal) * (length / n)
+            add(c_in, c_out, speed, share(known, u, v), share(target == c_in, u, v),
+                share(target == c_out, u, v) if c_out > 0 else 0.0)
+    # seams between parts of different classes without an occluding depth step
+    for axis, normal in ((1, np.array([1.0, 0.0])), (0, np.array([0.0, 1.0]))):
+        pa = parts[:, :-1] if axis == 1 else parts[:-1]
+        pb = parts[:, 1:] if axis == 1 else parts[1:]
+        for y, x in zip(*np.nonzero((pa > 0) & (pb > 0) & (pa != pb))):
+            y2, x2 = (y, x + 1) if axis == 1 else (y + 1, x)
+            ca, cb = part_label[parts[y, x] - 1], part_label[parts[y2, x2] - 1]
+            za, zb = depth[y, x], depth[y2, x2]
+            if ca == cb or abs(1 / za - 1 / zb) > edge_gap / za / zb:
+                continue
+            samples += 1
+            speeds = []
+            for (yy, xx), z in (((y, x), za), ((y2, x2), zb)):
+                point = np.array([z * (xx + 0.5 - cx) / fx, z * (yy + 0.5 - cy) / fy, z])
+                speeds.append(pixel_speed(point, part_segment[parts[yy, xx] - 1], normal))
+            pair = [target[y, x], target[y2, x2]]
+            counted = np.mean([p != UNKNOWN for p in pair]) if ignore_unknown else 1.0
+            add(ca, cb, 0.5 * (speeds[0] + speeds[1]), counted, np.mean([p == ca for p in pair]),
+                np.mean([p == cb for p in pair]))
+    # eq. (1) and its derivative from the class counts
+    value = naive_non_overlapping_ratio(target, labels, m, ignore_unknown)
+    grad, used = np.zeros(23), 0
+    for cl in range(1, m + 1):
+        a_c = np.count_nonzero(target == cl)
+        b_c = np.count_nonzero((labels == cl) & known)
+        i_c = np.count_nonzero((labels == cl) & (target == cl))
+        union = a_c + b_c - i_c
+        if union == 0:
+            continue
+        used += 1
+        d_union = d_model[cl] - d_overlap[cl]
+        miss = union - i_c
+        grad += -d_union / (union + 1.0) if miss == 0 else (d_union - d_overlap[cl]) / miss - d_union / union
+    if used == 0 or value == 0.0:
+        return value, np.zeros(23), samples
+    return value, grad * value / used, samples
 
 
 def naive_keypoint_distance(pose, model, camera, uv, confidence):

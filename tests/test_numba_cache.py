@@ -80,3 +80,15 @@ def test_fingerprint_covers_kernel_modules_and_what_they_import(tmp_path):
     (tmp_path / "kernels_pkg" / "inner.py").write_text((tmp_path / "kernels_pkg" / "inner.py").read_text() + "\n# edit\n")
     compiled_sources_fingerprint.cache_clear()
     assert compiled_sources_fingerprint(root) != base
+
+
+def test_the_gradient_steps_compiled_callees_are_fingerprinted():
+    # optimize.py's Gauss-Newton loop compiles the gradient kernels of cost.py, the joint
+    # Jacobians of body/kinematics.py and the edge scan of render/rasterize.py into itself: each
+    # of those files must be part of the fingerprint, or an edit to it would leave the loop stale
+    import mocap
+    from mocap._numba import KERNEL_MARKER
+
+    root = Path(mocap.__file__).parent
+    for name in ("optimize.py", "cost.py", "body/kinematics.py", "render/rasterize.py", "render/_raster.py"):
+        assert KERNEL_MARKER in (root / name).read_text(encoding="utf-8"), name

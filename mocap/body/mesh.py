@@ -271,3 +271,37 @@ def resolution_for_image(width: int, height: int) -> int:
     if width < 1 or height < 1:
         raise ValueError(f"image size must be positive, got {width}x{height}")
     return int(np.clip(round(8.0 * np.sqrt(max(width, height) / 160.0)), 8, 24))
+
+
+def edge_faces(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The edges of a closed triangle mesh and the two triangles that share each.
+
+    Parameters
+    ----------
+    triangles : ndarray, shape (T, 3), int
+        Vertex indices of a closed, consistently wound mesh (every edge in exactly two triangles).
+
+    Returns
+    -------
+    edges : ndarray, shape (E, 2), int64
+        Vertex indices of each edge, lower first.
+    faces : ndarray, shape (E, 2), int64
+        The two triangles sharing it.
+
+    Raises
+    ------
+    ValueError
+        If an edge is not shared by exactly two triangles (the mesh is not closed).
+    """
+    t = np.asarray(triangles, dtype=np.int64)
+    if t.ndim != 2 or t.shape[1] != 3:
+        raise ValueError(f"triangles must have shape (T, 3), got {t.shape}")
+    pairs = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+    pairs.sort(axis=1)
+    owner = np.tile(np.arange(len(t), dtype=np.int64), 3)
+    order = np.lexsort((pairs[:, 1], pairs[:, 0]))
+    pairs, owner = pairs[order], owner[order]
+    if len(pairs) % 2 or not (np.array_equal(pairs[0::2], pairs[1::2])
+                              and (len(pairs) < 4 or (np.diff(pairs[0::2], axis=0) != 0).any(axis=1).all())):
+        raise ValueError("the mesh is not closed: every edge must be shared by exactly two triangles")
+    return pairs[0::2].copy(), np.stack([owner[0::2], owner[1::2]], axis=1)

@@ -127,6 +127,17 @@ def occluding_edge_sum_and_clear(scene, buffers, min_gap, distance, marks):
                               buffers.box, min_gap, distance, marks, True)
 
 
+@jit
+def occluding_edge_marks_into(scene, buffers, min_gap, distance, marks):
+    """Compiled: as :func:`occluding_edge_sum_and_clear`, but the occluding-edge pixels stay
+    marked in ``marks`` (the caller clears them: they lie in ``buffers.box``); the part and
+    depth buffers are cleared."""
+    out = _raster._edge_scan(buffers.part_ids, buffers.inverse_depth, scene.width, scene.height,
+                             buffers.box, min_gap, distance, marks, False)
+    _raster._clear(buffers.part_ids, buffers.inverse_depth, scene.width, buffers.box)
+    return out
+
+
 @dataclass(frozen=True)
 class Rendering:
     """What one render produces (all arrays of shape (height, width)).

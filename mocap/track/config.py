@@ -29,6 +29,14 @@ RECOVERY_STEP_SCALE = 2.5
 MIN_SKIN_BLOB_PIXELS = 2
 #: Kinematic jumps refined per frame: the lowest-F ones.
 JUMPS_REFINED = 2
+#: Share of the edge step's evaluations that the gradient step takes when it is on (one
+#: gradient is one render, counted as one evaluation).
+GRADIENT_SHARE = 0.1
+#: Largest move per Gauss–Newton iteration of the gradient step, relative to the initial simplex steps.
+GRADIENT_SCALE = 1.0
+#: Pixels of edge distance per unit of F in the gradient step's score (eq. 2 + this x eq. 1): the
+#: tracker's hypothesis score's ratio (50 per unit of F against 2 per pixel).
+GRADIENT_REGION_WEIGHT = 25.0
 #: Hypotheses whose joints are on average closer than this (metres) are merged, the better kept.
 MERGE_DISTANCE_M = 0.02
 #: Initial simplex step of the three root coordinates, metres (chosen with ``angle_step_deg`` on
@@ -120,6 +128,10 @@ class TrackerConfig(JsonConfig):
         Proposals of each source refined per frame: the lowest-F ones (0: the stage is off).
     proposal_evaluations : int
         Evaluations of each proposal's refinement.
+    gradient_step : bool
+        Beyond the paper (its future work): after the edge step, a bounded Gauss–Newton descent
+        of eq. (2) on its analytic gradient (:func:`mocap.optimize.minimize_edge_gauss_newton`),
+        with :data:`GRADIENT_SHARE` of the edge step's evaluations.
     """
 
     evaluations: int = 500
@@ -143,6 +155,7 @@ class TrackerConfig(JsonConfig):
     exemplars: bool = False
     proposals_refined: int = 2
     proposal_evaluations: int = 100
+    gradient_step: bool = False
 
     def __post_init__(self) -> None:
         for name in ("beam",):
@@ -154,7 +167,7 @@ class TrackerConfig(JsonConfig):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                 raise ValueError(f"{name} must be a non-negative integer, got {v!r}")
-        for name in ("recovery", "hand_reacquisition", "jumps", "offline", "blob_arms", "exemplars"):
+        for name in ("recovery", "hand_reacquisition", "jumps", "offline", "blob_arms", "exemplars", "gradient_step"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         split_budget(self.evaluations, self.split)          # validates the split
@@ -193,6 +206,19 @@ class TrackerConfig(JsonConfig):
     def steps(self) -> np.ndarray:
         """Initial simplex steps, shape (23,): metres for the root, radians for the angles."""
         return np.r_[np.full(3, POSITION_STEP_M), np.full(N_PARAMETERS - 3, math.radians(self.angle_step_deg))]
+
+
+#: Fewest evaluations the gradient step runs with: its start and one step, each rendering the
+#: edge distance and F.
+MIN_GRADIENT_EVALUATIONS = 4
+
+
+def gradient_budget(edge_evaluations: int) -> int:
+    """Evaluations the gradient step takes out of the edge step's ``edge_evaluations`` when it is
+    on: :data:`GRADIENT_SHARE` of them, or 0 (the edge step keeps them all) when that is fewer
+    than :data:`MIN_GRADIENT_EVALUATIONS`."""
+    n = int(round(GRADIENT_SHARE * max(edge_evaluations, 0)))
+    return n if n >= MIN_GRADIENT_EVALUATIONS else 0
 
 
 def split_budget(total: int, split: str) -> tuple[int, int]:

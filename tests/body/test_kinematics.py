@@ -116,3 +116,37 @@ def test_other_dimensions_change_the_skeleton():
     j1 = BodyModel.build(tall).joint_positions(zero_pose())
     j0 = MODEL.joint_positions(zero_pose())
     np.testing.assert_allclose(j1 - [0, 0, 2.0], 1.2 * (j0 - [0, 0, 2.0]), atol=1e-12)
+
+
+def test_point_jacobians_match_central_differences_of_the_kinematics():
+    from mocap.body.kinematics import point_jacobians
+
+    rng = np.random.default_rng(7)
+    mesh = MODEL.mesh
+    idx = rng.choice(len(mesh.vertices), 60, replace=False)
+    seg, local = mesh.vertex_segment[idx], mesh.vertices[idx]
+
+    def points(q):
+        t = MODEL.segment_transforms(q)
+        return np.einsum("nij,nj->ni", t[seg, :, :3], local) + t[seg, :, 3]
+
+    for _ in range(4):
+        q = random_pose(rng)
+        got = point_jacobians(q, MODEL.skeleton, seg, local)
+        h = 1e-6          # central differences: error ~h^2 * |X'''| + rounding 1e-16 / h, below 1e-8 m
+        ref = np.stack([(points(q + h * e) - points(q - h * e)) / (2 * h) for e in np.eye(23)], axis=-1)
+        np.testing.assert_allclose(got, ref, atol=1e-8)
+    with pytest.raises(ValueError):
+        point_jacobians(q, MODEL.skeleton, [8], [[0.0, 0.0, 0.0]])
+
+
+def test_edge_faces_of_the_body_mesh_and_an_open_mesh():
+    from mocap.body.mesh import edge_faces
+
+    tri = MODEL.mesh.triangles
+    edges, faces = edge_faces(tri)
+    assert len(edges) == 3 * len(tri) // 2                        # closed: every edge in two triangles
+    for (a, b), (f, g) in zip(edges[::37], faces[::37]):
+        assert f != g and {a, b} <= set(tri[f]) and {a, b} <= set(tri[g])
+    with pytest.raises(ValueError, match="not closed"):
+        edge_faces(tri[1:])

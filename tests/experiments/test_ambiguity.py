@@ -1,3 +1,4 @@
+import json
 import numpy as np
 from experiments.ambiguity import ARM_JOINTS, flip_oracle, reflect_in_depth, table
 
@@ -162,3 +163,20 @@ def test_seed_option_rejects_non_integers(capsys):
     from experiments.ambiguity import main
     assert main(["--seed", "0,x"]) == 2
     assert "--seed" in capsys.readouterr().err
+
+
+def test_summary_pools_every_frame_of_every_sequence_and_seed():
+    from experiments.ambiguity import summary
+
+    rows = [{"sequence": "a", "seed": 0, "lag1_frame_mpjpe_mm": [10.0, 20.0, 200.0], "lag1_frame_start_mpjpe_mm": [1.0] * 3,
+             "lag1_mpjpe_mm": 76.7, "lag1_ms_per_frame": 2.0, "lag1_edge_residual_px": 1.0, "lag1_region_residual": 0.1,
+             "lag1_residual_failures": 1},
+            {"sequence": "b", "seed": 29, "lag1_frame_mpjpe_mm": [30.0], "lag1_frame_start_mpjpe_mm": [5.0],
+             "lag1_mpjpe_mm": 30.0, "lag1_ms_per_frame": 6.0, "lag1_edge_residual_px": 3.0, "lag1_region_residual": 0.3,
+             "lag1_residual_failures": 2}]
+    got = summary(rows, (1, 3))
+    assert got["frames"] == 4 and got["median_mm"] == 25.0 and got["mean_mm"] == 65.0
+    assert got["start_median_mm"] == 1.0 and got["failure_rate"] == 0.25
+    assert got["ms_per_frame"] == 3.0 and got["edge_residual_px"] == 1.5 and got["residual_failures"] == 3   # frame-weighted
+    assert [p["seed"] for p in got["per_sequence"]] == [0, 29]
+    json.dumps(got)                                                   # one JSON object
