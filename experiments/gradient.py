@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments import RESULTS_DIR
-from mocap.io.jsonfile import read_json, write_json
+from mocap.files import read_json, write_json
 from mocap.synth import SEQUENCE_NAMES
 from mocap.track import TrackerConfig
 
