@@ -60,7 +60,7 @@ from experiments import RESULTS_DIR
 from experiments.units import (EXTENSIONS, PREPARED_FILE, PREPARED_FILE_PAPER, DataSpec, load_prepared, load_sequence,
                                prepare_data, prepared_file)
 from mocap.body import JOINT_NAMES
-from mocap.files import read_json, write_json
+from mocap.io.files import read_json, write_json
 from mocap.metrics import DEFAULT_FAILURE_MM, failure_rate, mpjpe, pa_mpjpe, reprojection_error, root_relative_mpjpe
 from mocap.synth import SEQUENCE_NAMES, SEQUENCES
 from mocap.track import Tracker, TrackerConfig, register, track_prepared
@@ -154,7 +154,7 @@ def cost_equivalent_rates(error_mm: np.ndarray, tracked: np.ndarray, truth: np.n
     return float((failing & region_le).mean()), float((failing & both_le).mean())
 
 
-def _benchmark_sequence(sequence: str, root: Path, seed: int, without: tuple[str, ...] = ()):
+def benchmark_sequence(sequence: str, root: Path, seed: int, without: tuple[str, ...] = ()):
     """The generated, prepared benchmark sequence (loaded sequence, prepared frames)."""
     spec = DataSpec(sequence, None, SEQUENCES[sequence].frames, seed, *SIZE)
     folder = prepare_data(spec, str(root), without)
@@ -189,7 +189,7 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     :func:`experiments.keypoints.oracle_keypoints` with that noise (seeded by ``seed``)."""
     from experiments.keypoints import oracle_keypoints
 
-    loaded, prepared = _benchmark_sequence(sequence, root, seed, without)
+    loaded, prepared = benchmark_sequence(sequence, root, seed, without)
     camera = loaded.calibration.camera
     tracker = Tracker(loaded.model, camera, config, loaded.calibration.initial_pose)
     truth_joints = loaded.ground_truth.joints
@@ -299,7 +299,7 @@ def register_from_truth(prepared, model, camera, true_poses: np.ndarray, config:
 def measure_from_truth(sequence: str, config: TrackerConfig, root: Path, seed: int = 0,
                        lags: tuple[int, ...] = (1, 3), without: tuple[str, ...] = ()) -> dict:
     """Registration error of one benchmark sequence from true start poses (see the module)."""
-    loaded, prepared = _benchmark_sequence(sequence, root, seed, without)
+    loaded, prepared = benchmark_sequence(sequence, root, seed, without)
     truth_poses, truth_joints = loaded.ground_truth.poses, loaded.ground_truth.joints
     row = {"sequence": sequence, "frames": len(prepared)}
     for lag in lags:

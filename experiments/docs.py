@@ -25,7 +25,7 @@ import numpy as np
 
 from experiments import EXPERIMENTS_DIR
 from experiments.tables import PAPER_TABLE2
-from mocap.files import read_json, write_json, write_text_atomic
+from mocap.io.files import read_json, write_json, write_text_atomic
 
 #: Where the page goes by default.
 DOCS_RESULTS = EXPERIMENTS_DIR.parent / "docs" / "results.md"

@@ -23,7 +23,7 @@ import numpy as np
 from experiments import EXPERIMENTS_DIR
 from mocap.body.pose import PARAMETER_INDEX
 from mocap.body.prior import PRIOR_FILE, PRIOR_INDEX, PosePrior
-from mocap.files import write_json
+from mocap.io.files import write_json
 
 #: Default training folder: ``../shared/data/mocap/train`` beside the repository.
 TRAIN_DIR = EXPERIMENTS_DIR.parent.parent / "shared" / "data" / "mocap" / "train"

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments import RESULTS_DIR
-from mocap.files import read_json, write_json
+from mocap.io.files import read_json, write_json
 from mocap.synth import SEQUENCE_NAMES
 from mocap.track import TrackerConfig
 
@@ -59,12 +59,12 @@ def truth_rows(config: TrackerConfig, seed: int, sequences, out: Path) -> list[d
 def truth_residuals(seed: int, sequences, out: Path) -> dict[str, float]:
     """Mean F (eq. 1) and edge distance (eq. 2, pixels) of the *true* poses, frames 1.. of each
     sequence, with the tracker's own costs: what a perfect registration would leave."""
-    from experiments.ambiguity import _benchmark_sequence
+    from experiments.ambiguity import benchmark_sequence
     from mocap.track import Tracker
 
     region, edge = [], []
     for name in sequences:
-        loaded, prepared = _benchmark_sequence(name, out, seed)
+        loaded, prepared = benchmark_sequence(name, out, seed)
         poses = loaded.ground_truth.poses
         tracker = Tracker(loaded.model, loaded.calibration.camera, TrackerConfig(), poses[0])
         for f in range(1, min(len(prepared), len(poses))):

@@ -25,7 +25,7 @@ from experiments.results import Results, short_name
 from experiments.tables import (PAPER_TABLE1, TABLE1_HEADER, TABLE2_HEADER, markdown, table1_cells, table1_rows, table2_cells,
                                 table2_rows)
 from experiments.units import clip_name
-from mocap.files import write_text_atomic
+from mocap.io.files import write_text_atomic
 
 
 def _f(v, digits: int = 2) -> str:

@@ -35,7 +35,7 @@ from experiments.config import SweepConfig
 from experiments.plan import Plan, find_clips, make_plan
 from experiments.units import (PREPARED_FILE, data_folder, measure_table2, prepare_data, run_unit,
                                save_unit)
-from mocap.files import write_text_atomic
+from mocap.io.files import write_text_atomic
 
 #: Names of the result files at the top of a results folder.
 CONFIG_FILE, SWEEP_FILE, TABLE2_FILE = "config.json", "sweep.json", "table2.json"

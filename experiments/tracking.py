@@ -25,7 +25,7 @@ from types import MappingProxyType
 import numpy as np
 
 from experiments import RESULTS_DIR
-from mocap.files import read_json, write_json
+from mocap.io.files import read_json, write_json
 from mocap.metrics import DEFAULT_FAILURE_MM
 from mocap.synth import SEQUENCE_NAMES
 from mocap.track import TrackerConfig

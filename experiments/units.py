@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap.files import write_bytes_atomic
+from mocap.io.files import write_bytes_atomic
 from mocap.track import EDGE_STARTS
 
 #: Folder names below the results folder.

@@ -100,13 +100,13 @@ class JsonConfig:
 
     def to_json(self, path: str | Path) -> None:
         """Write as JSON, atomically."""
-        from mocap.files import write_json
+        from mocap.io.files import write_json
         write_json(path, self.to_dict())
 
     @classmethod
     def from_json(cls: type[T], path: str | Path) -> T:
         """Read a file written by :meth:`to_json` (FileNotFoundError, ValueError)."""
-        from mocap.files import read_json
+        from mocap.io.files import read_json
         try:
             return cls.from_dict(read_json(path))
         except ValueError as exc:

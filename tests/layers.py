@@ -2,7 +2,7 @@
 
 Layers, low to high; a module may import its own layer and below:
 
-0 base    ``mocap/_*.py``, ``mocap/labels.py``, ``mocap/config.py``, ``mocap/files.py``
+0 base    ``mocap/_*.py``, ``mocap/labels.py``, ``mocap/config.py``, ``mocap/io/files.py``
 1 body    ``mocap/body``
 2 io      ``mocap/io`` (files of frames, poses, keypoints: the body model's names, nothing above)
 3 render  ``mocap/render``
@@ -23,7 +23,7 @@ from pathlib import Path
 
 LAYER_NAMES = ("base", "body", "io", "render", "image", "fit", "track", "run", "face")
 _TOP = {"experiments", "notebooks", "docs"}
-_BY_SUBPACKAGE = {"labels": 0, "config": 0, "files": 0, "body": 1, "io": 2, "render": 3, "imaging": 4, "cost": 4,
+_BY_SUBPACKAGE = {"labels": 0, "config": 0, "body": 1, "io": 2, "render": 3, "imaging": 4, "cost": 4,
                   "metrics": 4, "optimize": 5, "run": 7, "bench": 7, "commands": 8, "cli": 8, "__main__": 8}
 #: Layer of every other module of the package.
 _DEFAULT = 6
@@ -38,6 +38,8 @@ def layer(module: str) -> int:
         return -1
     sub = parts[1]
     if sub.startswith("_") and sub != "__main__":
+        return 0
+    if parts[1:3] == ["io", "files"]:        # atomic writes and JSON files: the bottom of the package
         return 0
     return _BY_SUBPACKAGE.get(sub, _DEFAULT)
 

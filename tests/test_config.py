@@ -13,7 +13,7 @@ from experiments.config import SweepConfig
 from mocap.calibrate import Calibration
 from mocap.cli import main
 from mocap.imaging import ImagingConfig
-from mocap.files import write_text_atomic
+from mocap.io.files import write_text_atomic
 from mocap.track import TrackerConfig
 
 from tests.conftest import REPO_ROOT

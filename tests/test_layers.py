@@ -32,7 +32,7 @@ CLEAN = {
 
 
 def test_layers_by_module_name():
-    assert [layer(m) for m in ("mocap._numba", "mocap.files", "mocap.body.pose", "mocap.io.video",
+    assert [layer(m) for m in ("mocap._numba", "mocap.io.files", "mocap.body.pose", "mocap.io.video",
                                "mocap.render.camera", "mocap.imaging.edges", "mocap.cost", "mocap.optimize",
                                "mocap.track", "mocap.synth.sequence", "mocap.calibrate", "mocap.run.loop",
                                "mocap.bench", "mocap.commands.demo", "experiments.sweep",

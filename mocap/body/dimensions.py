@@ -175,11 +175,11 @@ class BodyDimensions:
 
     def to_json(self, path: str | Path) -> None:
         """Save as JSON (written atomically)."""
-        from mocap.files import write_json
+        from mocap.io.files import write_json
         write_json(path, self.to_dict())
 
     @classmethod
     def from_json(cls, path: str | Path) -> "BodyDimensions":
         """Load from JSON written by :meth:`to_json`."""
-        from mocap.files import read_json
+        from mocap.io.files import read_json
         return cls.from_dict(read_json(path))

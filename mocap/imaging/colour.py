@@ -26,7 +26,7 @@ from skimage import color, data, feature, transform
 from mocap._numba import jit
 from mocap.imaging._validate import Box, check_box, check_mask, check_rgb, check_same_size
 from mocap.imaging.config import DEFAULT_COLOUR_THRESHOLD, ImagingConfig
-from mocap.files import read_json, write_json
+from mocap.io.files import read_json, write_json
 from mocap.labels import CLASS_MERGES_INTO, MAX_CLASSES, UNKNOWN
 
 __all__ = ["ColourModel", "learn_colour_model", "detect_face", "rgb_to_hsv", "skin_box_of_face",

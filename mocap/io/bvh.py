@@ -56,7 +56,7 @@ from scipy.spatial.transform import Rotation
 from mocap.body.dimensions import PART_NAMES, BodyDimensions
 from mocap.body.pose import N_PARAMETERS, PARAMETER_INDEX, check_pose
 from mocap.body.skeleton import SEGMENT_NAMES, SEGMENT_PARENTS, part_spans, segment_offsets
-from mocap.files import write_text_atomic
+from mocap.io.files import write_text_atomic
 
 __all__ = ["CAMERA_TO_BVH", "CHANNEL_NAMES", "CONVENTIONS", "JOINT_MAPS", "Bvh", "BvhJoint", "pose_channels",
            "read_bvh", "read_pose_bvh", "write_bvh"]

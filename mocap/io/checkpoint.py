@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap.files import write_bytes_atomic
+from mocap.io.files import write_bytes_atomic
 
 __all__ = ["Checkpoint", "write_checkpoint", "read_checkpoint", "truncate_journal"]
 

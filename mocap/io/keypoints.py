@@ -25,7 +25,7 @@ from typing import Mapping, Protocol
 import numpy as np
 
 from mocap.body.skeleton import JOINT_NAMES
-from mocap.files import write_text_atomic
+from mocap.io.files import write_text_atomic
 
 #: Header of the keypoint file.
 KEYPOINT_COLUMNS: tuple[str, ...] = ("frame", "joint", "u", "v", "confidence")

@@ -16,7 +16,7 @@ import numpy as np
 
 from mocap.body.pose import N_PARAMETERS, PARAMETER_NAMES
 from mocap.body.skeleton import JOINT_NAMES
-from mocap.files import write_text_atomic
+from mocap.io.files import write_text_atomic
 
 #: Joint column names in order.
 JOINT_COLUMNS: tuple[str, ...] = tuple(f"{j}_{a}" for j in JOINT_NAMES for a in "xyz")

@@ -19,7 +19,7 @@ from mocap.body.dimensions import BodyDimensions
 from mocap.body.model import BodyModel
 from mocap.body.pose import JOINT_LIMITS, PARAMETER_NAMES, check_pose, neutral_pose, pose_from_dict, pose_to_dict
 from mocap.body.skeleton import DEFAULT_PART_CLASS, MESH_PART_NAMES
-from mocap.files import read_json, write_json
+from mocap.io.files import read_json, write_json
 from mocap.labels import DEFAULT_CLASS_NAMES
 from mocap.render.camera import Camera
 

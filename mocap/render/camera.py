@@ -141,13 +141,13 @@ class Camera:
 
     def to_json(self, path: str | Path) -> None:
         """Save as JSON (atomically)."""
-        from mocap.files import write_json
+        from mocap.io.files import write_json
         write_json(path, self.to_dict())
 
     @classmethod
     def from_json(cls, path: str | Path) -> "Camera":
         """Load a file written by :meth:`to_json` (FileNotFoundError, ValueError)."""
-        from mocap.files import read_json
+        from mocap.io.files import read_json
         return cls.from_dict(read_json(path))
 
     def as_array(self) -> np.ndarray:

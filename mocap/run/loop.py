@@ -28,7 +28,7 @@ import mocap.run.journal as journalling
 from mocap._progress import ProgressBar
 from mocap.body import BodyModel
 from mocap.calibrate import Calibration
-from mocap.files import write_text_atomic
+from mocap.io.files import write_text_atomic
 from mocap.imaging import ColourModel, PreparedFrame, prepare_frame
 from mocap.imaging.resample import downscale
 from mocap.imaging.scene import SceneColours

@@ -37,7 +37,7 @@ import uuid
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from mocap.files import write_bytes_atomic, write_text_atomic
+from mocap.io.files import write_bytes_atomic, write_text_atomic
 from mocap.run.options import OwnVideoOptions
 
 __all__ = ["PER_VIDEO_OPTIONS", "ManySummary", "SUMMARY_COLUMNS", "expand_inputs", "track_input", "track_many",
@@ -210,7 +210,7 @@ def _clear_run(out_dir: Path) -> None:
 
 def _check_options(out: Path, record: dict, overwrite: bool) -> None:
     """Refuse a folder written with other options (unless ``overwrite``); then record these."""
-    from mocap.files import read_json, write_json
+    from mocap.io.files import read_json, write_json
 
     path = out / OPTIONS_FILE
     if path.is_file() and not overwrite:

@@ -21,7 +21,7 @@ import numpy as np
 
 from mocap.body.skeleton import JOINT_NAMES
 from mocap.calibrate import Calibration
-from mocap.files import write_bytes_atomic, write_text_atomic
+from mocap.io.files import write_bytes_atomic, write_text_atomic
 from mocap.io.pose_table import PoseTable
 from mocap.io.video_check import format_frames
 from mocap.render.camera import Camera

@@ -22,7 +22,7 @@ import imageio.v3 as iio
 import numpy as np
 from tqdm import tqdm
 
-from mocap.files import read_json, write_bytes_atomic, write_json
+from mocap.io.files import read_json, write_bytes_atomic, write_json
 from mocap.imaging import ColourModel, ImagingConfig, prepare_frame
 from mocap.imaging.resample import downscale, working_factor
 from mocap.imaging.visual import colour_distance, colour_labels, label_palette, overlay_edges, tile

@@ -28,7 +28,7 @@ from tqdm import tqdm
 import mocap
 from mocap.body.model import BodyModel
 from mocap.body.pose import JOINT_LIMITS
-from mocap.files import write_bytes_atomic, write_text_atomic
+from mocap.io.files import write_bytes_atomic, write_text_atomic
 from mocap.io.pose_table import PoseTable
 from mocap.labels import DEFAULT_CLASS_NAMES
 from mocap.render.calibration import Calibration

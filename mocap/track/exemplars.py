@@ -220,7 +220,7 @@ class ExemplarSource:
 
     def save(self, path: str | Path) -> str:
         """Write the database (compressed ``.npz``, atomically); returns its checksum."""
-        from mocap.files import write_bytes_atomic
+        from mocap.io.files import write_bytes_atomic
 
         meta = {"format": EXEMPLAR_FORMAT, "attribution": self.attribution, "provenance": self.provenance,
                 "sha256": self.checksum}

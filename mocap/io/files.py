@@ -1,7 +1,7 @@
 """Files that are whole or absent: atomic writes (a file is either the old one or the complete
 new one, never half) and the toolkit's JSON files with clear errors.
 
-The bottom of the package (docs/design.md section 1): every layer may use it, from the body
+The bottom of the package (docs/design.md section 1; its one module in ``io/``): every layer may use it, from the body
 model's dimension files up to the run's outputs.
 """
 from __future__ import annotations
