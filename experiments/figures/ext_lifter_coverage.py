@@ -57,6 +57,6 @@ def main(results: dict, out: str | Path, name: str = "ext_lifter_coverage") -> l
             ax.set_xlabel("hypotheses M")
             ax.set_ylabel("frames within 100 mm (%)")
             ax.set_ylim(0.0, 100.0)
-            if ax.lines:
+            if ax.get_legend_handles_labels()[1]:
                 ax.legend(fontsize=6, loc="lower right")
         return save(fig, out, name)
