@@ -18,7 +18,7 @@ from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX, neutral_pose, within_
 from mocap.body.skeleton import JOINT_INDEX, JOINT_NAMES
 from mocap.render.camera import Camera
 from mocap.synth.actor import random_dimensions
-from mocap.track.lifter import (DENSITY_SIGMA_M, MIN_VISIBLE, N_FEATURES, Lifter, lifter_features,
+from mocap.track.lifter import (DENSITY_SIGMA_M, MIN_VISIBLE, N_FEATURES, Lifter, fit_roots, lifter_features,
                                 relative_joints)
 
 torch = pytest.importorskip("torch", reason="the lifter's training tests need the extra 'fit' (torch==2.13.0)")
@@ -123,6 +123,24 @@ def test_lift_gives_poses_inside_the_limits_on_the_body():
         assert (np.diff(lifted.probabilities) <= 0).all()
         np.testing.assert_allclose(lifted.joints, relative_joints([model.joint_positions(p) for p in lifted.poses]),
                                    atol=1e-12)
+
+
+def test_fit_roots_recovers_the_root_and_minimises_the_pixel_error():
+    """Exact keypoints: the true root (analytic); noisy ones: the minimum scipy's least squares finds."""
+    from scipy.optimize import least_squares
+
+    rng = np.random.default_rng(7)
+    camera, model = Camera.default(160, 120), BodyModel.build()
+    q = _random_poses(rng, 3)
+    roots = np.array([(0.1, 0.5, 1.6), (-0.3, 0.4, 2.4), (0.2, 0.7, 3.5)])
+    q[:, :3] = 0.0
+    at_zero = np.stack([model.joint_positions(p) for p in q])
+    for joints, root in zip(at_zero, roots):
+        uv = camera.project(joints + root)
+        np.testing.assert_allclose(fit_roots(joints[None], uv, camera)[0], root, atol=1e-9)
+        noisy = uv + rng.normal(0.0, 2.0, uv.shape)
+        expect = least_squares(lambda t: (camera.project(joints + t) - noisy).ravel(), root).x
+        np.testing.assert_allclose(fit_roots(joints[None], noisy, camera)[0], expect, atol=1e-6)
 
 
 def test_bad_keypoints_are_refused_clearly():
