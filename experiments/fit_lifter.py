@@ -464,7 +464,7 @@ def main(argv=None) -> int:
     if args.out.resolve() == SHIPPED.resolve():
         import os
 
-        from mocap.io.jsonfile import write_json
+        from mocap.io.files import write_json
 
         write_json(RECORD, {"sha256": checksum, "file": f"mocap/track/{LIFTER_FILE}",
                             "load_average_1_5_15": [round(v, 2) for v in os.getloadavg()],

@@ -196,7 +196,7 @@ def loso_measure(train_dir: Path, seed: int = 0, hidden=LOSO_HIDDEN, steps: int 
 
 def main(argv=None) -> int:
     from experiments.fit_pose_prior import TRAIN_DIR
-    from mocap.io.jsonfile import write_json
+    from mocap.io.files import write_json
     from mocap.track.lifter import Lifter
 
     p = argparse.ArgumentParser(prog="python -m experiments.lifter_coverage", description=__doc__.split("\n\n")[0])

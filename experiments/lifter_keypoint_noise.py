@@ -108,7 +108,7 @@ def measure(train_dir: Path, work: Path, progress: bool = True) -> dict:
 
 
 def main(argv=None) -> int:
-    from mocap.io.jsonfile import write_json
+    from mocap.io.files import write_json
 
     p = argparse.ArgumentParser(prog="python -m experiments.lifter_keypoint_noise",
                                 description=__doc__.split("\n\n")[0])

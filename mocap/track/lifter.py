@@ -334,7 +334,7 @@ class Lifter:
     def save(self, path: str | Path) -> str:
         """Write the weights (float16, compressed ``.npz``, atomically) and the metadata; returns
         the checksum of the stored arrays."""
-        from mocap.io.atomic import write_bytes_atomic
+        from mocap.io.files import write_bytes_atomic
 
         stored = [np.asarray(a, dtype=np.float16) for a in self.weights]
         checksum = lifter_checksum(stored)
