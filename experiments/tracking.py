@@ -48,14 +48,6 @@ CONFIGS = MappingProxyType({
     "no-prior": {"prior_weight": 0.0},
     "no-jumps": {"jumps": False},
     "two-class": {},
-    "blobs": {"blob_arms": True},
-    "exemplars": {"exemplars": True},
-    "both": {"blob_arms": True, "exemplars": True},
-    # the proposal stage's budget: proposals refined per source and evaluations per refinement
-    "both-P1": {"blob_arms": True, "exemplars": True, "proposals_refined": 1},
-    "both-P4": {"blob_arms": True, "exemplars": True, "proposals_refined": 4},
-    "both-E50": {"blob_arms": True, "exemplars": True, "proposal_evaluations": 50},
-    "both-E200": {"blob_arms": True, "exemplars": True, "proposal_evaluations": 200},
     # the default tracker given the oracle's 2D keypoints (ORACLE_KEYPOINTS)
     "oracle-keypoints": {},
 })

@@ -25,7 +25,7 @@ EDGE_STARTS = ("region_simplex", "fresh")
 FRESH_STEP_SCALE = 3.0
 #: Size of the recovery simplex (from the last good pose) relative to the initial steps.
 RECOVERY_STEP_SCALE = 2.5
-#: Skin regions smaller than this (pixels) are left out by hand re-acquisition and the blob source.
+#: Skin regions smaller than this (pixels) are left out by hand re-acquisition.
 MIN_SKIN_BLOB_PIXELS = 2
 #: Kinematic jumps refined per frame: the lowest-F ones.
 JUMPS_REFINED = 2
@@ -107,12 +107,6 @@ class TrackerConfig(JsonConfig):
     motion_cap : float
         ...at most this much (a truncated quadratic): a jump between branches or to a
         re-acquired arm costs a fixed price that a clearly better fit pays.
-    blob_arms : bool
-        Proposal stage: both depth branches of the arm that reaches each hand blob
-        (:class:`mocap.track.proposals.BlobArmSource`).
-    exemplars : bool
-        Proposal stage: the nearest exemplars of the shipped set rendered from motion capture
-        (:mod:`mocap.track.exemplars`), and their half turns.
     proposals_refined : int
         Proposals of each source refined per frame: the lowest-F ones (0: the stage is off).
     proposal_evaluations : int
@@ -143,8 +137,6 @@ class TrackerConfig(JsonConfig):
     prior_weight: float = 0.05
     motion_sigma_m: float = 0.05
     motion_cap: float = 8.0
-    blob_arms: bool = False
-    exemplars: bool = False
     proposals_refined: int = 2
     proposal_evaluations: int = 100
 
@@ -158,7 +150,7 @@ class TrackerConfig(JsonConfig):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                 raise ValueError(f"{name} must be a non-negative integer, got {v!r}")
-        for name in ("recovery", "hand_reacquisition", "jumps", "offline", "blob_arms", "exemplars"):
+        for name in ("recovery", "hand_reacquisition", "jumps", "offline"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         split_budget(self.evaluations, self.split)          # validates the split
@@ -190,7 +182,7 @@ class TrackerConfig(JsonConfig):
             unknown names raise TypeError.
         """
         return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
-                           prior_weight=0.0, keypoint_weight=0.0, blob_arms=False, exemplars=False), **changes)
+                           prior_weight=0.0, keypoint_weight=0.0), **changes)
 
     def keypoint_step_weights(self) -> tuple[float, float]:
         """Weight of the keypoint distance in the region step (units of F per pixel) and in the

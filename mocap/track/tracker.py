@@ -5,8 +5,8 @@ registration (:func:`~mocap.track.registration.register`; the leading one with t
 budget, the others with ``hypothesis_evaluations``). Proposals compete with them: a recovery
 from the last good pose when the leader fails, hand re-acquisition when a skin region is left
 unexplained, the leader's kinematic jumps (:mod:`mocap.body.jumps`), and the proposal stage's
-poses read from the current image (:class:`~mocap.track.proposals.ProposalSource`: hand blobs,
-exemplars, keypoints), each refined by a short registration. Every candidate gets a **unary score** (``region_weight * F + edge_weight * edge
+poses read from the current image (:class:`~mocap.track.proposals.ProposalSource`: 2D
+keypoints), each refined by a short registration. Every candidate gets a **unary score** (``region_weight * F + edge_weight * edge
 distance + prior_weight * pose-prior energy``, plus ``keypoint_weight * keypoint distance`` on
 frames with 2D keypoints, which every registration of the frame then also adds); between consecutive frames a **motion term**
 (half the mean squared joint displacement over ``motion_sigma_m**2``) links them. The forward
@@ -42,7 +42,7 @@ from mocap.render.camera import Camera
 from mocap.track.config import (JUMPS_REFINED, MERGE_DISTANCE_M, RECOVERY_STEP_SCALE,
                                 TrackerConfig)
 from mocap.track.decode import backtrack, viterbi_step
-from mocap.track.proposals import (BlobArmSource, KeypointArmSource, ProposalContext, ProposalSource, jump_proposals,
+from mocap.track.proposals import (KeypointArmSource, ProposalContext, ProposalSource, jump_proposals,
                                    reach_proposals, unexplained_hands)
 from mocap.track.registration import Registration, register
 
@@ -375,17 +375,11 @@ def _result(frame: _Frame, k: int) -> FrameResult:
 
 
 def proposal_sources(config: TrackerConfig) -> list[ProposalSource]:
-    """The proposal stage's sources that ``config`` switches on (``blob_arms``, ``exemplars``; the
-    keypoint source with ``keypoint_weight`` > 0: it proposes nothing on frames without keypoints)."""
+    """The proposal stage's sources that ``config`` switches on (the keypoint source with
+    ``keypoint_weight`` > 0: it proposes nothing on frames without keypoints)."""
     sources: list[ProposalSource] = []
     if config.keypoint_weight > 0:
         sources.append(KeypointArmSource(min_offset_px=config.reacquisition_distance_px))
-    if config.blob_arms:
-        sources.append(BlobArmSource())
-    if config.exemplars:
-        from mocap.track.exemplars import ExemplarSource      # loads the shipped exemplar set
-
-        sources.append(ExemplarSource.default())
     return sources
 
 
