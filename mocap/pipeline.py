@@ -220,8 +220,8 @@ def track_video(source, setup: RunSetup, out_dir: str | Path, config: TrackerCon
     if setup.record is not None:
         settings["own_video"] = setup.record
     settings["start_frame"] = start_frame
-    if keypoints is not None:
-        settings["keypoints"] = getattr(keypoints, "description", type(keypoints).__name__)
+    settings["keypoints"] = "none" if keypoints is None else getattr(keypoints, "description",
+                                                                     type(keypoints).__name__)
     to_working = (camera.width / frames_in.width, camera.height / frames_in.height)
     out_dir.mkdir(parents=True, exist_ok=True)
     journal, run_json = out_dir / "poses.csv", out_dir / "run.json"

@@ -22,3 +22,15 @@ def shared_data() -> Path:
     if os.environ.get("CI"):
         pytest.fail(reason)
     pytest.skip(reason)
+
+
+@pytest.fixture(autouse=True)
+def bare_install_keypoints(request, monkeypatch):
+    """Every test but those marked ``mediapipe`` sees ``--keypoints auto`` (the commands' default)
+    as on an install without the optional extra ``keypoints``: no MediaPipe run unless asked.
+
+    (Processes a test starts are not reached: they get ``--keypoints none``.)"""
+    if request.node.get_closest_marker("mediapipe") is None:
+        from mocap.io import mediapipe_keypoints
+
+        monkeypatch.setattr(mediapipe_keypoints, "available", lambda: False)

@@ -8,8 +8,9 @@ when the first frame supports them), the edge mask (white on black) and the trun
 distance map (viridis: dark on edges), as PNG in ``labels/``, ``edges/`` and ``distance/``,
 plus ``segment.mp4`` (frame | labels / edges | distance), the colour model
 (``colour_model.json``, learned on the first frame that shows the person) and the parameters
-(``imaging.json``) it used. With ``--keypoints mediapipe|FILE`` the 2D keypoints the tracker
-would get are drawn on the frame panel of ``segment.mp4`` (yellow dots, working pixels). An interrupted run resumes: the same command keeps the frames
+(``imaging.json``) it used. With keypoints (``--keypoints auto``, the default: MediaPipe Pose
+where the optional extra ``keypoints`` is installed; or ``mediapipe`` or a FILE; ``none``) the
+2D keypoints the tracker would get are drawn on the frame panel of ``segment.mp4`` (yellow dots, working pixels). An interrupted run resumes: the same command keeps the frames
 already written (``segment.json`` holds the settings they were made with).
 """
 from __future__ import annotations
@@ -24,7 +25,7 @@ import imageio.v3 as iio
 import numpy as np
 from tqdm import tqdm
 
-from mocap.commands._common import add_background_options
+from mocap.commands._common import add_background_options, add_keypoints_option, keypoints_line
 from mocap.imaging import ColourModel, ImagingConfig, learn_colour_model, median_background, \
     prepare_frame
 from mocap.imaging.visual import colour_distance, colour_labels, label_palette, overlay_edges, tile
@@ -69,9 +70,7 @@ def add_parser(subparsers) -> None:
                         "(default: as track, near 160 pixels)")
     p.add_argument("--allow-damaged", action="store_true",
                    help="segment a video whose frames do not all decode instead of stopping")
-    p.add_argument("--keypoints", default=None, metavar="mediapipe|FILE",
-                   help="draw the 2D keypoints the tracker would get: 'mediapipe' (optional extra 'keypoints') or "
-                        "a CSV frame,joint,u,v,confidence (docs/design.md section 4)")
+    add_keypoints_option(p, "the tracker would get, drawn")
     p.add_argument("--start", type=int, default=0, metavar="N", help="first frame (default 0)")
     p.add_argument("--max-frames", type=int, metavar="N", help="process at most N frames")
     p.set_defaults(run=run)
@@ -111,7 +110,15 @@ def _settings(args: argparse.Namespace, config: ImagingConfig, stop: int, factor
             "hair_box": list(args.hair_box) if args.hair_box else None,
             "lower_body_box": list(args.lower_body_box) if args.lower_body_box else None,
             "start": args.start, "stop": stop, "working_factor": factor, "imaging": config.to_dict(),
-            "keypoints": args.keypoints if args.keypoints in (None, "mediapipe") else path(args.keypoints)}
+            "keypoints": _keypoints_setting(args.keypoints, path)}
+
+
+def _keypoints_setting(name, path) -> str | None:
+    """What ``--keypoints NAME`` gave (``auto`` resolved): ``mediapipe``, a file's absolute path or None."""
+    from mocap.own_video import resolve_keypoints
+
+    resolved = resolve_keypoints(None if name is None else str(name))[0]
+    return resolved if resolved in (None, "mediapipe") else path(resolved)
 
 
 def _working_box(box, factor: int):
@@ -158,6 +165,7 @@ def _segment(args: argparse.Namespace, source, factor: int, out: Path, config: I
     from mocap.own_video import keypoint_source
 
     keypoints = keypoint_source(args.keypoints)            # a bad keypoint file stops before anything is written
+    print(keypoints_line(args.keypoints))
 
     settings = _settings(args, config, stop, factor)
     settings_file = out / "segment.json"

@@ -58,6 +58,11 @@ class TrackerConfig(JsonConfig):
         A frame with F above this is a region failure (F is in [0, 1]).
     edge_failure_threshold_px : float, pixels
         A frame with mean edge distance above this is an edge failure.
+    keypoint_failure_threshold_px : float, pixels
+        On a frame with 2D keypoints the failure flag reads the keypoint distance D_k: the frame
+        failed when D_k is above this, or when F and the edge distance are both above their
+        thresholds (a silhouette neither explains). Without keypoints F or the edge distance
+        alone flags it, as in the paper.
     recovery : bool
         Beyond the paper: retry a failed frame from the last good pose with a wider simplex.
     mesh_resolution : int
@@ -121,6 +126,7 @@ class TrackerConfig(JsonConfig):
     ftol: float = 1e-3
     region_failure_threshold: float = 0.45
     edge_failure_threshold_px: float = 4.0
+    keypoint_failure_threshold_px: float = 6.0
     recovery: bool = True
     mesh_resolution: int = 0
     hand_reacquisition: bool = True
@@ -157,7 +163,8 @@ class TrackerConfig(JsonConfig):
         if self.edge_start not in EDGE_STARTS:
             raise ValueError(f"edge_start must be one of {EDGE_STARTS}, got {self.edge_start!r}")
         for name in ("position_step_m", "angle_step_deg",
-                     "edge_failure_threshold_px", "region_failure_threshold", "reacquisition_distance_px",
+                     "edge_failure_threshold_px", "keypoint_failure_threshold_px", "region_failure_threshold",
+                     "reacquisition_distance_px",
                      "motion_sigma_m", "motion_cap"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:

@@ -9,6 +9,7 @@ the weights of :meth:`~mocap.track.config.TrackerConfig.keypoint_step_weights`.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,10 +53,17 @@ class Registration:
         return sum(r.evaluations for r in (self.region, self.edge) if r is not None)
 
     def failed(self, config: TrackerConfig) -> bool:
-        """A residual peak: F above its threshold, or (when the edge step ran) the edge distance."""
-        edge_checked = self.edge is not None and self.edge.evaluations > 0
-        return bool(self.region_residual > config.region_failure_threshold
-                    or (edge_checked and self.edge_residual > config.edge_failure_threshold_px))
+        """A residual peak. Without keypoints: F above its threshold, or (when the edge step ran)
+        the edge distance. With keypoints: the keypoint distance above
+        ``keypoint_failure_threshold_px``, or F and the edge distance at the pose (whether or not
+        the edge step ran) both above theirs: a segmentation that gets the colours wrong no
+        longer fails a pose that the keypoints and the edges place."""
+        region_peak = self.region_residual > config.region_failure_threshold
+        if math.isnan(self.keypoint_residual):
+            edge_checked = self.edge is not None and self.edge.evaluations > 0
+            return bool(region_peak or (edge_checked and self.edge_residual > config.edge_failure_threshold_px))
+        return bool(self.keypoint_residual > config.keypoint_failure_threshold_px
+                    or (region_peak and self.edge_residual > config.edge_failure_threshold_px))
 
 
 def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: TrackerConfig, *,
