@@ -10,7 +10,8 @@ and the same three of the paper's model (two classes, no hair region, no lower b
 ``bench`` extra is installed), ``prepare_frame`` and its parts ``prepare_background``,
 ``prepare_colour``, ``prepare_edges``, ``prepare_distance``, ``frame_100`` / ``frame_500`` (a
 whole frame of the paper's method, image side included, at that many cost evaluations),
-``frame_beam`` (a whole frame of the default tracker), and
+``frame_beam`` (a whole frame of the default tracker), ``lifter`` (one frame's 2D keypoints lifted
+to the K hypotheses of :mod:`mocap.track.lifter`, group ``lifter``), and
 ``video_640x480`` (group ``video``): the whole own-video path of ``python -m mocap track`` on a
 640x480 clip — decode, reduction to the 160x120 working resolution, image side, registration
 at the default budget and every output (journal, BVH, residual plot, overlay video) — as wall
@@ -218,6 +219,24 @@ def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, mi
     return rows
 
 
+def lifter_rows(size: tuple[int, int], *, min_runs: int, min_seconds: float) -> list[BenchRow]:
+    """Row ``lifter``: one frame's :meth:`mocap.track.lifter.Lifter.lift` with the shipped weights (the
+    features, the network, the forward kinematics and the root of its K hypotheses), on the projected
+    joints of varied poses before the default camera at ``size``, every joint visible."""
+    from mocap.body.model import BodyModel
+    from mocap.render import Camera
+    from mocap.track.lifter import Lifter
+
+    lifter, model, camera = Lifter.load(), BodyModel.build(), Camera.default(*size)
+    uv = [camera.project(model.joint_positions(q)) for q in _poses(64)]
+    visible = np.ones(len(uv[0]), dtype=bool)
+
+    def call(i):
+        lifter.lift(uv[i % len(uv)], visible, camera, model)
+
+    return [_row("lifter", size, 0, time_calls(call, min_runs=min_runs, min_seconds=min_seconds))]
+
+
 def video_rows(*, frames: int, cpus: set[int] | None = None) -> list[BenchRow]:
     """Row ``video_640x480``: :func:`mocap.own_video.track_own_video` (what ``python -m mocap track``
     calls) end to end on a 640x480 MP4 (the synthetic
@@ -334,7 +353,7 @@ def format_table(rows: Sequence[BenchRow], notes: Sequence[str]) -> str:
 
 
 #: Groups of stages, in the order a full run measures them.
-GROUPS: tuple[str, ...] = ("render", "imaging", "frame", "video")
+GROUPS: tuple[str, ...] = ("render", "imaging", "frame", "lifter", "video")
 
 
 def run_benchmark(*, quick: bool = False, with_llvmpipe: bool = True, stages: Sequence[str] = GROUPS,
@@ -357,6 +376,7 @@ def run_benchmark(*, quick: bool = False, with_llvmpipe: bool = True, stages: Se
               "imaging": lambda: (imaging_rows(TABLE2_SIZES, min_runs=min_runs // 3, min_seconds=min_seconds), []),
               "frame": lambda: (frame_rows((160, 120), (100, 500), frames=12 if quick else 50,
                                            min_runs=12 if quick else 100), []),
+              "lifter": lambda: (lifter_rows((160, 120), min_runs=min_runs, min_seconds=min_seconds), []),
               "video": lambda: (video_rows(frames=12 if quick else 100, cpus=cpus if pinned else None), [])}
     for name in tqdm(stages, desc="bench", unit="group", disable=not progress, file=sys.stderr):
         if name not in groups:
