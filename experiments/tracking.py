@@ -48,14 +48,19 @@ CONFIGS = MappingProxyType({
     "no-prior": {"prior_weight": 0.0},
     "no-jumps": {"jumps": False},
     "two-class": {},
-    # the default tracker given the oracle's 2D keypoints (ORACLE_KEYPOINTS)
-    "oracle-keypoints": {},
+    # given the oracle's 2D keypoints (ORACLE_KEYPOINTS): the keypoint cue with the arms' inverse
+    # kinematics as its proposals (issue 23), with the learned lifter's proposals instead, and with
+    # its proposals and its score (the default tracker)
+    "oracle-keypoints": {"lifter_proposals": False, "lifter_weight": 0.0},
+    "oracle-lifter": {"lifter_weight": 0.0},
+    "oracle-lifter-score": {},
 })
 #: Configurations tracked with the paper's two-class model (skin and clothes: no hair region, no
 #: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.
 TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
 #: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
-ORACLE_KEYPOINTS = MappingProxyType({"oracle-keypoints": 2.0})
+ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-lifter",
+                                                             "oracle-lifter-score")})
 
 
 def config_of(name: str) -> TrackerConfig:

@@ -101,9 +101,18 @@ class TrackerConfig(JsonConfig):
         distance D_k (:class:`mocap.cost.KeypointCost`). The registration steps add D_k at the
         same rate relative to their own cost: the region step minimises
         ``F + keypoint_weight / region_weight * D_k``, the edge step
-        ``D_c + keypoint_weight / edge_weight * D_k``; and the keypoint source
-        (:class:`mocap.track.proposals.KeypointArmSource`) joins the proposal stage. Without
-        keypoints it changes nothing.
+        ``D_c + keypoint_weight / edge_weight * D_k``; and a keypoint source joins the proposal
+        stage (``lifter_proposals``). Without keypoints it changes nothing.
+    lifter_proposals : bool
+        With keypoints (``keypoint_weight`` > 0): the proposal stage's keypoint source is the
+        learned lifter (:class:`mocap.track.proposals.LifterSource`: its K whole-body hypotheses,
+        :mod:`mocap.track.lifter`) instead of the one-arm-at-a-time inverse kinematics of
+        :class:`mocap.track.proposals.KeypointArmSource`.
+    lifter_weight : float
+        With keypoints: score per nat of the lifter's negative log-density at a candidate's joints
+        (about the neck, :meth:`mocap.track.lifter.Lifter.log_density`), counted from the density
+        at the lifter's most probable hypothesis; 0: off. Every candidate of a frame, tracked or
+        proposed, pays it.
     prior_weight : float
         Score per nat of the pose prior's negative log-density (:mod:`mocap.body.prior`); 0: off.
     motion_sigma_m : float, metres
@@ -140,6 +149,8 @@ class TrackerConfig(JsonConfig):
     region_weight: float = 50.0
     edge_weight: float = 2.0
     keypoint_weight: float = 2.0
+    lifter_proposals: bool = True
+    lifter_weight: float = 0.5
     prior_weight: float = 0.05
     motion_sigma_m: float = 0.05
     motion_cap: float = 8.0
@@ -156,7 +167,7 @@ class TrackerConfig(JsonConfig):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                 raise ValueError(f"{name} must be a non-negative integer, got {v!r}")
-        for name in ("recovery", "hand_reacquisition", "jumps", "offline"):
+        for name in ("recovery", "hand_reacquisition", "jumps", "offline", "lifter_proposals"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         split_budget(self.evaluations, self.split)          # validates the split
@@ -169,7 +180,7 @@ class TrackerConfig(JsonConfig):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be a finite positive number, got {v!r}")
-        for name in ("ftol", "region_weight", "edge_weight", "keypoint_weight", "prior_weight"):
+        for name in ("ftol", "region_weight", "edge_weight", "keypoint_weight", "lifter_weight", "prior_weight"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise ValueError(f"{name} must be finite and non-negative, got {v!r}")
@@ -189,7 +200,14 @@ class TrackerConfig(JsonConfig):
             unknown names raise TypeError.
         """
         return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
-                           prior_weight=0.0, keypoint_weight=0.0), **changes)
+                           prior_weight=0.0, keypoint_weight=0.0, lifter_proposals=False, lifter_weight=0.0),
+                       **changes)
+
+    @property
+    def uses_lifter(self) -> bool:
+        """Whether frames with keypoints are lifted (``keypoint_weight`` > 0 and the lifter's
+        proposals or score on)."""
+        return self.keypoint_weight > 0 and (self.lifter_proposals or self.lifter_weight > 0)
 
     def keypoint_step_weights(self) -> tuple[float, float]:
         """Weight of the keypoint distance in the region step (units of F per pixel) and in the

@@ -12,9 +12,10 @@ Two kinds feed the beam (:class:`mocap.track.Tracker`):
   map; and, where a detector gave them, 2D keypoints) and returns full poses
   (:class:`Proposal`), whatever the previous pose was. The tracker scores every proposal once
   by F, refines the lowest-F ones of each source by a short registration and lets them
-  compete in the beam; the decoder decides. Source here: :class:`KeypointArmSource` (each arm
-  on every depth branch of its elbow and wrist keypoints, the torso on the shoulder
-  keypoints). The silhouette-only sources (hand blobs, the k-NN exemplars) were removed: see
+  compete in the beam; the decoder decides. Sources here: :class:`LifterSource` (the learned
+  lifter's whole-body hypotheses from the frame's 2D keypoints, :mod:`mocap.track.lifter`) and
+  :class:`KeypointArmSource` (each arm on every depth branch of its elbow and wrist keypoints,
+  the torso on the shoulder keypoints). The silhouette-only sources (hand blobs, the k-NN exemplars) were removed: see
   docs/research-log.md.
 """
 from __future__ import annotations
@@ -72,12 +73,16 @@ class ProposalContext:
         The leading hypothesis's pose registered on this frame (metres, radians).
     keypoints : object or None
         The frame's 2D keypoints in working-camera pixels, when a detector gave them.
+    lifted : LiftedHypotheses or None
+        The learned lifter's hypotheses for those keypoints (:meth:`mocap.track.lifter.Lifter.lift`),
+        when the tracker lifts them.
     """
 
     model: BodyModel
     camera: Camera
     leader: np.ndarray
     keypoints: object | None = None
+    lifted: object | None = None
 
 
 class ProposalSource(Protocol):
@@ -403,3 +408,22 @@ class KeypointArmSource:
                                           pixel_ray(camera, k.uv[w])).values())
         inside = [q for q in branches if within_limits(q)]
         return inside or [clamp_to_limits(q) for q in branches]
+
+
+@dataclass(frozen=True)
+class LifterSource:
+    """Whole-body proposals from 2D keypoints: the learned lifter's K hypotheses of the frame.
+
+    The tracker lifts the frame's keypoints once (:meth:`mocap.track.lifter.Lifter.lift`, the
+    calibrated body's forward kinematics, each hypothesis's root placed by the translation whose
+    projection best fits the keypoints: its depth from the body's size and the keypoints' scale)
+    and hands them over in :attr:`ProposalContext.lifted`; this source proposes every one of
+    them, most probable first. None without keypoints.
+    """
+
+    origin: str = "lifter"
+
+    def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
+        if context.lifted is None:
+            return []
+        return [Proposal(np.array(q, dtype=np.float64), self.origin) for q in context.lifted.poses]
