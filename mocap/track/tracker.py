@@ -50,7 +50,7 @@ from mocap.track.proposals import (KeypointArmSource, LifterSource, ProposalCont
 from mocap.track.registration import Registration, register
 
 #: Most nats the lifter term charges a candidate (before ``lifter_weight``): about the energy of
-#: joints 9 cm on average from the nearest hypothesis. The lifter misses some frames (its best of
+#: joints 18 cm on average from the nearest hypothesis (:data:`~mocap.track.lifter.DENSITY_SIGMA_M`). The lifter misses some frames (its best of
 #: ten is within 10 cm on about nine in ten); there the image's evidence must decide.
 LIFTER_ENERGY_CAP = 10.0
 
