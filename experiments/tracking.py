@@ -48,12 +48,12 @@ CONFIGS = MappingProxyType({
     "no-prior": {"prior_weight": 0.0},
     "no-jumps": {"jumps": False},
     "two-class": {},
-    # given the oracle's 2D keypoints (ORACLE_KEYPOINTS): the keypoint cue with the arms' inverse
-    # kinematics as its proposals (issue 23), with the learned lifter's proposals instead, and with
-    # its proposals and its score (the default tracker)
-    "oracle-keypoints": {"lifter_proposals": False, "lifter_weight": 0.0},
-    "oracle-lifter": {"lifter_weight": 0.0},
-    "oracle-lifter-score": {},
+    # given the oracle's 2D keypoints (ORACLE_KEYPOINTS): the default tracker (the keypoint cue with
+    # the arms' inverse kinematics as its proposals, issue 23), with the learned lifter's proposals
+    # instead, and with its proposals and its score (issue 29)
+    "oracle-keypoints": {},
+    "oracle-lifter": {"lifter_proposals": True},
+    "oracle-lifter-score": {"lifter_proposals": True, "lifter_weight": 0.5},
 })
 #: Configurations tracked with the paper's two-class model (skin and clothes: no hair region, no
 #: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.

@@ -11,8 +11,8 @@ and the same three of the paper's model (two classes, no hair region, no lower b
 ``prepare_colour``, ``prepare_edges``, ``prepare_distance``, ``frame_100`` / ``frame_500`` (a
 whole frame of the paper's method, image side included, at that many cost evaluations),
 ``frame_beam`` (a whole frame of the default tracker), ``frame_beam_keypoints`` (the same given
-the true joints projected as 2D keypoints: the keypoint cue and the learned lifter's proposals
-and score), ``lifter`` (one frame's 2D keypoints lifted to the K hypotheses of
+the true joints projected as 2D keypoints: the keypoint cue, and the learned lifter's proposals
+and score where the default configuration turns them on), ``lifter`` (one frame's 2D keypoints lifted to the K hypotheses of
 :mod:`mocap.track.lifter`, group ``lifter``), and
 ``video_640x480`` (group ``video``): the whole own-video path of ``python -m mocap track`` on a
 640x480 clip — decode, reduction to the 160x120 working resolution, image side, registration
@@ -187,7 +187,7 @@ def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, mi
     evaluations, auto split; :meth:`~mocap.track.TrackerConfig.paper`) for each N of ``budgets``,
     and ``frame_beam`` the default tracker (beam, proposals and decoding; its evaluations vary
     from frame to frame), ``frame_beam_keypoints`` the same given the ground truth's joints
-    projected as 2D keypoints (the keypoint cue, the lifter's proposals and score)."""
+    projected as 2D keypoints (the keypoint cue with the default configuration's sources)."""
     import tempfile
 
     from mocap.body.mesh import resolution_for_image

@@ -107,11 +107,15 @@ class TrackerConfig(JsonConfig):
         With keypoints (``keypoint_weight`` > 0): the proposal stage's keypoint source is the
         learned lifter (:class:`mocap.track.proposals.LifterSource`: its K whole-body hypotheses,
         :mod:`mocap.track.lifter`) instead of the one-arm-at-a-time inverse kinematics of
-        :class:`mocap.track.proposals.KeypointArmSource`.
+        :class:`mocap.track.proposals.KeypointArmSource`. Off by default: with the lifters
+        available so far it did not beat the arms' source on an unseen seed (docs/research-log.md,
+        issue 29; ``experiments.tracking`` configurations ``oracle-lifter*``).
     lifter_weight : float
         With keypoints: score per nat of the lifter's negative log-density at a candidate's joints
         (about the neck, :meth:`mocap.track.lifter.Lifter.log_density`), counted from the density
-        at the lifter's most probable hypothesis; 0: off. Every candidate of a frame, tracked or
+        at the lifter's most probable hypothesis and capped
+        (:data:`mocap.track.tracker.LIFTER_ENERGY_CAP`); 0: off (the default, as above; 0.5 was
+        the best of 0 / 0.2 / 0.5 / 1.5 on seed 0). Every candidate of a frame, tracked or
         proposed, pays it.
     prior_weight : float
         Score per nat of the pose prior's negative log-density (:mod:`mocap.body.prior`); 0: off.
@@ -149,8 +153,8 @@ class TrackerConfig(JsonConfig):
     region_weight: float = 50.0
     edge_weight: float = 2.0
     keypoint_weight: float = 2.0
-    lifter_proposals: bool = True
-    lifter_weight: float = 0.5
+    lifter_proposals: bool = False
+    lifter_weight: float = 0.0
     prior_weight: float = 0.05
     motion_sigma_m: float = 0.05
     motion_cap: float = 8.0

@@ -5,8 +5,9 @@ registration (:func:`~mocap.track.registration.register`; the leading one with t
 budget, the others with ``hypothesis_evaluations``). Proposals compete with them: a recovery
 from the last good pose when the leader fails, hand re-acquisition when a skin region is left
 unexplained, the leader's kinematic jumps (:mod:`mocap.body.jumps`), and the proposal stage's
-poses read from the current image (:class:`~mocap.track.proposals.ProposalSource`: the learned
-lifter's whole-body hypotheses from 2D keypoints), each refined by a short registration. Every
+poses read from the current image (:class:`~mocap.track.proposals.ProposalSource`: from 2D
+keypoints, the arms' inverse kinematics or the learned lifter's whole-body hypotheses), each
+refined by a short registration. Every
 candidate gets a **unary score** (``region_weight * F + edge_weight * edge distance +
 prior_weight * pose-prior energy``; on frames with 2D keypoints plus ``keypoint_weight *
 keypoint distance``, which every registration of the frame then also adds, and ``lifter_weight``

@@ -17,6 +17,8 @@ MODEL = BodyModel.build(BodyDimensions(), resolution=8)
 CAMERA = Camera.default(160, 120)
 #: Back within this of the truth (metres, mean joint error), the issue's bound.
 BACK_M = 0.1
+#: The lifter's proposals and score (off by default: docs/research-log.md, issue 29).
+LIFTER_ON = {"lifter_proposals": True, "lifter_weight": 0.5}
 
 
 @pytest.fixture(scope="module")
@@ -54,7 +56,7 @@ def tracked_errors(config, start, truth, lifter, n=6):
 def test_the_lifter_source_proposes_the_lifted_hypotheses(lifter):
     truth = reaching_pose()
     _, (keypoints, *_) = still_clip(truth, 1)
-    tracker = Tracker(MODEL, CAMERA, TrackerConfig(), truth, lifter=lifter)
+    tracker = Tracker(MODEL, CAMERA, TrackerConfig(**LIFTER_ON), truth, lifter=lifter)
     lifted = tracker.lift(keypoints)
     proposals = LifterSource().propose(None, ProposalContext(MODEL, CAMERA, truth, keypoints, lifted))
     assert len(proposals) == lifter.n_hypotheses and {p.origin for p in proposals} == {"lifter"}
@@ -67,7 +69,7 @@ def test_the_lifter_source_proposes_the_lifted_hypotheses(lifter):
 def test_the_lifter_term_is_zero_at_its_best_guess_grows_away_from_it_and_is_capped(lifter):
     truth = reaching_pose()
     _, (keypoints, *_) = still_clip(truth, 1)
-    tracker = Tracker(MODEL, CAMERA, TrackerConfig(), truth, lifter=lifter)
+    tracker = Tracker(MODEL, CAMERA, TrackerConfig(**LIFTER_ON), truth, lifter=lifter)
     lifted = tracker.lift(keypoints)
     best = MODEL.joint_positions(lifted.poses[0])
     assert tracker.lifter_energy(lifted, best) == pytest.approx(0.0, abs=1e-9)
