@@ -14,8 +14,9 @@ Two comparisons, on the same frames:
   and our camera-frame joints compare) on the 160x120 benchmark clips, MediaPipe fed the
   frames upscaled 4x (it does not find people at 160x120); our tracker with the clip's true
   calibration and background.
-* **real** (no ground truth; MediaPipe as reference): ``python -m mocap track CLIP`` with no
-  other option on the clips of ``../shared/data/video/``, and the share of our projected
+* **real** (no ground truth; MediaPipe as reference): ``python -m mocap track CLIP --keypoints
+  none`` (the silhouette alone; the command's default ``auto`` is the keypoint run below where
+  MediaPipe is installed) on the clips of ``../shared/data/video/``, and the share of our projected
   shoulders, elbows and wrists (``poses.csv``'s ``_u``/``_v``) within half of MediaPipe's
   shoulder width of its 2D landmarks (:func:`mocap.metrics.pck_2d`).
 

@@ -48,16 +48,12 @@ CONFIGS = MappingProxyType({
     "no-prior": {"prior_weight": 0.0},
     "no-jumps": {"jumps": False},
     "two-class": {},
-    "blobs": {"blob_arms": True},
-    "exemplars": {"exemplars": True},
-    "both": {"blob_arms": True, "exemplars": True},
-    # the proposal stage's budget: proposals refined per source and evaluations per refinement
-    "both-P1": {"blob_arms": True, "exemplars": True, "proposals_refined": 1},
-    "both-P4": {"blob_arms": True, "exemplars": True, "proposals_refined": 4},
-    "both-E50": {"blob_arms": True, "exemplars": True, "proposal_evaluations": 50},
-    "both-E200": {"blob_arms": True, "exemplars": True, "proposal_evaluations": 200},
-    # the default tracker given the oracle's 2D keypoints (ORACLE_KEYPOINTS)
+    # given the oracle's 2D keypoints (ORACLE_KEYPOINTS): the default tracker (the keypoint cue with
+    # the arms' inverse kinematics as its proposals, issue 23), with the learned lifter's proposals
+    # instead, and with its proposals and its score (issue 29)
     "oracle-keypoints": {},
+    "oracle-lifter": {"lifter_proposals": True},
+    "oracle-lifter-score": {"lifter_proposals": True, "lifter_weight": 0.5},
     # the gradient step (issue 30) on / off, whichever the default is not
     "gradient": {"gradient_step": not TrackerConfig().gradient_step},
 })
@@ -65,7 +61,8 @@ CONFIGS = MappingProxyType({
 #: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.
 TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
 #: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
-ORACLE_KEYPOINTS = MappingProxyType({"oracle-keypoints": 2.0})
+ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-lifter",
+                                                             "oracle-lifter-score")})
 
 
 def config_of(name: str) -> TrackerConfig:

@@ -13,8 +13,10 @@ model: one render each, the occluding-contour samples and, for eq. 1, the seams)
 ``bench`` extra is installed), ``prepare_frame`` and its parts ``prepare_background``,
 ``prepare_colour``, ``prepare_edges``, ``prepare_distance``, ``frame_100`` / ``frame_500`` (a
 whole frame of the paper's method, image side included, at that many cost evaluations),
-``frame_beam`` (a whole frame of the default tracker), ``lifter`` (one frame's 2D keypoints lifted
-to the K hypotheses of :mod:`mocap.track.lifter`, group ``lifter``), and
+``frame_beam`` (a whole frame of the default tracker), ``frame_beam_keypoints`` (the same given
+the true joints projected as 2D keypoints: the keypoint cue, and the learned lifter's proposals
+and score where the default configuration turns them on), ``lifter`` (one frame's 2D keypoints lifted to the K hypotheses of
+:mod:`mocap.track.lifter`, group ``lifter``), and
 ``video_640x480`` (group ``video``): the whole own-video path of ``python -m mocap track`` on a
 640x480 clip — decode, reduction to the 160x120 working resolution, image side, registration
 at the default budget and every output (journal, BVH, residual plot, overlay video) — as wall
@@ -196,12 +198,15 @@ def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, mi
     its frames: ``frame_<N>`` the paper's method (one hypothesis, two-step registration with N cost
     evaluations, auto split; :meth:`~mocap.track.TrackerConfig.paper`) for each N of ``budgets``,
     and ``frame_beam`` the default tracker (beam, proposals and decoding; its evaluations vary
-    from frame to frame)."""
+    from frame to frame), ``frame_beam_keypoints`` the same given the ground truth's joints
+    projected as 2D keypoints (the keypoint cue with the default configuration's sources)."""
     import tempfile
 
     from mocap.body.mesh import resolution_for_image
     from mocap.calibrate import Calibration, colour_model_from_pose
     from mocap.imaging import prepare_frame
+    from mocap.io.keypoints import Keypoints
+    from mocap.io.pose_table import PoseTable
     from mocap.io.sequence import find_sequence
     from mocap.io.video import iter_frames, read_image
     from mocap.synth import generate_sequence
@@ -218,14 +223,17 @@ def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, mi
         colour = colour_model_from_pose(images[0], background, model, camera, calibration.initial_pose)
         model = model.with_class_names(colour.names)
         configs = {f"frame_{b}": TrackerConfig.paper(evaluations=b) for b in budgets}
-        configs["frame_beam"] = TrackerConfig()
+        configs["frame_beam"] = configs["frame_beam_keypoints"] = TrackerConfig()
+        truth = PoseTable.read(seq.ground_truth).joints
+        keypoints = [Keypoints(camera.project(j), np.ones(len(j))) for j in truth]
         for name, config in configs.items():
             times = []
+            given = keypoints if name == "frame_beam_keypoints" else [None] * len(images)
             while len(times) < min_runs:
                 tracker = Tracker(model, camera, config, calibration.initial_pose)
                 for i, frame in enumerate(images):
                     t0 = time.perf_counter_ns()
-                    tracker.push(i, prepare_frame(frame, background, colour))
+                    tracker.push(i, prepare_frame(frame, background, colour), given[i])
                     times.append((time.perf_counter_ns() - t0) / 1000.0)
             rows.append(_row(name, size, model.mesh.n_triangles, np.asarray(times[1:])))
     return rows

@@ -6,8 +6,12 @@ from pathlib import Path
 
 import pytest
 
+from mocap.io import mediapipe_keypoints
+
 REPO_ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = REPO_ROOT.parent / "shared" / "data"
+#: Whether MediaPipe imports, as the library asks it (kept before the session's patch).
+_REAL_AVAILABLE = mediapipe_keypoints.available
 #: Test files that share a session fixture costing a minute (the tiny sweep of
 #: tests/experiments/conftest.py): one pytest-xdist group, so that one worker makes it once.
 SHARED_SESSION_GROUPS = {f"tests/experiments/{name}.py": "tiny-sweep"
@@ -36,3 +40,23 @@ def shared_data() -> Path:
     if os.environ.get("CI"):
         pytest.fail(reason)
     pytest.skip(reason)
+
+
+@pytest.fixture(autouse=True, scope="session")
+def bare_install_keypoints():
+    """The whole session (module- and session-scoped fixtures included) sees ``--keypoints auto``
+    (the commands' default) as on an install without the optional extra ``keypoints``: no
+    MediaPipe run unless a test asks (marker ``mediapipe``: :func:`real_keypoints_extra`).
+
+    (Processes a test starts are not reached: they get ``--keypoints none``.)"""
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(mediapipe_keypoints, "available", lambda: False)
+        yield
+
+
+@pytest.fixture(autouse=True)
+def real_keypoints_extra(request, monkeypatch):
+    """Tests marked ``mediapipe`` see whether MediaPipe really imports."""
+    if request.node.get_closest_marker("mediapipe") is not None:
+        monkeypatch.setattr(mediapipe_keypoints, "available", _REAL_AVAILABLE)
+

@@ -154,3 +154,47 @@ def test_keypoint_file_through_track_and_a_malformed_one_is_one_line(sequence, t
     assert main(["track", str(sequence), "--out", str(tmp_path / "bad-run"), "--keypoints", str(bad)]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("error:") and "\n" not in err and "line 3: unknown joint 'nose'" in err
+
+
+@pytest.mark.mediapipe                  # (the real import check, made to fail here)
+def test_keypoints_auto_without_the_extra_tracks_as_before_and_says_so(sequence, tmp_path, capsys, monkeypatch):
+    """The commands' default ``--keypoints auto`` where MediaPipe does not import (its import
+    made to fail): the same poses as ``--keypoints none``, and the output and run.json say so."""
+    import builtins
+
+    from mocap.io import mediapipe_keypoints
+
+    real_import = builtins.__import__
+
+    def no_mediapipe(name, *args, **kwargs):
+        if name.split(".")[0] == "mediapipe":
+            raise ImportError(f"No module named {name!r}")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_mediapipe)
+    assert not mediapipe_keypoints.available()
+    args = ["--iterations", "60", "--max-frames", "3", "--no-overlay"]
+    capsys.readouterr()
+    assert main(["track", str(sequence), "--out", str(tmp_path / "auto"), *args]) == 0
+    printed = capsys.readouterr().out
+    assert "keypoints: none (auto: MediaPipe Pose, the optional extra 'keypoints', is not installed" in printed
+    assert main(["track", str(sequence), "--out", str(tmp_path / "none"), "--keypoints", "none", *args]) == 0
+    runs = {name: json.loads((tmp_path / name / "run.json").read_text()) for name in ("auto", "none")}
+    assert runs["auto"]["settings"]["keypoints"] == runs["none"]["settings"]["keypoints"] == "none"
+    assert runs["auto"]["settings"]["own_video"]["keypoints"].startswith("none (auto:")
+    assert runs["none"]["settings"]["own_video"]["keypoints"] == "none"
+    np.testing.assert_array_equal(PoseTable.read(tmp_path / "auto" / "poses.csv").poses,
+                                  PoseTable.read(tmp_path / "none" / "poses.csv").poses)
+
+
+@pytest.mark.mediapipe
+def test_keypoints_auto_with_the_extra_uses_mediapipe(sequence, tmp_path, capsys):
+    pytest.importorskip("mediapipe", reason="the optional extra 'keypoints' (MediaPipe Pose) is not installed")
+    out = tmp_path / "auto"
+    assert main(["track", str(sequence), "--out", str(out), "--iterations", "40", "--max-frames", "2",
+                 "--no-overlay"]) == 0
+    assert "keypoints: mediapipe (auto: the optional extra 'keypoints' is installed)" in capsys.readouterr().out
+    run = json.loads((out / "run.json").read_text())
+    assert run["settings"]["keypoints"].startswith("mediapipe ") and run["settings"]["keypoints"].endswith(
+        "(--keypoints auto)")
+    assert run["keypoints_ms_per_frame"] > 0

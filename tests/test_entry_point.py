@@ -46,7 +46,7 @@ def test_cli_track_calls_the_library_with_its_options(recorder, tmp_path):
     (source, out, options), = recorder
     assert Path(source) == video and out == tmp_path / "run"
     assert options == OwnVideoOptions(hfov_deg=70.0, height_m=1.6, max_frames=5, overlay=False, start=2,
-                                      no_background=True, tracker=TrackerConfig(evaluations=123))
+                                      no_background=True, tracker=TrackerConfig(evaluations=123), keypoints="auto")
 
 
 def test_bench_video_stage_calls_the_library(recorder):

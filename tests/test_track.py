@@ -7,6 +7,7 @@ from scipy import ndimage
 from mocap.body import PARAMETER_INDEX as P, BodyDimensions, BodyModel, clamp_to_limits, neutral_pose
 from mocap.cost import EdgeCost, RegionCost
 from mocap.track import AUTO_SPLIT_THRESHOLD, TrackerConfig, register, split_budget
+from mocap.track.config import EDGE_FAILURE_THRESHOLD_PX, KEYPOINT_FAILURE_THRESHOLD_PX, REGION_FAILURE_THRESHOLD
 from mocap.render import Camera, render
 
 #: The paper's model (skin and clothes; no hair region, no lower body), whose registration the
@@ -181,3 +182,33 @@ def test_unexplained_hands_of_a_body_reaching_behind_the_camera_is_nothing():
     joints = MODEL.joint_positions(lost)
     joints[:, 2] -= joints[:, 2].min()            # the nearest joint on the camera plane
     assert unexplained_hands(frame.labels, joints, MODEL, CAMERA, TrackerConfig()).shape == (0, 2)
+
+
+def test_the_failure_flag_reads_the_keypoints_where_there_are_some():
+    """A frame whose segmentation is wrong (skin and clothes colours mixed up: F peaks, the edges
+    are clean): without keypoints the registration fails; with the true joints
+    as keypoints it does not; with keypoints far from where the model can go it does again."""
+    from mocap.cost import KeypointCost
+    from mocap.labels import class_label
+
+    truth = neutral_pose()
+    r = render(truth, MODEL, CAMERA)
+    labels = r.labels.copy()
+    skin, clothes = (class_label(name, MODEL.class_names) for name in ("skin", "clothes"))
+    labels[r.labels == skin], labels[r.labels == clothes] = clothes, skin
+    distance = np.minimum(ndimage.distance_transform_edt(~r.edges), 20.0).astype(np.float32)
+    region, edge = RegionCost(labels, MODEL, CAMERA), EdgeCost(distance, MODEL, CAMERA)
+    config = TrackerConfig(evaluations=300)
+    uv = CAMERA.project(MODEL.joint_positions(truth))
+    ones = np.ones(len(uv))
+
+    def registered(keypoint_uv):
+        cost = None if keypoint_uv is None else KeypointCost(keypoint_uv, ones, MODEL, CAMERA)
+        return register(region, edge, truth, config, keypoint_cost=cost)
+
+    without, right, wrong = registered(None), registered(uv), registered(uv + [40.0, 0.0])
+    assert without.region_residual > REGION_FAILURE_THRESHOLD
+    assert without.edge_residual < EDGE_FAILURE_THRESHOLD_PX            # the edges are clean
+    assert without.failed(config)
+    assert right.keypoint_residual < KEYPOINT_FAILURE_THRESHOLD_PX and not right.failed(config)
+    assert wrong.keypoint_residual > KEYPOINT_FAILURE_THRESHOLD_PX and wrong.failed(config)

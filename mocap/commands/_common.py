@@ -94,3 +94,19 @@ def add_background_options(p: argparse.ArgumentParser) -> None:
                     help="use the per-pixel median of frames A..B-1 of VIDEO (empty frames)")
     bg.add_argument("--no-background", action="store_true",
                     help="no empty view: the foreground is what the colour classes explain")
+
+
+def add_keypoints_option(p: argparse.ArgumentParser, what: str) -> None:
+    """``--keypoints auto|mediapipe|none|FILE`` (default ``auto``: MediaPipe Pose where the optional
+    extra ``keypoints`` imports, none otherwise); ``what`` says what they are for."""
+    p.add_argument("--keypoints", default="auto", metavar="auto|mediapipe|none|FILE",
+                   help=f"2D keypoints {what}: 'auto' (default: MediaPipe Pose where the optional extra "
+                        "'keypoints' is installed, none otherwise), 'mediapipe', 'none', or a CSV "
+                        "frame,joint,u,v,confidence in input pixels (docs/design.md section 4)")
+
+
+def keypoints_line(name) -> str:
+    """``keypoints: ...``: which keypoints ``--keypoints NAME`` gives here (and why, for ``auto``)."""
+    from mocap.run.options import resolve_keypoints
+
+    return f"keypoints: {resolve_keypoints(None if name is None else str(name))[1]}"

@@ -12,7 +12,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--no-llvmpipe", action="store_true", help="skip the OpenGL (Mesa llvmpipe) comparison")
     p.add_argument("--groups", nargs="+", default=None, metavar="GROUP",
                    help="stage groups to run: render (render and cost evaluations), imaging (prepare_*), "
-                        "frame (frame_100, frame_500: the paper's method; frame_beam: the default tracker), "
+                        "frame (frame_100, frame_500: the paper's method; frame_beam: the default tracker; frame_beam_keypoints: "
+                        "the same given keypoints), "
                         "lifter (lifter: one frame's keypoints to the lifter's hypotheses), "
                         "video (video_640x480: the own-video path end to end); default all")
     p.set_defaults(run=run)

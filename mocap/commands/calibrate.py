@@ -1,5 +1,5 @@
 """``python -m mocap calibrate VIDEO [--background IMG | --background-frames A:B | --no-background]
-[--hfov DEG] [--height M] [--keypoints mediapipe|FILE] [--out JSON]``: automatic calibration of
+[--hfov DEG] [--height M] [--keypoints auto|mediapipe|none|FILE] [--out JSON]``: automatic calibration of
 body proportions and initial pose (with ``--keypoints``, the calibration frame's 2D keypoints
 pull the model's joints onto them: shoulder width and place, head, arms).
 
@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mocap.commands._common import add_background_options
+from mocap.commands._common import add_background_options, add_keypoints_option, keypoints_line
 
 
 def add_parser(subparsers) -> None:
@@ -32,9 +32,7 @@ def add_parser(subparsers) -> None:
                    help=f"camera horizontal field of view, degrees (default {DEFAULT_HFOV_DEG:g}, a webcam)")
     p.add_argument("--height", type=float, default=None, metavar="M",
                    help="the person's height in metres: fixes the absolute scale")
-    p.add_argument("--keypoints", default=None, metavar="mediapipe|FILE",
-                   help="2D keypoints of the calibration frame: 'mediapipe' (optional extra 'keypoints') or a CSV "
-                        "frame,joint,u,v,confidence (docs/design.md section 4)")
+    add_keypoints_option(p, "of the calibration frame")
     p.add_argument("--allow-damaged", action="store_true",
                    help="calibrate on a video whose frames do not all decode instead of stopping")
     p.set_defaults(run=run)
@@ -49,6 +47,7 @@ def run(args: argparse.Namespace) -> int:
     from mocap.run.tracking import RunInput
 
     keypoints = keypoint_source(None if args.keypoints is None else str(args.keypoints))
+    print(keypoints_line(args.keypoints))
     # the background as track chooses it (given, the sequence folder's own, frames, none or auto)
     chosen = OwnVideoOptions(background=args.background, background_frames=args.background_frames,
                              no_background=args.no_background, hfov_deg=args.hfov, height_m=args.height)

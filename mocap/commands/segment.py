@@ -8,8 +8,9 @@ when the first frame supports them), the edge mask (white on black) and the trun
 distance map (viridis: dark on edges), as PNG in ``labels/``, ``edges/`` and ``distance/``,
 plus ``segment.mp4`` (frame | labels / edges | distance), the colour model
 (``colour_model.json``, learned on the first frame that shows the person) and the parameters
-(``imaging.json``) it used. With ``--keypoints mediapipe|FILE`` the 2D keypoints the tracker
-would get are drawn on the frame panel of ``segment.mp4`` (yellow dots, working pixels). An interrupted run resumes: the same command keeps the frames
+(``imaging.json``) it used. With keypoints (``--keypoints auto``, the default: MediaPipe Pose
+where the optional extra ``keypoints`` is installed; or ``mediapipe`` or a FILE; ``none``) the
+2D keypoints the tracker would get are drawn on the frame panel of ``segment.mp4`` (yellow dots, working pixels). An interrupted run resumes: the same command keeps the frames
 already written (``segment.json`` holds the settings they were made with).
 """
 from __future__ import annotations
@@ -17,7 +18,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mocap.commands._common import add_background_options
+from mocap.commands._common import add_background_options, add_keypoints_option, keypoints_line
 
 
 def _box(text: str) -> tuple[int, int, int, int]:
@@ -54,9 +55,7 @@ def add_parser(subparsers) -> None:
                         "(default: as track, near 160 pixels)")
     p.add_argument("--allow-damaged", action="store_true",
                    help="segment a video whose frames do not all decode instead of stopping")
-    p.add_argument("--keypoints", default=None, metavar="mediapipe|FILE",
-                   help="draw the 2D keypoints the tracker would get: 'mediapipe' (optional extra 'keypoints') or "
-                        "a CSV frame,joint,u,v,confidence (docs/design.md section 4)")
+    add_keypoints_option(p, "the tracker would get, drawn")
     p.add_argument("--start", type=int, default=0, metavar="N", help="first frame (default 0)")
     p.add_argument("--max-frames", type=int, metavar="N", help="process at most N frames")
     p.set_defaults(run=run)
@@ -75,5 +74,6 @@ def run(args: argparse.Namespace) -> int:
         work_width=args.work_width, allow_damaged=args.allow_damaged,
         keypoints=None if args.keypoints is None else str(args.keypoints), start=args.start,
         max_frames=args.max_frames)
+    print(keypoints_line(args.keypoints))
     segment(args.video, args.out, options)
     return 0

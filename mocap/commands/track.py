@@ -1,5 +1,6 @@
 """``python -m mocap track VIDEO [--background IMG | --background-frames A:B | --no-background]
-[--calibration JSON] [--hfov DEG] [--height M] [--work-width PX] [--out DIR]``, or
+[--calibration JSON] [--hfov DEG] [--height M] [--work-width PX] [--keypoints auto|mediapipe|none|FILE]
+[--out DIR]``, or
 ``python -m mocap track --camera N``
 
 VIDEO is a video file, a folder of images, or a sequence folder (``frames/``, and its
@@ -8,7 +9,8 @@ VIDEO is a video file, a folder of images, or a sequence folder (``frames/``, an
 With nothing else given, everything is found from the video (docs/own-video.md): a
 background estimated from the clip when the person moves enough (else a colour-only
 foreground), an automatic calibration on the first frame with a face, a working resolution
-near 160 pixels wide. ``--camera N`` tracks webcam N live (Ctrl-C stops and keeps what was
+near 160 pixels wide, and 2D keypoints from MediaPipe Pose where its optional extra
+``keypoints`` is installed (``--keypoints auto``; the output says which). ``--camera N`` tracks webcam N live (Ctrl-C stops and keeps what was
 tracked).
 """
 from __future__ import annotations
@@ -17,7 +19,7 @@ import argparse
 from pathlib import Path
 
 from mocap.commands._common import add_tracker_options, print_summary, tracker_config
-from mocap.commands._common import add_background_options
+from mocap.commands._common import add_background_options, add_keypoints_option
 
 
 def add_parser(subparsers) -> None:
@@ -43,9 +45,7 @@ def add_parser(subparsers) -> None:
                         f"(default: the tracker chooses, near {DEFAULT_WORK_WIDTH} or less for a person close to "
                         "the camera; see docs/own-video.md)")
     p.add_argument("--show", action="store_true", help="show the overlay live in a window (needs a display)")
-    p.add_argument("--keypoints", default=None, metavar="mediapipe|FILE",
-                   help="2D keypoints as a further cue: 'mediapipe' (optional extra 'keypoints') or a CSV "
-                        "frame,joint,u,v,confidence in input pixels (docs/design.md section 4)")
+    add_keypoints_option(p, "as a further cue")
     p.add_argument("--out", type=Path, default=Path("mocap-track"), help="output folder (default ./mocap-track)")
     p.add_argument("--colour", choices=("calibration", "face"), default="calibration",
                    help="learn colours inside the calibrated model (default) or from the detected face")
@@ -78,6 +78,8 @@ def print_setup(account: dict) -> None:
           f"(input {account['input_width']}x{account['input_height']} reduced {factor}x)")
     background, calibration = account["background"], account["calibration"]
     print(f"background: {background['mode']} ({background['reason']})")
+    if "keypoints" in account:
+        print(f"keypoints: {account['keypoints']}")
     if calibration["from"] == "automatic":
         height = account["height_m"]
         print(f"calibration: automatic on frame {calibration['frame']}, person at {calibration['depth_m']:.2f} m "

@@ -14,7 +14,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from mocap.commands._common import add_tracker_options, tracker_config
+from mocap.commands._common import add_keypoints_option, add_tracker_options, keypoints_line, tracker_config
 
 
 def add_parser(subparsers) -> None:
@@ -44,6 +44,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--start", type=int, default=0, metavar="N", help="first frame to track in every input (default 0)")
     p.add_argument("--allow-damaged", action="store_true",
                    help="track the frames that decode of a damaged video instead of failing it")
+    add_keypoints_option(p, "as a further cue (a file: the same for every input)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_tracker_options(p)
     p.set_defaults(run=run)
@@ -56,7 +57,9 @@ def run(args: argparse.Namespace) -> int:
     options = OwnVideoOptions(no_background=args.no_background, hfov_deg=args.hfov, height_m=args.height,
                               work_width=args.work_width, colour=args.colour, start=args.start,
                               max_frames=args.max_frames, allow_damaged=args.allow_damaged,
-                              overlay=not args.no_overlay, overwrite=args.overwrite, tracker=tracker_config(args))
+                              overlay=not args.no_overlay, overwrite=args.overwrite, tracker=tracker_config(args),
+                              keypoints=None if args.keypoints is None else str(args.keypoints))
+    print(keypoints_line(args.keypoints))
     summary = track_many(args.inputs, args.out, options, workers=args.workers, scheduler=args.scheduler,
                          progress=not args.no_progress)
     for row in summary.rows:

@@ -46,6 +46,16 @@ MISSING_EXTRA = ("--keypoints mediapipe needs MediaPipe Pose, the optional extra
                  "pip install 'mocap[keypoints]' (or give a keypoint file: --keypoints FILE.csv)")
 
 
+def available() -> bool:
+    """Whether MediaPipe Pose (the optional extra ``keypoints``) imports here: what
+    ``--keypoints auto`` asks (an import of about 2 s the first time)."""
+    try:
+        from mediapipe.python.solutions import pose  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
 class MediaPipeKeypoints:
     """A :class:`~mocap.io.keypoints.KeypointSource` running MediaPipe Pose on each frame.
 

@@ -273,8 +273,8 @@ def run_settings(frames_in, setup: RunSetup, params: RunParams, resolution: int)
     if setup.record is not None:
         settings["own_video"] = setup.record
     settings["start_frame"] = params.start_frame
-    if params.keypoints is not None:
-        settings["keypoints"] = getattr(params.keypoints, "description", type(params.keypoints).__name__)
+    settings["keypoints"] = "none" if params.keypoints is None else getattr(params.keypoints, "description",
+                                                                            type(params.keypoints).__name__)
     return settings
 
 

@@ -13,11 +13,14 @@ from mocap.config import JsonConfig
 from mocap.render.camera import DEFAULT_HFOV_DEG
 from mocap.track import TrackerConfig
 
-__all__ = ["BACKGROUND_MODES", "COLOUR_SOURCES", "OwnVideoOptions", "background_mode", "keypoint_source"]
+__all__ = ["BACKGROUND_MODES", "COLOUR_SOURCES", "KEYPOINT_CHOICES", "OwnVideoOptions", "background_mode",
+           "keypoint_source", "resolve_keypoints"]
 
 #: How the background is found: ``auto`` (estimate, use if the person moves enough), ``image``
 #: (a file), ``frames`` (median of frames A:B), ``none`` (colour-only foreground).
 BACKGROUND_MODES = ("auto", "image", "frames", "none")
+#: ``--keypoints`` values other than a keypoint file (:func:`resolve_keypoints`).
+KEYPOINT_CHOICES = ("auto", "mediapipe", "none")
 #: Where the colour classes are learnt: inside the calibrated model's projected parts, or from
 #: the detected face and a box under it (the paper's way).
 COLOUR_SOURCES = ("calibration", "face")
@@ -71,9 +74,10 @@ class OwnVideoOptions(JsonConfig):
     overwrite : bool
         Start afresh instead of resuming a run in the output folder.
     keypoints : str or None
-        2D keypoints: ``"mediapipe"`` (MediaPipe Pose, the optional extra ``keypoints``) or a
-        keypoint file (:mod:`mocap.io.keypoints`); the tracker adds them as a cue
-        (``tracker.keypoint_weight``).
+        2D keypoints: ``"mediapipe"`` (MediaPipe Pose, the optional extra ``keypoints``), a
+        keypoint file (:mod:`mocap.io.keypoints`), ``"auto"`` (MediaPipe when the extra imports,
+        none otherwise: the command line's default, :func:`resolve_keypoints`) or None /
+        ``"none"``; the tracker adds them as a cue (``tracker.keypoint_weight``).
     tracker : TrackerConfig
     """
 
@@ -117,8 +121,9 @@ class OwnVideoOptions(JsonConfig):
             raise ValueError(f"the start frame must be a non-negative integer, got {self.start!r}")
         if self.max_frames is not None and self.max_frames < 1:
             raise ValueError(f"max_frames must be at least 1, got {self.max_frames}")
-        if self.keypoints is not None and self.keypoints != "mediapipe" and not Path(self.keypoints).is_file():
-            raise FileNotFoundError(f"keypoint file not found: {self.keypoints} (or give --keypoints mediapipe)")
+        if self.keypoints is not None and self.keypoints not in KEYPOINT_CHOICES and not Path(self.keypoints).is_file():
+            raise FileNotFoundError(f"keypoint file not found: {self.keypoints} (or give --keypoints "
+                                    f"{'|'.join(KEYPOINT_CHOICES)})")
         if self.work_width is not None and self.work_width < 16:
             raise ValueError(f"the working width must be at least 16 pixels, got {self.work_width}")
 
@@ -129,14 +134,45 @@ class OwnVideoOptions(JsonConfig):
                                self.background_frames is not None, self.no_background)
 
 
+def resolve_keypoints(name: str | None) -> tuple[str | None, str]:
+    """What ``--keypoints NAME`` means on this installation.
+
+    Parameters
+    ----------
+    name : str or None
+        ``"auto"``, ``"mediapipe"``, ``"none"`` (or None) or a keypoint file's path.
+
+    Returns
+    -------
+    (str or None, str)
+        ``"mediapipe"``, the file's path or None (no keypoints), and one line saying which and,
+        for ``"auto"``, why (what the command prints; ``run.json`` ``settings.own_video.keypoints``).
+    """
+    if name is None or name == "none":
+        return None, "none"
+    if name == "auto":
+        from mocap.io import mediapipe_keypoints
+
+        if mediapipe_keypoints.available():
+            return "mediapipe", "mediapipe (auto: the optional extra 'keypoints' is installed)"
+        return None, ("none (auto: MediaPipe Pose, the optional extra 'keypoints', is not installed; "
+                      "pip install 'mocap[keypoints]' adds 2D keypoints as a cue)")
+    return name, name if name == "mediapipe" else f"file {name}"
+
+
 def keypoint_source(name: str | None):
     """The :class:`~mocap.io.keypoints.KeypointSource` of ``OwnVideoOptions.keypoints``: None,
-    MediaPipe Pose for ``"mediapipe"`` (ValueError in one line without the extra), else a
-    keypoint file (FileNotFoundError, ValueError naming the line of a malformed one)."""
-    if name is None:
+    MediaPipe Pose for ``"mediapipe"`` (ValueError in one line without the extra) and for
+    ``"auto"`` where the extra imports (:func:`resolve_keypoints`), else a keypoint file
+    (FileNotFoundError, ValueError naming the line of a malformed one)."""
+    resolved, _ = resolve_keypoints(name)
+    if resolved is None:
         return None
-    if name == "mediapipe":
+    if resolved == "mediapipe":
         from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
-        return MediaPipeKeypoints()
+        source = MediaPipeKeypoints()
+        if name == "auto":
+            source.description += " (--keypoints auto)"
+        return source
     from mocap.io.keypoints import KeypointFile
-    return KeypointFile(name)
+    return KeypointFile(resolved)

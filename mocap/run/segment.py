@@ -30,7 +30,7 @@ from mocap.io.frames import VideoSource
 from mocap.io.lock import FolderLock
 from mocap.io.video import VideoWriter, read_image
 from mocap.run.colours import ColourRecipe, SampleBoxes, learn_colours
-from mocap.run.options import background_mode, keypoint_source
+from mocap.run.options import background_mode, keypoint_source, resolve_keypoints
 from mocap.run.setup import FaceSearch, FrameAccess, SetupRequest, find_background
 
 __all__ = ["SegmentOptions", "segment"]
@@ -60,7 +60,8 @@ class SegmentOptions:
         Wanted working width; None: as ``track`` (near 160 pixels).
     allow_damaged : bool
     keypoints : str or None
-        ``"mediapipe"`` or a keypoint file: drawn on the frame panel of ``segment.mp4``.
+        ``"auto"`` (MediaPipe where the optional extra imports, none otherwise), ``"mediapipe"``,
+        ``"none"`` or a keypoint file: drawn on the frame panel of ``segment.mp4``.
     start : int
     max_frames : int or None
     """
@@ -116,7 +117,13 @@ def _settings(video: Path, options: SegmentOptions, stop: int, factor: int) -> d
             "skin_box": box("skin"), "clothes_box": box("clothes"), "hair_box": box("hair"),
             "lower_body_box": box("lower_body"),
             "start": options.start, "stop": stop, "working_factor": factor, "imaging": options.imaging.to_dict(),
-            "keypoints": options.keypoints if options.keypoints in (None, "mediapipe") else path(options.keypoints)}
+            "keypoints": _keypoints_setting(options.keypoints, path)}
+
+
+def _keypoints_setting(name: str | None, path) -> str | None:
+    """What ``--keypoints NAME`` gave (``auto`` resolved): ``mediapipe``, a file's absolute path or None."""
+    resolved = resolve_keypoints(name)[0]
+    return resolved if resolved in (None, "mediapipe") else path(resolved)
 
 
 def _working_box(box: Box | None, factor: int) -> Box | None:

@@ -20,7 +20,7 @@ from mocap.io.sequence import find_sequence
 from mocap.io.video import read_image
 from mocap.run.advice import RunFacts, what_to_try
 from mocap.run.loop import RunParams, track_frames
-from mocap.run.options import OwnVideoOptions, keypoint_source
+from mocap.run.options import OwnVideoOptions, keypoint_source, resolve_keypoints
 from mocap.run.outputs import RunSummary
 from mocap.run.person import NewcomerFinder
 from mocap.run.setup import SetupRequest, find_setup
@@ -126,6 +126,7 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
     """
     options = OwnVideoOptions() if options is None else options
     keypoints = keypoint_source(options.keypoints)          # a bad keypoint file stops the run first
+    keypoints_used = resolve_keypoints(options.keypoints)[1]
     opened = RunInput.open(source, options)
     frames_in = opened.frames
     try:
@@ -134,7 +135,8 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
         if frames_in.live:
             frames_in.hold(found.consumed)
         setup = dataclasses.replace(found.setup, colour_from=options.colour,
-                                    background_file=Path(opened.background) if opened.background else None)
+                                    background_file=Path(opened.background) if opened.background else None,
+                                    record={**found.setup.record, "keypoints": keypoints_used})
         width, height = frames_in.width, frames_in.height
         account = {**setup.record, "input_width": width, "input_height": height,
                    "working_width": setup.calibration.camera.width, "working_height": setup.calibration.camera.height}

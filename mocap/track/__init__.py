@@ -12,12 +12,12 @@ module                    what
 """
 from mocap.track.config import AUTO_SPLIT_THRESHOLD, EDGE_STARTS, TrackerConfig, split_budget
 from mocap.track.decode import backtrack, viterbi, viterbi_step
-from mocap.track.proposals import (BlobArmSource, Proposal, ProposalContext, ProposalSource, jump_proposals,
+from mocap.track.proposals import (Proposal, ProposalContext, ProposalSource, jump_proposals,
                                    place_by_silhouette, reach_proposals, unexplained_hands)
 from mocap.track.registration import Registration, register
 from mocap.track.tracker import FrameResult, Tracker, proposal_sources, track_prepared
 
-__all__ = ["AUTO_SPLIT_THRESHOLD", "BlobArmSource", "EDGE_STARTS", "FrameResult", "Proposal", "ProposalContext",
+__all__ = ["AUTO_SPLIT_THRESHOLD", "EDGE_STARTS", "FrameResult", "Proposal", "ProposalContext",
            "ProposalSource", "Registration", "Tracker", "TrackerConfig",
            "backtrack", "jump_proposals", "place_by_silhouette", "proposal_sources", "reach_proposals", "register", "split_budget", "track_prepared",
            "unexplained_hands", "viterbi", "viterbi_step"]

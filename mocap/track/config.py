@@ -25,7 +25,7 @@ EDGE_STARTS = ("region_simplex", "fresh")
 FRESH_STEP_SCALE = 3.0
 #: Size of the recovery simplex (from the last good pose) relative to the initial steps.
 RECOVERY_STEP_SCALE = 2.5
-#: Skin regions smaller than this (pixels) are left out by hand re-acquisition and the blob source.
+#: Skin regions smaller than this (pixels) are left out by hand re-acquisition.
 MIN_SKIN_BLOB_PIXELS = 2
 #: Kinematic jumps refined per frame: the lowest-F ones.
 JUMPS_REFINED = 2
@@ -46,6 +46,11 @@ POSITION_STEP_M = 0.05
 REGION_FAILURE_THRESHOLD = 0.45
 #: A frame with mean edge distance above this (pixels) is an edge failure.
 EDGE_FAILURE_THRESHOLD_PX = 4.0
+#: On a frame with 2D keypoints the failure flag reads the keypoint distance D_k (pixels): the
+#: frame failed when D_k is above this, or when F and the edge distance are both above their
+#: thresholds (a silhouette neither explains). Without keypoints F or the edge distance alone
+#: flags it, as in the paper.
+KEYPOINT_FAILURE_THRESHOLD_PX = 6.0
 #: Score of a hypothesis per unit of F (the region residual).
 REGION_WEIGHT = 50.0
 #: Score of a hypothesis per pixel of mean edge distance.
@@ -113,17 +118,24 @@ class TrackerConfig(JsonConfig):
         distance D_k (:class:`mocap.cost.KeypointCost`). The registration steps add D_k at the
         same rate relative to their own cost: the region step minimises
         ``F + keypoint_weight / REGION_WEIGHT * D_k``, the edge step
-        ``D_c + keypoint_weight / EDGE_WEIGHT * D_k`` (:data:`REGION_WEIGHT`, :data:`EDGE_WEIGHT`); and the keypoint source
-        (:class:`mocap.track.proposals.KeypointArmSource`) joins the proposal stage. Without
-        keypoints it changes nothing.
+        ``D_c + keypoint_weight / EDGE_WEIGHT * D_k`` (:data:`REGION_WEIGHT`, :data:`EDGE_WEIGHT`); and a keypoint
+        source joins the proposal stage (``lifter_proposals``). Without keypoints it changes nothing.
+    lifter_proposals : bool
+        With keypoints (``keypoint_weight`` > 0): the proposal stage's keypoint source is the
+        learned lifter (:class:`mocap.track.proposals.LifterSource`: its K whole-body hypotheses,
+        :mod:`mocap.track.lifter`) instead of the one-arm-at-a-time inverse kinematics of
+        :class:`mocap.track.proposals.KeypointArmSource`. Off by default: with the lifters
+        available so far it did not beat the arms' source on an unseen seed (docs/research-log.md,
+        issue 29; ``experiments.tracking`` configurations ``oracle-lifter*``).
+    lifter_weight : float
+        With keypoints: score per nat of the lifter's negative log-density at a candidate's joints
+        (about the neck, :meth:`mocap.track.lifter.Lifter.log_density`), counted from the density
+        at the lifter's most probable hypothesis and capped
+        (:data:`mocap.track.tracker.LIFTER_ENERGY_CAP`); 0: off (the default, as above; 0.5 was
+        the best of 0 / 0.2 / 0.5 / 1.5 on seed 0). Every candidate of a frame, tracked or
+        proposed, pays it.
     prior_weight : float
         Score per nat of the pose prior's negative log-density (:mod:`mocap.body.prior`); 0: off.
-    blob_arms : bool
-        Proposal stage: both depth branches of the arm that reaches each hand blob
-        (:class:`mocap.track.proposals.BlobArmSource`).
-    exemplars : bool
-        Proposal stage: the nearest exemplars of the shipped set rendered from motion capture
-        (:mod:`mocap.track.exemplars`), and their half turns.
     proposals_refined : int
         Proposals of each source refined per frame: the lowest-F ones (0: the stage is off).
     proposal_evaluations : int
@@ -150,9 +162,9 @@ class TrackerConfig(JsonConfig):
     lag: int = 8
     offline: bool = False
     keypoint_weight: float = 2.0
+    lifter_proposals: bool = False
+    lifter_weight: float = 0.0
     prior_weight: float = 0.05
-    blob_arms: bool = False
-    exemplars: bool = False
     proposals_refined: int = 2
     proposal_evaluations: int = 100
     gradient_step: bool = False
@@ -167,7 +179,7 @@ class TrackerConfig(JsonConfig):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                 raise ValueError(f"{name} must be a non-negative integer, got {v!r}")
-        for name in ("recovery", "hand_reacquisition", "jumps", "offline", "blob_arms", "exemplars", "gradient_step"):
+        for name in ("recovery", "hand_reacquisition", "jumps", "offline", "gradient_step", "lifter_proposals"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         split_budget(self.evaluations, self.split)          # validates the split
@@ -177,7 +189,7 @@ class TrackerConfig(JsonConfig):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be a finite positive number, got {v!r}")
-        for name in ("ftol", "keypoint_weight", "prior_weight"):
+        for name in ("ftol", "keypoint_weight", "lifter_weight", "prior_weight"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise ValueError(f"{name} must be finite and non-negative, got {v!r}")
@@ -194,7 +206,14 @@ class TrackerConfig(JsonConfig):
             unknown names raise TypeError.
         """
         return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
-                           prior_weight=0.0, keypoint_weight=0.0, blob_arms=False, exemplars=False), **changes)
+                           prior_weight=0.0, keypoint_weight=0.0, lifter_proposals=False, lifter_weight=0.0),
+                       **changes)
+
+    @property
+    def uses_lifter(self) -> bool:
+        """Whether frames with keypoints are lifted (``keypoint_weight`` > 0 and the lifter's
+        proposals or score on)."""
+        return self.keypoint_weight > 0 and (self.lifter_proposals or self.lifter_weight > 0)
 
     def keypoint_step_weights(self) -> tuple[float, float]:
         """Weight of the keypoint distance in the region step (units of F per pixel) and in the

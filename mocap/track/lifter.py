@@ -61,8 +61,11 @@ OUTPUTS_PER_HYPOTHESIS = 3 + len(BOUNDED_ANGLES)
 N_FEATURES = 3 * len(JOINT_NAMES) + 2
 #: Fewest visible joints the lifter accepts (fewer give no scale to normalise by).
 MIN_VISIBLE = 3
-#: Standard deviation (metres, per coordinate) of the isotropic Gaussians of :meth:`Lifter.log_density`.
-DENSITY_SIGMA_M = 0.06
+#: Standard deviation (metres, per coordinate) of the isotropic Gaussians of :meth:`Lifter.log_density`:
+#: about the lifter's best-of-ten error, so that the truth is rarely far out in the tails. Chosen in
+#: the tracker's score (issue 29; oracle keypoints, seed 0, gestures-2 / gestures-1, a 512x3
+#: candidate model, lifter_weight 0.5): 0.06 m gave 169 / 100 mm, 0.12 m 103 / 107 mm.
+DENSITY_SIGMA_M = 0.12
 #: Gauss-Newton steps refining each hypothesis's root on the pixel reprojection error.
 ROOT_REFINE_STEPS = 3
 #: Joint about which hypotheses' joints are given (the metrics' root joint, :data:`mocap.metrics.ROOT_JOINT`).

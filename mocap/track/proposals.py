@@ -12,10 +12,11 @@ Two kinds feed the beam (:class:`mocap.track.Tracker`):
   map; and, where a detector gave them, 2D keypoints) and returns full poses
   (:class:`Proposal`), whatever the previous pose was. The tracker scores every proposal once
   by F, refines the lowest-F ones of each source by a short registration and lets them
-  compete in the beam; the decoder decides. Sources here: :class:`BlobArmSource` (both depth
-  branches of the arm that reaches each hand blob) and :class:`KeypointArmSource` (each arm
-  on every depth branch of its elbow and wrist keypoints, the torso on the shoulder
-  keypoints); elsewhere the exemplar source (:mod:`mocap.track.exemplars`).
+  compete in the beam; the decoder decides. Sources here: :class:`LifterSource` (the learned
+  lifter's whole-body hypotheses from the frame's 2D keypoints, :mod:`mocap.track.lifter`) and
+  :class:`KeypointArmSource` (each arm on every depth branch of its elbow and wrist keypoints,
+  the torso on the shoulder keypoints). The silhouette-only sources (hand blobs, the k-NN exemplars) were removed: see
+  docs/research-log.md.
 """
 from __future__ import annotations
 
@@ -72,12 +73,16 @@ class ProposalContext:
         The leading hypothesis's pose registered on this frame (metres, radians).
     keypoints : object or None
         The frame's 2D keypoints in working-camera pixels, when a detector gave them.
+    lifted : LiftedHypotheses or None
+        The learned lifter's hypotheses for those keypoints (:meth:`mocap.track.lifter.Lifter.lift`),
+        when the tracker lifts them.
     """
 
     model: BodyModel
     camera: Camera
     leader: np.ndarray
     keypoints: object | None = None
+    lifted: object | None = None
 
 
 class ProposalSource(Protocol):
@@ -176,44 +181,6 @@ def skin_blobs_off_head(labels: np.ndarray, joints: np.ndarray, model: BodyModel
         return np.zeros((0, 2))
     head = int(np.argmin(np.linalg.norm(blobs.centroids - camera.project(joints)[JOINT_INDEX["head"]], axis=1)))
     return np.delete(blobs.centroids, head, axis=0)
-
-
-@dataclass(frozen=True)
-class BlobArmSource:
-    """Both depth branches of each arm that reaches a hand blob (the skin regions but the head's).
-
-    For every such region and arm whose reach (shoulder to hand centre, arm straight, times
-    each of :data:`REACH_FRACTIONS`) the region's camera ray meets, the hand is put on the ray at
-    the two depths where it does (nearer and farther than the shoulder: the two depth branches)
-    by :func:`mocap.body.ik.reach_arm`, the rest of the body kept as the leader's; joint limits
-    hold. Up to ``max_blobs`` regions, largest first.
-
-    Attributes
-    ----------
-    min_pixels : int, pixels
-        Smaller skin regions are ignored.
-    max_blobs : int
-        Regions used at most.
-    """
-
-    min_pixels: int = MIN_SKIN_BLOB_PIXELS
-    max_blobs: int = 3
-    origin: str = "blob"
-
-    def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
-        model, camera, leader = context.model, context.camera, context.leader
-        joints = model.joint_positions(leader)
-        out = []
-        for uv in skin_blobs_off_head(prepared.labels, joints, model, camera, self.min_pixels)[: self.max_blobs]:
-            ray = pixel_ray(camera, uv)
-            for side in SIDES:
-                shoulder = joints[JOINT_INDEX[f"{side}_shoulder"]]
-                reach = arm_reach_m(leader, model, side)
-                for fraction in REACH_FRACTIONS:
-                    for depth in ray_sphere_depths(ray, shoulder, fraction * reach):
-                        if depth > 0:
-                            out.append(Proposal(reach_arm(leader, model.skeleton, side, depth * ray), self.origin))
-        return out
 
 
 def unexplained_hands(labels: np.ndarray, joints: np.ndarray, model: BodyModel, camera: Camera,
@@ -441,3 +408,22 @@ class KeypointArmSource:
                                           pixel_ray(camera, k.uv[w])).values())
         inside = [q for q in branches if within_limits(q)]
         return inside or [clamp_to_limits(q) for q in branches]
+
+
+@dataclass(frozen=True)
+class LifterSource:
+    """Whole-body proposals from 2D keypoints: the learned lifter's K hypotheses of the frame.
+
+    The tracker lifts the frame's keypoints once (:meth:`mocap.track.lifter.Lifter.lift`, the
+    calibrated body's forward kinematics, each hypothesis's root placed by the translation whose
+    projection best fits the keypoints: its depth from the body's size and the keypoints' scale)
+    and hands them over in :attr:`ProposalContext.lifted`; this source proposes every one of
+    them, most probable first. None without keypoints.
+    """
+
+    origin: str = "lifter"
+
+    def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
+        if context.lifted is None:
+            return []
+        return [Proposal(np.array(q, dtype=np.float64), self.origin) for q in context.lifted.poses]

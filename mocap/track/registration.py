@@ -22,6 +22,7 @@ docs/research-log.md.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +31,7 @@ from mocap.body.pose import JOINT_LIMITS, check_pose, clamp_to_limits
 from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.optimize import GaussNewtonResult, SimplexResult, initial_simplex, minimize_cost, minimize_edge_gauss_newton
 from mocap.track.config import (EDGE_FAILURE_THRESHOLD_PX, FRESH_STEP_SCALE, GRADIENT_REGION_WEIGHT, GRADIENT_SCALE,
-                                REGION_FAILURE_THRESHOLD, TrackerConfig, gradient_budget, split_budget)
+                                KEYPOINT_FAILURE_THRESHOLD_PX, REGION_FAILURE_THRESHOLD, TrackerConfig, gradient_budget, split_budget)
 
 
 @dataclass(frozen=True)
@@ -69,10 +70,17 @@ class Registration:
         return sum(r.evaluations for r in (self.region, self.edge, self.gradient) if r is not None)
 
     def failed(self, config: TrackerConfig) -> bool:
-        """A residual peak: F above its threshold, or (when the edge step ran) the edge distance."""
-        edge_checked = self.edge is not None and self.edge.evaluations > 0
-        return bool(self.region_residual > REGION_FAILURE_THRESHOLD
-                    or (edge_checked and self.edge_residual > EDGE_FAILURE_THRESHOLD_PX))
+        """A residual peak. Without keypoints: F above its threshold, or (when the edge step ran)
+        the edge distance. With keypoints: the keypoint distance above
+        :data:`~mocap.track.config.KEYPOINT_FAILURE_THRESHOLD_PX`, or F and the edge distance at
+        the pose (whether or not the edge step ran) both above theirs: a segmentation that gets
+        the colours wrong no longer fails a pose that the keypoints and the edges place."""
+        region_peak = self.region_residual > REGION_FAILURE_THRESHOLD
+        if math.isnan(self.keypoint_residual):
+            edge_checked = self.edge is not None and self.edge.evaluations > 0
+            return bool(region_peak or (edge_checked and self.edge_residual > EDGE_FAILURE_THRESHOLD_PX))
+        return bool(self.keypoint_residual > KEYPOINT_FAILURE_THRESHOLD_PX
+                    or (region_peak and self.edge_residual > EDGE_FAILURE_THRESHOLD_PX))
 
 
 def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: TrackerConfig, *,

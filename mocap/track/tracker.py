@@ -5,10 +5,13 @@ registration (:func:`~mocap.track.registration.register`; the leading one with t
 budget, the others with ``hypothesis_evaluations``). Proposals compete with them: a recovery
 from the last good pose when the leader fails, hand re-acquisition when a skin region is left
 unexplained, the leader's kinematic jumps (:mod:`mocap.body.jumps`), and the proposal stage's
-poses read from the current image (:class:`~mocap.track.proposals.ProposalSource`: hand blobs,
-exemplars, keypoints), each refined by a short registration. Every candidate gets a **unary score** (``REGION_WEIGHT * F + EDGE_WEIGHT * edge
-distance + prior_weight * pose-prior energy``, plus ``keypoint_weight * keypoint distance`` on
-frames with 2D keypoints, which every registration of the frame then also adds); between consecutive frames a **motion term**
+poses read from the current image (:class:`~mocap.track.proposals.ProposalSource`: from 2D
+keypoints, the arms' inverse kinematics or the learned lifter's whole-body hypotheses), each
+refined by a short registration. Every
+candidate gets a **unary score** (``REGION_WEIGHT * F + EDGE_WEIGHT * edge distance +
+prior_weight * pose-prior energy``; on frames with 2D keypoints plus ``keypoint_weight *
+keypoint distance``, which every registration of the frame then also adds, and ``lifter_weight``
+times the lifter's negative log-density at the candidate's joints); between consecutive frames a **motion term**
 (half the mean squared joint displacement over ``MOTION_SIGMA_M**2``) links them. The forward
 Viterbi recursion (:func:`~mocap.track.decode.viterbi_step`) gives each candidate the cost of
 the best path to it; near-duplicates are merged and the ``beam`` cheapest survive.
@@ -42,9 +45,15 @@ from mocap.render.camera import Camera
 from mocap.track.config import (EDGE_WEIGHT, JUMPS_REFINED, MERGE_DISTANCE_M, MOTION_CAP, MOTION_SIGMA_M,
                                 RECOVERY_STEP_SCALE, REGION_WEIGHT, TrackerConfig)
 from mocap.track.decode import backtrack, viterbi_step
-from mocap.track.proposals import (BlobArmSource, KeypointArmSource, ProposalContext, ProposalSource, jump_proposals,
+from mocap.track.lifter import MIN_VISIBLE, Lifter, relative_joints
+from mocap.track.proposals import (KeypointArmSource, LifterSource, ProposalContext, ProposalSource, jump_proposals,
                                    reach_proposals, unexplained_hands)
 from mocap.track.registration import Registration, register
+
+#: Most nats the lifter term charges a candidate (before ``lifter_weight``): about the energy of
+#: joints 18 cm on average from the nearest hypothesis (:data:`~mocap.track.lifter.DENSITY_SIGMA_M`). The lifter misses some frames (its best of
+#: ten is within 10 cm on about nine in ten); there the image's evidence must decide.
+LIFTER_ENERGY_CAP = 10.0
 
 
 @dataclass
@@ -120,14 +129,19 @@ class Tracker:
     sources : sequence of ProposalSource, optional
         The proposal stage's sources (default: :func:`proposal_sources` of ``config``);
         experiments add others (an oracle) this way.
+    lifter : Lifter, optional
+        The 2D->3D lifter of frames with keypoints (default: the shipped one,
+        :meth:`Lifter.load`, when ``config.uses_lifter``).
     """
 
     def __init__(self, model: BodyModel, camera: Camera, config: TrackerConfig, initial_pose,
-                 prior: PosePrior | None = None, sources: Sequence[ProposalSource] | None = None) -> None:
+                 prior: PosePrior | None = None, sources: Sequence[ProposalSource] | None = None,
+                 lifter: Lifter | None = None) -> None:
         if config.mesh_resolution and model.mesh.resolution != config.mesh_resolution:
             model = model.with_resolution(config.mesh_resolution)
         self.model, self.camera, self.config = model, camera, config
         self.prior = prior if prior is not None else (default_prior() if config.prior_weight > 0 else None)
+        self.lifter = lifter if lifter is not None else (Lifter.load() if config.uses_lifter else None)
         self.sources: tuple[ProposalSource, ...] = tuple(proposal_sources(config) if sources is None else sources)
         self.candidates: list[tuple[str, np.ndarray]] = []
         q = clamp_to_limits(check_pose(initial_pose, name="initial pose"))
@@ -210,8 +224,9 @@ class Tracker:
             return _Frame(index, True, kept, self._cost - self._cost.min(), np.arange(len(kept)), 0, timings)
         region_cost, edge_cost = self.costs(prepared)
         # every registration of the frame, with the keypoint distance when keypoints are given
-        fit = functools.partial(register, region_cost, edge_cost, config=cfg,
-                                keypoint_cost=self.keypoint_cost(keypoints))
+        keypoint_cost = self.keypoint_cost(keypoints)
+        fit = functools.partial(register, region_cost, edge_cost, config=cfg, keypoint_cost=keypoint_cost)
+        lifted = self.lift(keypoints)
         candidates: list[tuple[Registration, str]] = []
         evaluations = 0
         t1 = time.perf_counter()
@@ -238,11 +253,12 @@ class Tracker:
             evaluations += self._jump(region_cost, fit, leader, candidates)
         t3 = time.perf_counter()
         if self.sources and cfg.proposals_refined > 0:
-            context = ProposalContext(self.model, self.camera, leader.pose, keypoints)
+            context = ProposalContext(self.model, self.camera, leader.pose, keypoints, lifted)
+            rough = functools.partial(self._rough_unary, region_cost, edge_cost, keypoint_cost, lifted)
             for source in self.sources:
-                evaluations += self._propose(source, prepared, context, region_cost, fit, candidates)
+                evaluations += self._propose(source, prepared, context, rough, fit, candidates)
         timings["proposals"] = 1e3 * (time.perf_counter() - t3)
-        hypotheses = [self._hypothesis(reg, origin) for reg, origin in candidates]
+        hypotheses = [self._hypothesis(reg, origin, lifted) for reg, origin in candidates]
         self.candidates = [(h.origin, h.pose) for h in hypotheses]
         transition = self._motion(self._beam, hypotheses)
         cost, back = viterbi_step(self._cost, transition, np.array([h.unary for h in hypotheses]))
@@ -253,15 +269,49 @@ class Tracker:
         return _Frame(index, False, [hypotheses[k] for k in keep], kept_cost - kept_cost[0], back[keep], evaluations,
                       timings)
 
-    def _hypothesis(self, reg: Registration, origin: str) -> _Hypothesis:
+    def lift(self, keypoints):
+        """The lifter's hypotheses (:class:`~mocap.track.lifter.LiftedHypotheses`) of a frame's
+        keypoints (working pixels); None without a lifter or with fewer than
+        :data:`~mocap.track.lifter.MIN_VISIBLE` joints present."""
+        if self.lifter is None or keypoints is None:
+            return None
+        present = np.asarray(keypoints.confidence) > 0
+        if present.sum() < MIN_VISIBLE:
+            return None
+        uv = np.where(present[:, None], keypoints.uv, 0.0)
+        return self.lifter.lift(uv, present, self.camera, self.model)
+
+    def lifter_energy(self, lifted, joints: np.ndarray) -> float:
+        """The lifter term of the score before its weight (nats): the lifter's log-density at its
+        most probable hypothesis minus that at ``joints`` (10, 3; camera coordinates, metres),
+        at most :data:`LIFTER_ENERGY_CAP` (far from every hypothesis the lifter has no say)."""
+        top = self.lifter.log_density(lifted, lifted.joints[0])
+        return min(top - self.lifter.log_density(lifted, relative_joints(joints)), LIFTER_ENERGY_CAP)
+
+    def _unary(self, region: float, edge: float, keypoint: float, pose: np.ndarray, joints: np.ndarray,
+               lifted) -> float:
+        """The unary score of a candidate from its residuals (see the module)."""
         cfg = self.config
-        unary = REGION_WEIGHT * reg.region_residual + EDGE_WEIGHT * reg.edge_residual
-        if not math.isnan(reg.keypoint_residual):
-            unary += cfg.keypoint_weight * reg.keypoint_residual
+        unary = REGION_WEIGHT * region + EDGE_WEIGHT * edge
+        if not math.isnan(keypoint):
+            unary += cfg.keypoint_weight * keypoint
         if self.prior is not None and cfg.prior_weight > 0:
-            unary += cfg.prior_weight * self.prior.energy(reg.pose)
-        return _Hypothesis(reg.pose, self.model.joint_positions(reg.pose), reg.region_residual, reg.edge_residual,
-                           reg.edge_residual_after_region, reg.failed(cfg), origin, float(unary),
+            unary += cfg.prior_weight * self.prior.energy(pose)
+        if lifted is not None and cfg.lifter_weight > 0:
+            unary += cfg.lifter_weight * self.lifter_energy(lifted, joints)
+        return float(unary)
+
+    def _rough_unary(self, region_cost, edge_cost, keypoint_cost, lifted, pose: np.ndarray) -> float:
+        """The unary score of an unrefined pose (one evaluation of each cost): what ranks proposals."""
+        return self._unary(region_cost.evaluate_unchecked(pose), edge_cost(pose),
+                           math.nan if keypoint_cost is None else keypoint_cost(pose), pose,
+                           self.model.joint_positions(pose), lifted)
+
+    def _hypothesis(self, reg: Registration, origin: str, lifted=None) -> _Hypothesis:
+        joints = self.model.joint_positions(reg.pose)
+        unary = self._unary(reg.region_residual, reg.edge_residual, reg.keypoint_residual, reg.pose, joints, lifted)
+        return _Hypothesis(reg.pose, joints, reg.region_residual, reg.edge_residual,
+                           reg.edge_residual_after_region, reg.failed(self.config), origin, unary,
                            reg.region.iterations if reg.region else 0, reg.edge.iterations if reg.edge else 0)
 
     def _motion(self, previous: list[_Hypothesis], current: list[_Hypothesis]) -> np.ndarray:
@@ -310,15 +360,16 @@ class Tracker:
             candidates.append((reg, "jump"))
         return used
 
-    def _propose(self, source: ProposalSource, prepared, context: ProposalContext, region_cost, fit,
+    def _propose(self, source: ProposalSource, prepared, context: ProposalContext, rough, fit,
                  candidates: list) -> int:
-        """One source's proposals: each scored by F, the ``proposals_refined`` lowest refined by a
-        registration of ``proposal_evaluations``; returns evaluations used."""
+        """One source's proposals: each given its unary score unrefined (``rough``), the
+        ``proposals_refined`` lowest refined by a registration of ``proposal_evaluations``;
+        returns evaluations used."""
         proposals = source.propose(prepared, context)
         if not proposals:
             return 0
-        values = np.array([region_cost.evaluate_unchecked(p.pose) for p in proposals])
-        used = len(proposals)
+        values = np.array([rough(p.pose) for p in proposals])
+        used = 2 * len(proposals)
         for i in np.argsort(values, kind="stable")[: self.config.proposals_refined]:
             reg = fit(proposals[int(i)].pose, evaluations=self.config.proposal_evaluations)
             used += reg.evaluations
@@ -375,17 +426,13 @@ def _result(frame: _Frame, k: int) -> FrameResult:
 
 
 def proposal_sources(config: TrackerConfig) -> list[ProposalSource]:
-    """The proposal stage's sources that ``config`` switches on (``blob_arms``, ``exemplars``; the
-    keypoint source with ``keypoint_weight`` > 0: it proposes nothing on frames without keypoints)."""
+    """The proposal stage's sources that ``config`` switches on: with ``keypoint_weight`` > 0 the
+    lifter's (``lifter_proposals``) or else the arms' inverse kinematics on the keypoints; either
+    proposes nothing on frames without keypoints."""
     sources: list[ProposalSource] = []
     if config.keypoint_weight > 0:
-        sources.append(KeypointArmSource(min_offset_px=config.reacquisition_distance_px))
-    if config.blob_arms:
-        sources.append(BlobArmSource())
-    if config.exemplars:
-        from mocap.track.exemplars import ExemplarSource      # loads the shipped exemplar set
-
-        sources.append(ExemplarSource.default())
+        sources.append(LifterSource() if config.lifter_proposals
+                       else KeypointArmSource(min_offset_px=config.reacquisition_distance_px))
     return sources
 
 
