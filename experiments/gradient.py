@@ -59,12 +59,15 @@ def truth_rows(config: TrackerConfig, seed: int, sequences, out: Path) -> list[d
 def truth_residuals(seed: int, sequences, out: Path) -> dict[str, float]:
     """Mean F (eq. 1) and edge distance (eq. 2, pixels) of the *true* poses, frames 1.. of each
     sequence, with the tracker's own costs: what a perfect registration would leave."""
-    from experiments.ambiguity import _benchmark_sequence
+    from experiments.ambiguity import SIZE
+    from experiments.units import DataSpec, load_prepared, load_sequence, prepare_data
+    from mocap.synth import SEQUENCES
     from mocap.track import Tracker
 
     region, edge = [], []
     for name in sequences:
-        loaded, prepared = _benchmark_sequence(name, out, seed)
+        folder = prepare_data(DataSpec(name, None, SEQUENCES[name].frames, seed, *SIZE), str(out))
+        loaded, prepared = load_sequence(folder), load_prepared(folder)
         poses = loaded.ground_truth.poses
         tracker = Tracker(loaded.model, loaded.calibration.camera, TrackerConfig(), poses[0])
         for f in range(1, min(len(prepared), len(poses))):
