@@ -202,7 +202,7 @@ class TrackerConfig(JsonConfig):
             Fields to set as well (the budget, split and edge start the experiments sweep);
             unknown names raise TypeError.
         """
-        return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
+        return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0, gradient_step=False,
                            prior_weight=0.0, keypoint_weight=0.0, blob_arms=False, exemplars=False), **changes)
 
     def keypoint_step_weights(self) -> tuple[float, float]:
