@@ -54,8 +54,8 @@ CONFIGS = MappingProxyType({
     "oracle-keypoints": {},
     "oracle-lifter": {"lifter_proposals": True},
     "oracle-lifter-score": {"lifter_proposals": True, "lifter_weight": 0.5},
-    # the gradient step (issue 30) on / off, whichever the default is not
-    "gradient": {"gradient_step": not TrackerConfig().gradient_step},
+    # the default tracker with the gradient step (issue 30; off by default: docs/research-log.md)
+    "gradient": {"gradient_step": True},
 })
 #: Configurations tracked with the paper's two-class model (skin and clothes: no hair region, no
 #: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.

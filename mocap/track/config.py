@@ -205,7 +205,7 @@ class TrackerConfig(JsonConfig):
             Fields to set as well (the budget, split and edge start the experiments sweep);
             unknown names raise TypeError.
         """
-        return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
+        return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0, gradient_step=False,
                            prior_weight=0.0, keypoint_weight=0.0, lifter_proposals=False, lifter_weight=0.0),
                        **changes)
 
