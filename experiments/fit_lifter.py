@@ -5,6 +5,9 @@ Needs the optional extra ``fit`` (``torch==2.13.0``, the CPU build). Reads every
 by :func:`experiments.fit_pose_prior.load_training_poses`) and adds each pose's mirror image.
 Every training step draws a fresh batch of projections of those poses, all in PyTorch:
 
+* augmentation: half the poses take their left arm from another pose (the arms move
+  independently), every angle jittered by :data:`ANGLE_JITTER` within the limits, a quarter of
+  the elbows straightened (:data:`STRAIGHT_ELBOW`);
 * a random body (:func:`mocap.synth.actor.random_dimensions`, :data:`N_BODIES` of them) and a
   random heading over the full circle (added to the chest's yaw);
 * a random camera: horizontal field of view :data:`FOV_DEG` (webcam to phone), the person's
@@ -53,10 +56,10 @@ SEED = 0
 #: Hypotheses per frame.
 HYPOTHESES = 10
 #: Hidden layer widths of the full and the --quick model.
-HIDDEN = (1024, 1024, 1024)
+HIDDEN = (512, 512, 512)
 QUICK_HIDDEN = (32, 32)
 #: Training steps and batch size (full, --quick).
-STEPS, QUICK_STEPS = 12000, 30
+STEPS, QUICK_STEPS = 8000, 30
 BATCH, QUICK_BATCH = 256, 64
 LEARNING_RATE = 1e-3
 #: Weight of the mean over hypotheses in the winner-takes-all loss.
@@ -69,10 +72,22 @@ N_BODIES = 256
 FOV_DEG = (45.0, 80.0)
 #: Width of the frame at the person's depth, metres (how much of the scene the frame shows).
 FRAME_WIDTH_AT_DEPTH = (1.5, 4.4)
+#: Share of samples with the detector's (MediaPipe's) measured keypoint errors; the others the oracle's.
+DETECTOR_SHARE = 0.5
 #: Largest oracle noise, as a share of the keypoints' RMS spread about their centre.
 ORACLE_NOISE_MAX = 0.12
 #: Largest per-joint drop-out probability.
 DROP_MAX = 0.3
+#: Share of samples whose left arm comes from another pose, and the jitter (radians, standard
+#: deviation) added to every angle, within the limits.
+ARM_MIX = 0.5
+ANGLE_JITTER = 0.1
+#: Share of arms straightened (elbow flexion drawn from 0 to STRAIGHT_ELBOW_MAX radians): in the
+#: retargeted CMU trials 95 % of elbows are bent by more than 22 degrees.
+STRAIGHT_ELBOW = 0.25
+STRAIGHT_ELBOW_MAX = np.deg2rad(25.0)
+_ELBOWS = (PARAMETER_INDEX["r_elbow_flex"], PARAMETER_INDEX["l_elbow_flex"])
+_LEFT_ARM = [PARAMETER_INDEX[n] for n in PARAMETER_INDEX if n.startswith("l_")]
 #: Spread (per coordinate, units of the keypoints' scale) of a detector's gross misses.
 GROSS_SIGMA = 0.6
 #: CPU threads (deterministic for a fixed count). One: on a shared, busy machine two intra-op threads
@@ -266,6 +281,11 @@ def make_bodies(seed: int, n: int) -> Bodies:
                   torch.tensor(np.stack([s.joint_local for s in skeletons]), dtype=torch.float32), segment)
 
 
+def _limits_tensor():
+    torch = _torch()
+    return torch.tensor(np.clip(JOINT_LIMITS, -50.0, 50.0), dtype=torch.float32)
+
+
 def draw_batch(poses, bodies: Bodies, noise: KeypointNoise, n: int, generator):
     """One batch of projections (see the module docstring).
 
@@ -277,11 +297,21 @@ def draw_batch(poses, bodies: Bodies, noise: KeypointNoise, n: int, generator):
     """
     torch = _torch()
     g = generator
+    limits = _limits_tensor()
 
     def uniform(lo, hi, size=(n,)):
         return lo + (hi - lo) * torch.rand(size, generator=g)
 
     q = poses[torch.randint(len(poses), (n,), generator=g)].clone()
+    # augmentation: the left arm of another pose (arms move independently), angles jittered
+    other = poses[torch.randint(len(poses), (n,), generator=g)]
+    mix = (torch.rand(n, generator=g) < ARM_MIX)[:, None]
+    q[:, _LEFT_ARM] = torch.where(mix, other[:, _LEFT_ARM], q[:, _LEFT_ARM])
+    q[:, 3:] = q[:, 3:] + ANGLE_JITTER * torch.randn((n, q.shape[1] - 3), generator=g)
+    for elbow in _ELBOWS:                          # CMU's elbows are rarely straight: some arms straightened
+        straight = torch.rand(n, generator=g) < STRAIGHT_ELBOW
+        q[:, elbow] = torch.where(straight, STRAIGHT_ELBOW_MAX * torch.rand(n, generator=g), q[:, elbow])
+    q = torch.minimum(torch.maximum(q, limits[:, 0]), limits[:, 1])
     body = torch.randint(len(bodies.offsets), (n,), generator=g)
     q[:, 0:3] = 0.0
     q[:, PARAMETER_INDEX["chest_yaw"]] = uniform(-np.pi, np.pi)
@@ -297,7 +327,7 @@ def draw_batch(poses, bodies: Bodies, noise: KeypointNoise, n: int, generator):
     # noise in units of the clean keypoints' scale
     centre = xy.mean(dim=1, keepdim=True)
     scale = torch.sqrt(((xy - centre) ** 2).sum(dim=2).mean(dim=1))[:, None, None]
-    detector = torch.rand(n, generator=g) < 0.5
+    detector = torch.rand(n, generator=g) < DETECTOR_SHARE
     sigma_oracle = uniform(0.0, ORACLE_NOISE_MAX)[:, None, None]
     offset = torch.tensor(noise.offset, dtype=torch.float32)[None]
     sigma_det = torch.tensor(noise.sigma, dtype=torch.float32)[None, :, None]

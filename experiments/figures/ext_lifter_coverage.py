@@ -41,7 +41,10 @@ def main(results: dict, out: str | Path, name: str = "ext_lifter_coverage") -> l
             placeholder(left, "no coverage results")
         for key in measures:
             ms, cov = _curve(results[key]["all"])
-            left.plot(ms, cov, "o-", ms=4, label=_LABELS[key].format(seed=results[key].get("seed", "?")))
+            label = _LABELS[key].format(seed=results[key].get("seed", "?"))
+            if key == "loso" and "hidden" in results[key]:
+                label += f"; {'x'.join(map(str, results[key]['hidden']))}, {results[key]['steps']} steps"
+            left.plot(ms, cov, "o-", ms=4, label=label)
         if "oracle" in results:
             for seq, summary in results["oracle"]["sequences"].items():
                 ms, cov = _curve(summary)
@@ -57,6 +60,6 @@ def main(results: dict, out: str | Path, name: str = "ext_lifter_coverage") -> l
             ax.set_xlabel("hypotheses M")
             ax.set_ylabel("frames within 100 mm (%)")
             ax.set_ylim(0.0, 100.0)
-            if ax.lines:
+            if ax.get_legend_handles_labels()[1]:
                 ax.legend(fontsize=6, loc="lower right")
         return save(fig, out, name)

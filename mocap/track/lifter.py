@@ -7,8 +7,9 @@ joint limits by construction (a sigmoid between each angle's bounds,
 :data:`~mocap.body.pose.JOINT_LIMITS`; the chest heading as a direction, atan2 of two outputs),
 the calibrated body model's forward kinematics gives each hypothesis's joints, and its root
 (chest base) is placed in camera coordinates by the translation whose projection best fits the
-visible keypoints (linear least squares in the three root coordinates: the depth follows from
-the calibrated body's size and the keypoints' scale).
+visible keypoints (:func:`fit_roots`: linear least squares in the three root coordinates, then
+Gauss-Newton on the pixel error; the depth follows from the calibrated body's size and the
+keypoints' scale).
 
 Input normalisation (:func:`lifter_features`): pixels become image-plane coordinates
 ``((u - cx) / fx, (v - cy) / fy)``; the visible joints are centred on their mean and divided by
@@ -45,7 +46,7 @@ from mocap.body.skeleton import JOINT_INDEX, JOINT_NAMES
 from mocap.render.camera import Camera
 
 __all__ = ["BOUNDED_ANGLES", "DENSITY_SIGMA_M", "LIFTER_FILE", "LIFTER_FORMAT", "MIN_VISIBLE", "N_FEATURES",
-           "LiftedHypotheses", "Lifter", "lifter_checksum", "lifter_features", "relative_joints"]
+           "LiftedHypotheses", "Lifter", "fit_roots", "lifter_checksum", "lifter_features", "relative_joints"]
 
 #: File name of the shipped weights inside the package.
 LIFTER_FILE = "lifter.npz"
@@ -65,6 +66,8 @@ MIN_VISIBLE = 3
 #: the tracker's score (issue 29; oracle keypoints, seed 0, gestures-2 / gestures-1, a 512x3
 #: candidate model, lifter_weight 0.5): 0.06 m gave 169 / 100 mm, 0.12 m 103 / 107 mm.
 DENSITY_SIGMA_M = 0.12
+#: Gauss-Newton steps refining each hypothesis's root on the pixel reprojection error.
+ROOT_REFINE_STEPS = 3
 #: Joint about which hypotheses' joints are given (the metrics' root joint, :data:`mocap.metrics.ROOT_JOINT`).
 RELATIVE_TO = "neck"
 
@@ -294,7 +297,7 @@ class Lifter:
         for k, q in enumerate(poses):
             segment_transforms_into(q, sk.offsets, transforms)
             apply_transforms_into(transforms, sk.joint_segment, sk.joint_local, joints[k])
-            q[_ROOT] = _fit_root(joints[k][mask], uv[mask], camera)
+        poses[:, _ROOT] = fit_roots(joints[:, mask], uv[mask], camera)
         poses = np.clip(poses, JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1])
         if not all(within_limits(q) for q in poses):       # cannot happen: decode bounds every angle
             raise RuntimeError("lifter produced a pose outside the joint limits")
@@ -384,16 +387,51 @@ class Lifter:
                    str(meta.get("attribution", "")), dict(meta.get("provenance", {})))
 
 
-def _fit_root(joints: np.ndarray, uv: np.ndarray, camera: Camera) -> np.ndarray:
-    """Root translation (metres) that puts ``joints`` (n, 3; posed with the root at zero) on the
-    pixels ``uv`` (n, 2): linear least squares of ``fx (X + tx) = (u - cx)(Z + tz)`` and the
-    same for y (the projection's algebraic error), depth kept inside the root's limits."""
-    a = np.zeros((2 * len(joints), 3))
-    b = np.empty(2 * len(joints))
+def fit_roots(joints, keypoints_uv, camera: Camera) -> np.ndarray:
+    """Root translations that put posed joints on their keypoints.
+
+    Linear least squares of ``fx (X + tx) = (u - cx)(Z + tz)`` and the same for y (the
+    projection's algebraic error), then :data:`ROOT_REFINE_STEPS` Gauss-Newton steps on the
+    reprojection error in pixels, all K at once; kept inside the root's limits.
+
+    Parameters
+    ----------
+    joints : array_like, shape (K, n, 3), metres
+        Each pose's n joints with its root at zero (camera axes).
+    keypoints_uv : array_like, shape (n, 2), pixels
+        Where those joints are seen (finite; n >= 2, not all at one point).
+    camera : Camera
+
+    Returns
+    -------
+    ndarray, shape (K, 3), float64, metres
+        The root (``root_x, root_y, root_z``) of each pose.
+    """
+    joints = np.asarray(joints, dtype=np.float64)
+    uv = np.asarray(keypoints_uv, dtype=np.float64)
+    k, n = joints.shape[:2]
     du, dv = uv[:, 0] - camera.cx, uv[:, 1] - camera.cy
+    a = np.zeros((2 * n, 3))
     a[0::2, 0], a[0::2, 2] = camera.fx, -du
     a[1::2, 1], a[1::2, 2] = camera.fy, -dv
-    b[0::2] = du * joints[:, 2] - camera.fx * joints[:, 0]
-    b[1::2] = dv * joints[:, 2] - camera.fy * joints[:, 1]
-    t = np.linalg.lstsq(a, b, rcond=None)[0]
+    b = np.empty((k, 2 * n))
+    b[:, 0::2] = du * joints[..., 2] - camera.fx * joints[..., 0]
+    b[:, 1::2] = dv * joints[..., 2] - camera.fy * joints[..., 1]
+    t = np.linalg.lstsq(a, b.T, rcond=None)[0].T                 # one matrix for all K
+    for _ in range(ROOT_REFINE_STEPS):                            # Gauss-Newton on the pixel error
+        p = joints + t[:, None, :]
+        if (p[..., 2] < 0.05).any():
+            break
+        inv = 1.0 / p[..., 2]
+        jac = np.zeros((k, 2 * n, 3))
+        jac[:, 0::2, 0], jac[:, 0::2, 2] = camera.fx * inv, -camera.fx * p[..., 0] * inv ** 2
+        jac[:, 1::2, 1], jac[:, 1::2, 2] = camera.fy * inv, -camera.fy * p[..., 1] * inv ** 2
+        res = np.empty((k, 2 * n))
+        res[:, 0::2] = camera.fx * p[..., 0] * inv + camera.cx - uv[:, 0]
+        res[:, 1::2] = camera.fy * p[..., 1] * inv + camera.cy - uv[:, 1]
+        jt = jac.transpose(0, 2, 1)
+        try:
+            t = t - np.linalg.solve(jt @ jac, (jt @ res[..., None]))[..., 0]
+        except np.linalg.LinAlgError:
+            break
     return np.clip(t, JOINT_LIMITS[_ROOT, 0], JOINT_LIMITS[_ROOT, 1])
