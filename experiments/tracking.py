@@ -48,12 +48,10 @@ CONFIGS = MappingProxyType({
     "no-prior": {"prior_weight": 0.0},
     "no-jumps": {"jumps": False},
     "two-class": {},
-    # given the oracle's 2D keypoints (ORACLE_KEYPOINTS): the default tracker (the keypoint cue with
-    # the arms' inverse kinematics as its proposals, issue 23), with the learned lifter's proposals
-    # instead, and with its proposals and its score (issue 29)
+    # given the oracle's 2D keypoints (ORACLE_KEYPOINTS): the default tracker (the learned lifter's
+    # proposals and its score, issue 29), and without the lifter's score (its proposals alone)
     "oracle-keypoints": {},
-    "oracle-lifter": {"lifter_proposals": True},
-    "oracle-lifter-score": {"lifter_proposals": True, "lifter_weight": 0.5},
+    "oracle-no-lifter-score": {"lifter_weight": 0.0},
     # the default tracker with the gradient step (issue 30; off by default: docs/research-log.md)
     "gradient": {"gradient_step": True},
 })
@@ -61,8 +59,7 @@ CONFIGS = MappingProxyType({
 #: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.
 TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
 #: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
-ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-lifter",
-                                                             "oracle-lifter-score")})
+ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter-score")})
 
 
 def config_of(name: str) -> TrackerConfig:

@@ -14,8 +14,8 @@ model: one render each, the occluding-contour samples and, for eq. 1, the seams)
 ``prepare_colour``, ``prepare_edges``, ``prepare_distance``, ``frame_100`` / ``frame_500`` (a
 whole frame of the paper's method, image side included, at that many cost evaluations),
 ``frame_beam`` (a whole frame of the default tracker), ``frame_beam_keypoints`` (the same given
-the true joints projected as 2D keypoints: the keypoint cue, and the learned lifter's proposals
-and score where the default configuration turns them on), ``lifter`` (one frame's 2D keypoints lifted to the K hypotheses of
+the true joints projected as 2D keypoints: the keypoint cue, the learned lifter's proposals
+and its score), ``lifter`` (one frame's 2D keypoints lifted to the K hypotheses of
 :mod:`mocap.track.lifter`, group ``lifter``), and
 ``video_640x480`` (group ``video``): the whole own-video path of ``python -m mocap track`` on a
 640x480 clip — decode, reduction to the 160x120 working resolution, image side, registration
@@ -211,6 +211,7 @@ def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, mi
     from mocap.io.video import iter_frames, read_image
     from mocap.synth import generate_sequence
     from mocap.track import Tracker, TrackerConfig
+    from mocap.track.lifter import Lifter
 
     rows: list[BenchRow] = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -226,11 +227,12 @@ def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, mi
         configs["frame_beam"] = configs["frame_beam_keypoints"] = TrackerConfig()
         truth = PoseTable.read(seq.ground_truth).joints
         keypoints = [Keypoints(camera.project(j), np.ones(len(j))) for j in truth]
+        lifter = Lifter.load()          # once: a tracker would load it at its first frame with keypoints
         for name, config in configs.items():
             times = []
             given = keypoints if name == "frame_beam_keypoints" else [None] * len(images)
             while len(times) < min_runs:
-                tracker = Tracker(model, camera, config, calibration.initial_pose)
+                tracker = Tracker(model, camera, config, calibration.initial_pose, lifter=lifter)
                 for i, frame in enumerate(images):
                     t0 = time.perf_counter_ns()
                     tracker.push(i, prepare_frame(frame, background, colour), given[i])

@@ -123,8 +123,7 @@ def arm_angles_for_points(pose, skeleton: Skeleton, side: str, elbow, wrist, *,
         and from each other (as the jumps make them), else the directions are matched.
     judged : tuple of str
         Names among :data:`ARM_ANGLES` (without the side) whose joint limits decide between the
-        two solutions: :data:`JUMP_JUDGED_ANGLES` for the jumps, all four for inverse kinematics
-        from keypoints (:func:`arm_poses_on_rays`).
+        two solutions (:data:`JUMP_JUDGED_ANGLES` for the jumps).
 
     Returns
     -------
@@ -264,55 +263,3 @@ def torso_flip(pose, skeleton: Skeleton) -> np.ndarray:
         if miss(moved) < miss(out):             # the arm's limits may not let it reach the ray
             out = moved
     return out
-
-
-def arm_poses_on_rays(pose, skeleton: Skeleton, side: str, elbow_ray, wrist_ray) -> dict[str, np.ndarray]:
-    """Every pose of one arm whose elbow and wrist lie on two camera rays: the depth branches.
-
-    The elbow is where its ray meets the sphere of the upper arm's length about the shoulder
-    (nearer or farther branch), the wrist where its ray meets the sphere of the forearm's length
-    about that elbow; a ray that misses its sphere gives the point of the sphere nearest to it
-    (one branch, ``closest``: its joint then projects off its keypoint). The four arm angles follow in closed form (:func:`arm_angles_for_points`);
-    the torso, the forearm twist and the wrist are kept.
-
-    Parameters
-    ----------
-    pose : array_like, shape (23,)
-        Metres and radians: the torso that places the shoulder.
-    skeleton : Skeleton
-    side : {"r", "l"}
-    elbow_ray, wrist_ray : array_like, shape (3,)
-        Directions from the camera centre (camera coordinates; normalised here), e.g.
-        ``K^-1 (u, v, 1)`` of the elbow and wrist keypoints.
-
-    Returns
-    -------
-    dict of str to ndarray, shape (23,)
-        Keyed ``"<upper arm branch>-<forearm branch>"`` with branches ``near`` / ``far``
-        (``closest`` alone when the ray misses its sphere). Not clamped to the joint limits.
-    """
-    if side not in SIDES:
-        raise ValueError(f"side must be one of {SIDES}, got {side!r}")
-    q = check_pose(pose)
-    rays = [np.asarray(r, dtype=np.float64) for r in (elbow_ray, wrist_ray)]
-    if any(r.shape != (3,) or not np.all(np.isfinite(r)) or not np.linalg.norm(r) > 0 for r in rays):
-        raise ValueError("elbow_ray and wrist_ray must be 3 finite numbers, not all 0")
-    ray_e, ray_w = (_unit(r) for r in rays)
-    joints = joint_positions(q, skeleton)
-    s, e, w = (joints[JOINT_INDEX[f"{side}_{j}"]] for j in ("shoulder", "elbow", "wrist"))
-    upper, fore = float(np.linalg.norm(e - s)), float(np.linalg.norm(w - e))
-    out = {}
-    for e_name, e_new in _points_on_ray(ray_e, s, upper):
-        for w_name, w_new in _points_on_ray(ray_w, e_new, fore):
-            out[f"{e_name}-{w_name}"] = arm_angles_for_points(q, skeleton, side, e_new, w_new, judged=ARM_ANGLES)
-    return out
-
-
-def _points_on_ray(ray: np.ndarray, centre: np.ndarray, radius: float) -> list[tuple[str, np.ndarray]]:
-    """Points of the sphere about ``centre`` on the unit ``ray`` (named near/far), or the sphere's
-    point nearest to the ray (``closest``) when it misses."""
-    depths = ray_sphere_depths(ray, centre, radius)
-    if len(depths):
-        return [(name, t * ray) for name, t in zip(("near", "far"), depths) if t > 0]
-    off = float(ray @ centre) * ray - centre
-    return [("closest", centre + radius * (_unit(off) if np.linalg.norm(off) > 1e-12 else ray))]

@@ -93,9 +93,7 @@ class TrackerConfig(JsonConfig):
         further hypothesis.
     reacquisition_distance_px : float, pixels
         A skin region (of at least :data:`MIN_SKIN_BLOB_PIXELS`) whose centroid is farther than
-        this from both projected hands triggers it; likewise an arm (or the shoulders) whose
-        projected joints are on average this far from their 2D keypoints triggers the keypoint
-        proposals (:class:`mocap.track.proposals.KeypointArmSource`).
+        this from both projected hands triggers it.
     beam : int
         Hypotheses kept per frame (1: a single-hypothesis tracker, as the paper's).
     hypothesis_evaluations : int
@@ -119,21 +117,16 @@ class TrackerConfig(JsonConfig):
         same rate relative to their own cost: the region step minimises
         ``F + keypoint_weight / REGION_WEIGHT * D_k``, the edge step
         ``D_c + keypoint_weight / EDGE_WEIGHT * D_k`` (:data:`REGION_WEIGHT`, :data:`EDGE_WEIGHT`); and a keypoint
-        source joins the proposal stage (``lifter_proposals``). Without keypoints it changes nothing.
-    lifter_proposals : bool
-        With keypoints (``keypoint_weight`` > 0): the proposal stage's keypoint source is the
-        learned lifter (:class:`mocap.track.proposals.LifterSource`: its K whole-body hypotheses,
-        :mod:`mocap.track.lifter`) instead of the one-arm-at-a-time inverse kinematics of
-        :class:`mocap.track.proposals.KeypointArmSource`. Off by default: with the lifters
-        available so far it did not beat the arms' source on an unseen seed (docs/research-log.md,
-        issue 29; ``experiments.tracking`` configurations ``oracle-lifter*``).
+        source joins the proposal stage (the learned lifter's hypotheses,
+        :class:`mocap.track.proposals.LifterSource`). Without keypoints it changes nothing.
     lifter_weight : float
-        With keypoints: score per nat of the lifter's negative log-density at a candidate's joints
-        (about the neck, :meth:`mocap.track.lifter.Lifter.log_density`), counted from the density
-        at the lifter's most probable hypothesis and capped
-        (:data:`mocap.track.tracker.LIFTER_ENERGY_CAP`); 0: off (the default, as above; 0.5 was
-        the best of 0 / 0.2 / 0.5 / 1.5 on seed 0). Every candidate of a frame, tracked or
-        proposed, pays it.
+        With keypoints: score per nat of the learned lifter's negative log-density at a candidate's
+        joints (about the neck, :meth:`mocap.track.lifter.Lifter.log_density`), counted from the
+        density at the lifter's most probable hypothesis and capped
+        (:data:`mocap.track.tracker.LIFTER_ENERGY_CAP`); every candidate of a frame, tracked or
+        proposed, pays it. 0.5 was the best of 0 / 0.2 / 0.5 / 1.5 on seed 0; on the unseen seed 23
+        with oracle keypoints it took the tracker from 78 to 71 mm median and from 19.9 % to 16.5 %
+        of frames over 100 mm (the lifter's proposals alone; docs/research-log.md, issue 29).
     prior_weight : float
         Score per nat of the pose prior's negative log-density (:mod:`mocap.body.prior`); 0: off.
     proposals_refined : int
@@ -162,8 +155,7 @@ class TrackerConfig(JsonConfig):
     lag: int = 8
     offline: bool = False
     keypoint_weight: float = 2.0
-    lifter_proposals: bool = False
-    lifter_weight: float = 0.0
+    lifter_weight: float = 0.5
     prior_weight: float = 0.05
     proposals_refined: int = 2
     proposal_evaluations: int = 100
@@ -179,7 +171,7 @@ class TrackerConfig(JsonConfig):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                 raise ValueError(f"{name} must be a non-negative integer, got {v!r}")
-        for name in ("recovery", "hand_reacquisition", "jumps", "offline", "gradient_step", "lifter_proposals"):
+        for name in ("recovery", "hand_reacquisition", "jumps", "offline", "gradient_step"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         split_budget(self.evaluations, self.split)          # validates the split
@@ -206,14 +198,15 @@ class TrackerConfig(JsonConfig):
             unknown names raise TypeError.
         """
         return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0, gradient_step=False,
-                           prior_weight=0.0, keypoint_weight=0.0, lifter_proposals=False, lifter_weight=0.0),
+                           prior_weight=0.0, keypoint_weight=0.0, lifter_weight=0.0),
                        **changes)
 
     @property
     def uses_lifter(self) -> bool:
-        """Whether frames with keypoints are lifted (``keypoint_weight`` > 0 and the lifter's
-        proposals or score on)."""
-        return self.keypoint_weight > 0 and (self.lifter_proposals or self.lifter_weight > 0)
+        """Whether frames with keypoints are lifted (``keypoint_weight`` > 0: the lifter's hypotheses
+        are then the proposal stage's keypoint source, and its score term counts when
+        ``lifter_weight`` > 0)."""
+        return self.keypoint_weight > 0
 
     def keypoint_step_weights(self) -> tuple[float, float]:
         """Weight of the keypoint distance in the region step (units of F per pixel) and in the

@@ -12,30 +12,28 @@ Two kinds feed the beam (:class:`mocap.track.Tracker`):
   map; and, where a detector gave them, 2D keypoints) and returns full poses
   (:class:`Proposal`), whatever the previous pose was. The tracker scores every proposal once
   by F, refines the lowest-F ones of each source by a short registration and lets them
-  compete in the beam; the decoder decides. Sources here: :class:`LifterSource` (the learned
-  lifter's whole-body hypotheses from the frame's 2D keypoints, :mod:`mocap.track.lifter`) and
-  :class:`KeypointArmSource` (each arm on every depth branch of its elbow and wrist keypoints,
-  the torso on the shoulder keypoints). The silhouette-only sources (hand blobs, the k-NN exemplars) were removed: see
-  docs/research-log.md.
+  compete in the beam; the decoder decides. The source here: :class:`LifterSource` (the learned
+  lifter's whole-body hypotheses from the frame's 2D keypoints, :mod:`mocap.track.lifter`). The
+  arms' one-at-a-time inverse kinematics on the keypoints and the silhouette-only sources (hand
+  blobs, the k-NN exemplars) were removed: see docs/research-log.md.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 
 from mocap.body.ik import reach_arm
-from mocap.body.jumps import SIDES, arm_jumps, arm_poses_on_rays, ray_sphere_depths, torso_flip
+from mocap.body.jumps import SIDES, arm_jumps, ray_sphere_depths, torso_flip
 from mocap.body.model import BodyModel
-from mocap.body.pose import PARAMETER_INDEX, PARAMETER_NAMES, clamp_to_limits, within_limits
+from mocap.body.pose import PARAMETER_INDEX, PARAMETER_NAMES, clamp_to_limits
 from mocap.body.skeleton import JOINT_INDEX
 from mocap.imaging.blobs import label_blobs
 from mocap.labels import class_label
 from mocap.render.camera import Camera
 from mocap.render.rasterize import render_labels
-from mocap.track.config import MERGE_DISTANCE_M, MIN_SKIN_BLOB_PIXELS, TrackerConfig
+from mocap.track.config import MIN_SKIN_BLOB_PIXELS, TrackerConfig
 
 
 #: Hand distances from the shoulder tried when an arm is posed to reach an image point, as
@@ -272,142 +270,6 @@ def jump_proposals(pose: np.ndarray, model: BodyModel) -> list[tuple[str, np.nda
             out.append((f"{side}_{name}", clamp_to_limits(q)))
     out.append(("torso_flip", torso_flip(pose, model.skeleton)))
     return out
-
-
-def torso_on_shoulders(pose: np.ndarray, model: BodyModel, camera: Camera, r_shoulder_uv, l_shoulder_uv) -> np.ndarray:
-    """The pose turned and moved so that its shoulders project onto two shoulder keypoints.
-
-    The chest heading starts from the one whose shoulder line, at the shoulders' current depth,
-    has the keypoints' projected width (``cos(yaw) = width_px * depth / (fx * shoulder width)``,
-    capped at 1), facing the camera when the right shoulder keypoint is left of the left one and
-    away otherwise; of the two turns (which shoulder is nearer, which one view cannot tell) the
-    one nearer the current heading is taken. The heading is then refined (bounded scalar search,
-    scipy) to minimise the shoulders' reprojection distance, the whole body shifted at its depth
-    so that the shoulders' midpoint projects onto the keypoints' midpoint. Pitch, roll, head and
-    arm angles are kept.
-
-    Parameters
-    ----------
-    pose : ndarray, shape (23,)
-        Metres and radians; its shoulders in front of the camera.
-    model : BodyModel
-    camera : Camera
-    r_shoulder_uv, l_shoulder_uv : array_like, shape (2,), pixels
-
-    Returns
-    -------
-    ndarray, shape (23,), inside the joint limits
-    """
-    from scipy.optimize import minimize_scalar
-
-    rows = [JOINT_INDEX["r_shoulder"], JOINT_INDEX["l_shoulder"]]
-    target_uv = np.array([r_shoulder_uv, l_shoulder_uv], dtype=np.float64)
-    target_mid = pixel_ray(camera, target_uv.mean(axis=0))          # unit ray through the 2D midpoint
-    yaw_index = PARAMETER_INDEX["chest_yaw"]
-
-    def placed(yaw: float) -> np.ndarray:
-        q = pose.copy()
-        q[yaw_index] = yaw
-        q = clamp_to_limits(q)
-        mid = model.joint_positions(q)[rows].mean(axis=0)
-        q[:3] += target_mid * (mid[2] / target_mid[2]) - mid
-        for _ in range(3):             # the 3D midpoint does not project onto the 2D midpoint: correct
-            joints = model.joint_positions(q)[rows]
-            if np.any(joints[:, 2] <= 0):
-                break
-            off = target_uv.mean(axis=0) - camera.project(joints).mean(axis=0)
-            depth = float(joints[:, 2].mean())
-            q[0] += off[0] * depth / camera.fx
-            q[1] += off[1] * depth / camera.fy
-        return clamp_to_limits(q)
-
-    def miss(yaw: float) -> float:
-        joints = model.joint_positions(placed(yaw))[rows]
-        if np.any(joints[:, 2] <= 0):
-            return math.inf
-        return float(np.linalg.norm(camera.project(joints) - target_uv, axis=1).sum())
-
-    shoulders = model.joint_positions(pose)[rows]
-    width_m = float(np.linalg.norm(shoulders[0] - shoulders[1]))
-    across = min(1.0, abs(float(target_uv[1, 0] - target_uv[0, 0])) * float(shoulders[:, 2].mean())
-                 / (camera.fx * width_m))
-    turn = math.acos(across)
-    yaw = float(pose[yaw_index])
-    facing = target_uv[1, 0] >= target_uv[0, 0]
-    headings = (turn, -turn) if facing else (math.pi - turn, -math.pi + turn)
-    # the candidate heading (modulo a full turn) nearest the current one
-    start = min((h + 2.0 * math.pi * round((yaw - h) / (2.0 * math.pi)) for h in headings), key=lambda h: abs(h - yaw))
-    best = minimize_scalar(miss, bounds=(start - 0.5, start + 0.5), method="bounded", options={"xatol": 1e-3})
-    return placed(float(best.x) if miss(float(best.x)) < miss(start) else start)
-
-
-@dataclass(frozen=True)
-class KeypointArmSource:
-    """Proposals from 2D keypoints: each arm on every depth branch, the torso on the shoulders.
-
-    Only where the leader has lost its keypoints: an arm whose projected elbow and wrist are on
-    average within ``min_offset_px`` of their keypoints, or shoulders within it of theirs, is
-    not re-posed (every depth branch fits the keypoints equally, so proposing them there only
-    offers the beam branches the keypoints cannot tell apart).
-
-    For each arm whose elbow and wrist keypoints are present, every depth branch of
-    :func:`mocap.body.jumps.arm_poses_on_rays` from the leader's torso that lies inside the
-    joint limits (else the branches clamped to them, when none does) is proposed, the other arm
-    as it is. When both shoulder keypoints are present, one more proposal turns and moves the
-    torso onto them (:func:`torso_on_shoulders`: a heading from a shoulder line seen nearly
-    face-on is ill-conditioned, hence a proposal of its own) with every arm on its branch
-    nearest the leader's arm. Proposals whose joints are on average within
-    :data:`~mocap.track.config.MERGE_DISTANCE_M` of the leader's are left out (the leader's
-    registration covers them; the tracker refines the lowest-F of the rest).
-    """
-
-    min_offset_px: float = 6.0
-    origin: str = "keypoints"
-
-    def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
-        k = context.keypoints
-        if k is None:
-            return []
-        model, camera = context.model, context.camera
-        present = np.asarray(k.confidence) > 0
-        leader = np.asarray(context.leader, dtype=np.float64)
-        lead_joints = model.joint_positions(leader)
-        if np.any(lead_joints[:, 2] <= 0):
-            return []                                   # (a joint at or behind the camera projects nowhere)
-        offset = np.linalg.norm(camera.project(lead_joints) - k.uv, axis=1)          # NaN where absent
-
-        def lost(rows) -> bool:
-            rows = [r for r in rows if present[r]]
-            return bool(rows) and float(np.mean(offset[rows])) >= self.min_offset_px
-
-        out = []
-        for side in SIDES:
-            if lost([JOINT_INDEX[f"{side}_elbow"], JOINT_INDEX[f"{side}_wrist"]]):
-                out += self._arm_branches(leader, side, k, present, model, camera)
-        r_s, l_s = JOINT_INDEX["r_shoulder"], JOINT_INDEX["l_shoulder"]
-        if present[r_s] and present[l_s] and lost([r_s, l_s]):
-            torso = torso_on_shoulders(leader, model, camera, k.uv[r_s], k.uv[l_s])
-            for side in SIDES:
-                branches = self._arm_branches(torso, side, k, present, model, camera)
-                if branches:
-                    rows = [JOINT_INDEX[f"{side}_elbow"], JOINT_INDEX[f"{side}_wrist"]]
-                    best = min(branches, key=lambda q: float(np.linalg.norm(model.joint_positions(q)[rows]
-                                                                            - lead_joints[rows])))
-                    arm = [PARAMETER_INDEX[n] for n in PARAMETER_NAMES if n.startswith(f"{side}_")]
-                    torso[arm] = best[arm]
-            out.append(torso)
-        return [Proposal(q, self.origin) for q in out
-                if np.linalg.norm(model.joint_positions(q) - lead_joints, axis=1).mean() >= MERGE_DISTANCE_M]
-
-    @staticmethod
-    def _arm_branches(pose, side, k, present, model: BodyModel, camera: Camera) -> list[np.ndarray]:
-        e, w = JOINT_INDEX[f"{side}_elbow"], JOINT_INDEX[f"{side}_wrist"]
-        if not (present[e] and present[w]):
-            return []
-        branches = list(arm_poses_on_rays(pose, model.skeleton, side, pixel_ray(camera, k.uv[e]),
-                                          pixel_ray(camera, k.uv[w])).values())
-        inside = [q for q in branches if within_limits(q)]
-        return inside or [clamp_to_limits(q) for q in branches]
 
 
 @dataclass(frozen=True)

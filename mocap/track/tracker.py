@@ -6,8 +6,7 @@ budget, the others with ``hypothesis_evaluations``). Proposals compete with them
 from the last good pose when the leader fails, hand re-acquisition when a skin region is left
 unexplained, the leader's kinematic jumps (:mod:`mocap.body.jumps`), and the proposal stage's
 poses read from the current image (:class:`~mocap.track.proposals.ProposalSource`: from 2D
-keypoints, the arms' inverse kinematics or the learned lifter's whole-body hypotheses), each
-refined by a short registration. Every
+keypoints, the learned lifter's whole-body hypotheses), each refined by a short registration. Every
 candidate gets a **unary score** (``REGION_WEIGHT * F + EDGE_WEIGHT * edge distance +
 prior_weight * pose-prior energy``; on frames with 2D keypoints plus ``keypoint_weight *
 keypoint distance``, which every registration of the frame then also adds, and ``lifter_weight``
@@ -46,7 +45,7 @@ from mocap.track.config import (EDGE_WEIGHT, JUMPS_REFINED, MERGE_DISTANCE_M, MO
                                 RECOVERY_STEP_SCALE, REGION_WEIGHT, TrackerConfig)
 from mocap.track.decode import backtrack, viterbi_step
 from mocap.track.lifter import MIN_VISIBLE, Lifter, relative_joints
-from mocap.track.proposals import (KeypointArmSource, LifterSource, ProposalContext, ProposalSource, jump_proposals,
+from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, jump_proposals,
                                    reach_proposals, unexplained_hands)
 from mocap.track.registration import Registration, register
 
@@ -131,7 +130,7 @@ class Tracker:
         experiments add others (an oracle) this way.
     lifter : Lifter, optional
         The 2D->3D lifter of frames with keypoints (default: the shipped one,
-        :meth:`Lifter.load`, when ``config.uses_lifter``).
+        :meth:`Lifter.load`, loaded at the first frame with keypoints when ``config.uses_lifter``).
     """
 
     def __init__(self, model: BodyModel, camera: Camera, config: TrackerConfig, initial_pose,
@@ -141,7 +140,7 @@ class Tracker:
             model = model.with_resolution(config.mesh_resolution)
         self.model, self.camera, self.config = model, camera, config
         self.prior = prior if prior is not None else (default_prior() if config.prior_weight > 0 else None)
-        self.lifter = lifter if lifter is not None else (Lifter.load() if config.uses_lifter else None)
+        self.lifter = lifter                  # the shipped one is loaded at the first frame with keypoints
         self.sources: tuple[ProposalSource, ...] = tuple(proposal_sources(config) if sources is None else sources)
         self.candidates: list[tuple[str, np.ndarray]] = []
         q = clamp_to_limits(check_pose(initial_pose, name="initial pose"))
@@ -271,14 +270,16 @@ class Tracker:
 
     def lift(self, keypoints):
         """The lifter's hypotheses (:class:`~mocap.track.lifter.LiftedHypotheses`) of a frame's
-        keypoints (working pixels); None without a lifter or with fewer than
-        :data:`~mocap.track.lifter.MIN_VISIBLE` joints present."""
-        if self.lifter is None or keypoints is None:
+        keypoints (working pixels); None when the configuration does not lift (no keypoint term) or
+        with fewer than :data:`~mocap.track.lifter.MIN_VISIBLE` joints present."""
+        if keypoints is None or not self.config.uses_lifter:
             return None
         present = np.asarray(keypoints.confidence) > 0
         if present.sum() < MIN_VISIBLE:
             return None
         uv = np.where(present[:, None], keypoints.uv, 0.0)
+        if self.lifter is None:
+            self.lifter = Lifter.load()
         return self.lifter.lift(uv, present, self.camera, self.model)
 
     def lifter_energy(self, lifted, joints: np.ndarray) -> float:
@@ -427,13 +428,10 @@ def _result(frame: _Frame, k: int) -> FrameResult:
 
 def proposal_sources(config: TrackerConfig) -> list[ProposalSource]:
     """The proposal stage's sources that ``config`` switches on: with ``keypoint_weight`` > 0 the
-    lifter's (``lifter_proposals``) or else the arms' inverse kinematics on the keypoints; either
-    proposes nothing on frames without keypoints."""
-    sources: list[ProposalSource] = []
-    if config.keypoint_weight > 0:
-        sources.append(LifterSource() if config.lifter_proposals
-                       else KeypointArmSource(min_offset_px=config.reacquisition_distance_px))
-    return sources
+    learned lifter's hypotheses of the frame's keypoints (:class:`LifterSource`; it proposes
+    nothing on frames without keypoints). It replaced the arms' one-at-a-time inverse kinematics
+    on the keypoints (issue 29: docs/research-log.md)."""
+    return [LifterSource()] if config.keypoint_weight > 0 else []
 
 
 def track_prepared(prepared_frames, tracker: Tracker, *, first_index: int = 0, progress: bool = False,
