@@ -17,6 +17,7 @@ compiled kernel                                            twin                 
 ``cost`` (gradient of eq. 1, boundary motion)              :func:`naive_region_gradient`     ``tests/test_cost_gradient.py``
 ``synth.shading`` (surface samples)                        :func:`naive_surface_samples`     ``tests/synth/test_sequence.py``
 ``imaging.background`` (change mask)                       :func:`naive_change_mask`         ``tests/imaging/test_background.py``
+``imaging.background`` (densest sample)                    :func:`naive_densest_sample`      ``tests/imaging/test_background.py``
 ``imaging.colour`` (HSV, classification)                   :func:`naive_hsv`,                ``tests/imaging/test_colour.py``
                                                            :func:`naive_classify`
 ``imaging.edges`` (Deriche recursion)                      :func:`naive_deriche_1d`          ``tests/imaging/test_edges.py``
@@ -524,6 +525,17 @@ def naive_surface_samples(rows, cols, tri, triangles, verts, normals, local, vno
 
 
 # --- imaging ---
+
+
+def naive_densest_sample(video, radius):
+    """Twin of ``imaging.background._densest_sample``: per pixel, the sample with the most
+    samples within ``radius`` (NumPy over all pairs; ties to the earlier sample)."""
+    data = video.astype(np.float32)
+    counts = np.empty(video.shape[:3], np.int32)
+    for i in range(len(data)):
+        counts[i] = (np.sum((data - data[i]) ** 2, axis=3) <= radius * radius).sum(axis=0)
+    best = np.argmax(counts, axis=0)
+    return np.take_along_axis(video, best[None, ..., None], axis=0)[0]
 
 
 def naive_change_mask(frame, background, change_threshold, shadow_min_brightness,
