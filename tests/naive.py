@@ -18,6 +18,7 @@ compiled kernel                                            twin                 
 ``synth.shading`` (surface samples)                        :func:`naive_surface_samples`     ``tests/synth/test_sequence.py``
 ``imaging.background`` (change mask)                       :func:`naive_change_mask`         ``tests/imaging/test_background.py``
 ``imaging.background`` (densest sample)                    :func:`naive_densest_sample`      ``tests/imaging/test_background.py``
+``run.overlay`` (model box only; not compiled)             :func:`naive_draw_model`          ``tests/test_own_video.py``
 ``imaging.colour`` (HSV, classification)                   :func:`naive_hsv`,                ``tests/imaging/test_colour.py``
                                                            :func:`naive_classify`
 ``imaging.edges`` (Deriche recursion)                      :func:`naive_deriche_1d`          ``tests/imaging/test_edges.py``
@@ -684,3 +685,21 @@ def naive_deriche_edges(gy, gx, gain, low, high):
     suppression, hysteresis (the steps of :func:`mocap.imaging.detect_edges` after the gradient)."""
     magnitude = gain * np.hypot(gy, gx)
     return naive_hysteresis(naive_nonmax_suppression(gy, gx, magnitude, low), high)
+
+
+# --- run ---
+
+
+def naive_draw_model(frame, labels, edges, n_classes=2, alpha=0.35, class_names=None):
+    """Twin of :func:`mocap.run.overlay.draw_model` (which looks at the model's box only): the
+    whole frame blended where labelled, the edges drawn."""
+    from mocap.imaging.visual import label_palette
+    from mocap.run.overlay import EDGE_COLOUR
+
+    out = frame.copy()
+    model = np.nonzero(labels)
+    colours = label_palette(n_classes, class_names)[labels[model]].astype(np.float32)
+    blended = (1 - alpha) * frame[model].astype(np.float32) + alpha * colours
+    out[model] = np.clip(blended, 0, 255).astype(np.uint8)
+    out[edges] = EDGE_COLOUR
+    return out
