@@ -17,6 +17,8 @@ actor's frames looped the same way), made with the ffmpeg of imageio-ffmpeg into
 Prints one line per run: the seconds to the first row and the CPU seconds the command's process
 (its threads, not its ffmpeg children) had used by then, which a loaded machine moves less than
 the wall-clock seconds; the load average (1 min) before each run: compare runs of one call.
+``--baseline REF`` also times the ``mocap/`` of a git commit (``git archive``), compiled in its
+own copy, its cached runs alternating with the working tree's, so that both see the same load.
 """
 from __future__ import annotations
 
@@ -132,6 +134,8 @@ def main(argv=None) -> int:
     parser.add_argument("--work", type=Path, help="folder for the clip, the package copy and the runs "
                                                   "(default: a temporary folder, removed after)")
     parser.add_argument("--runs", type=int, default=3, help="runs after the compiling one (default 3)")
+    parser.add_argument("--baseline", metavar="REF", help="also time the mocap/ of this git commit, its cached runs "
+                                                          "alternating with the working tree's")
     args = parser.parse_args(argv)
     if args.runs < 1:
         parser.error("--runs must be at least 1")
@@ -145,22 +149,32 @@ def main(argv=None) -> int:
         if not clip.is_file():
             print(f"making {clip} ...", flush=True)
             make_clip(clip)
-        copy = args.work / "package"
-        shutil.rmtree(copy, ignore_errors=True)
-        shutil.copytree(ROOT / "mocap", copy / "mocap", ignore=shutil.ignore_patterns("__pycache__"))
+        copies = {"": args.work / "package"}
+        shutil.rmtree(copies[""], ignore_errors=True)
+        shutil.copytree(ROOT / "mocap", copies[""] / "mocap", ignore=shutil.ignore_patterns("__pycache__"))
+        if args.baseline:
+            copies[args.baseline] = args.work / "baseline"
+            shutil.rmtree(copies[args.baseline], ignore_errors=True)
+            copies[args.baseline].mkdir(parents=True)
+            archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.baseline, "mocap"], check=True,
+                                     capture_output=True).stdout
+            subprocess.run(["tar", "-x", "-C", str(copies[args.baseline])], input=archive, check=True)
         print(f"clip {clip}; `python -m mocap track CLIP --max-frames 1 --no-overlay` from a fresh copy of mocap/ "
               f"({os.cpu_count()} cores)", flush=True)
-        compiled = time_run(copy, clip, args.work / "run")
-        print(describe("compiling run", compiled), flush=True)
-        cached = []
+        compiled, cached = {}, {name: [] for name in copies}
+        for name, copy in copies.items():
+            compiled[name] = time_run(copy, clip, args.work / "run")
+            print(describe(f"{name or 'this tree'}: compiling run", compiled[name]), flush=True)
         for k in range(args.runs):
-            cached.append(time_run(copy, clip, args.work / "run"))
-            print(describe(f"cached run {k + 1}", cached[-1]), flush=True)
-        best = min(r["first_row_s"] for r in cached)
-        print(f"first row: {best:.2f} s at best from the cache (median "
-              f"{sorted(r['first_row_s'] for r in cached)[len(cached) // 2]:.2f} s), "
-              f"{compiled['first_row_s']:.2f} s when compiling; cache used from the second run: "
-              f"{'yes' if all(r['saved'] == 0 and r['loaded'] > 0 for r in cached) else 'NO'}")
+            for name, copy in copies.items():
+                cached[name].append(time_run(copy, clip, args.work / "run"))
+                print(describe(f"{name or 'this tree'}: cached run {k + 1}", cached[name][-1]), flush=True)
+        for name in copies:
+            runs = cached[name]
+            print(f"{name or 'this tree'}: first row {min(r['first_row_s'] for r in runs):.2f} s at best from the "
+                  f"cache (median {sorted(r['first_row_s'] for r in runs)[len(runs) // 2]:.2f} s), "
+                  f"{compiled[name]['first_row_s']:.2f} s when compiling; cache used from the second run: "
+                  f"{'yes' if all(r['saved'] == 0 and r['loaded'] > 0 for r in runs) else 'NO'}")
     finally:
         if temporary is not None:
             temporary.cleanup()

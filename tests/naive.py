@@ -8,6 +8,7 @@ compiled kernel                                            twin                 
 =========================================================  ===============================  =====================================
 ``body.kinematics`` (segment transforms, points)           :func:`naive_segment_transforms`  ``tests/body/test_kinematics.py``
 ``body.ik`` (arm reach, Levenberg–Marquardt)               :func:`naive_reach_arm` (scipy)   ``tests/body/test_ik.py``
+``body.mesh`` (templates scaled per part; not compiled)    :func:`naive_build_mesh`          ``tests/body/test_mesh_and_dimensions.py``
 ``optimize`` (ask/tell Nelder–Mead, compiled cost loop)    :func:`naive_nelder_mead`         ``tests/test_optimize.py``
 ``cost`` (region counts, eq. 1; edge mean, eq. 2)          :func:`naive_non_overlapping_ratio`, ``tests/test_cost.py``
                                                            :func:`naive_mean_edge_distance`
@@ -16,6 +17,8 @@ compiled kernel                                            twin                 
 ``cost`` (gradient of eq. 1, boundary motion)              :func:`naive_region_gradient`     ``tests/test_cost_gradient.py``
 ``synth.shading`` (surface samples)                        :func:`naive_surface_samples`     ``tests/synth/test_sequence.py``
 ``imaging.background`` (change mask)                       :func:`naive_change_mask`         ``tests/imaging/test_background.py``
+``imaging.background`` (densest sample)                    :func:`naive_densest_sample`      ``tests/imaging/test_background.py``
+``run.overlay`` (model box only; not compiled)             :func:`naive_draw_model`          ``tests/test_own_video.py``
 ``imaging.colour`` (HSV, classification)                   :func:`naive_hsv`,                ``tests/imaging/test_colour.py``
                                                            :func:`naive_classify`
 ``imaging.edges`` (Deriche recursion)                      :func:`naive_deriche_1d`          ``tests/imaging/test_edges.py``
@@ -38,6 +41,98 @@ from scipy.spatial.transform import Rotation
 from mocap.body.pose import PARAMETER_INDEX as P
 
 # --- body ---
+
+
+def naive_part_mesh(length, width, depth, *, e_long, e_cross, taper, resolution, start=0.0, axis_sign=1, cuts=()):
+    """Twin of :func:`mocap.body.mesh.part_mesh`: the tessellation as first written, a Python
+    loop over the longitudes and rings (the library's twin of it makes the triangles once)."""
+    from mocap.body.mesh import signed_volume
+
+    def signed_power(x, e):
+        return np.sign(x) * np.abs(x) ** e
+
+    n_lon = int(resolution)
+    eta = np.linspace(-np.pi / 2, np.pi / 2, n_lon // 2 + 3)[1:-1]
+    if cuts:
+        cut = np.asarray(cuts, dtype=np.float64)
+        eta = eta.copy()
+        moved = np.zeros(len(eta), bool)
+        extra = []
+        for e in np.arcsin(signed_power(2.0 * cut - 1.0, 1.0 / e_long)):
+            free = np.flatnonzero(~moved)
+            if free.size == 0:
+                extra.append(e)
+                continue
+            k = free[np.argmin(np.abs(eta[free] - e))]
+            eta[k], moved[k] = e, True
+        eta = np.unique(np.r_[eta, extra])
+    rings = len(eta)
+    omega = np.linspace(-np.pi, np.pi, n_lon, endpoint=False)
+    u = 0.5 * (1.0 + signed_power(np.sin(eta), e_long))
+    radial = np.abs(np.cos(eta)) ** e_long
+    scale = radial * (1.0 - taper * u)
+    cx = signed_power(np.cos(omega), e_cross)
+    cz = signed_power(np.sin(omega), e_cross)
+    along = start + length * u
+    ring = np.stack([
+        0.5 * width * scale[:, None] * cx[None, :],
+        np.broadcast_to(along[:, None], (rings, n_lon)),
+        0.5 * depth * scale[:, None] * cz[None, :],
+    ], axis=-1).reshape(-1, 3)
+    poles = np.array([[0.0, start, 0.0], [0.0, start + length, 0.0]])
+    vertices = np.concatenate([ring, poles])
+    vertices[:, 1] *= axis_sign
+    south, north = rings * n_lon, rings * n_lon + 1
+    tris = []
+    for k in range(n_lon):
+        k1 = (k + 1) % n_lon
+        tris.append((south, k1, k))
+        for r in range(rings - 1):
+            a, b = r * n_lon + k, r * n_lon + k1
+            c, d = a + n_lon, b + n_lon
+            tris.append((a, b, d))
+            tris.append((a, d, c))
+        top = (rings - 1) * n_lon
+        tris.append((north, top + k, top + k1))
+    triangles = np.array(tris, dtype=np.int64)
+    if signed_volume(vertices, triangles) < 0:
+        triangles = triangles[:, ::-1].copy()
+    return vertices, triangles
+
+
+def naive_build_mesh(dims, resolution):
+    """Twin of :func:`mocap.body.mesh.build_mesh`: every part tessellated afresh by
+    :func:`naive_part_mesh` and concatenated (the library scales templates made once).
+    Returns (vertices, vertex_segment, triangles, triangle_part)."""
+    from mocap.body.mesh import PART_SHAPES, hair_cuts, hair_triangles, part_resolution
+    from mocap.body.skeleton import (MESH_PART_NAMES, PART_SEGMENT, SEGMENT_AXIS_SIGN, SEGMENT_NAMES,
+                                     lower_body_span, part_spans)
+
+    spans = part_spans(dims)
+    verts, vseg, tris, tpart = [], [], [], []
+    offset = 0
+    for p, name in enumerate(MESH_PART_NAMES):
+        if not dims.has(name):
+            continue
+        size = dims[name]
+        seg = SEGMENT_NAMES.index(PART_SEGMENT[name])
+        e_long, e_cross, taper = PART_SHAPES[name]
+        if name == "lower_body":
+            start, sign = lower_body_span(dims)[0], 1
+        else:
+            start, sign = spans[p, 0], SEGMENT_AXIS_SIGN[seg]
+        cuts = hair_cuts(dims.hairline) if name == "head" and dims.hairline is not None else ()
+        v, t = naive_part_mesh(size.length, size.width, size.depth, e_long=e_long, e_cross=e_cross, taper=taper,
+                               resolution=part_resolution(name, resolution), start=start, axis_sign=sign, cuts=cuts)
+        part = np.full(len(t), p, dtype=np.int64)
+        if cuts:
+            part[hair_triangles(v, t, start, size.length, size.depth, dims.hairline, sign)] = MESH_PART_NAMES.index("hair")
+        verts.append(v)
+        vseg.append(np.full(len(v), seg, dtype=np.int64))
+        tris.append(t + offset)
+        tpart.append(part)
+        offset += len(v)
+    return np.concatenate(verts), np.concatenate(vseg), np.concatenate(tris), np.concatenate(tpart)
 
 
 def naive_segment_transforms(pose, offsets):
@@ -433,6 +528,17 @@ def naive_surface_samples(rows, cols, tri, triangles, verts, normals, local, vno
 # --- imaging ---
 
 
+def naive_densest_sample(video, radius):
+    """Twin of ``imaging.background._densest_sample``: per pixel, the sample with the most
+    samples within ``radius`` (NumPy over all pairs; ties to the earlier sample)."""
+    data = video.astype(np.float32)
+    counts = np.empty(video.shape[:3], np.int32)
+    for i in range(len(data)):
+        counts[i] = (np.sum((data - data[i]) ** 2, axis=3) <= radius * radius).sum(axis=0)
+    best = np.argmax(counts, axis=0)
+    return np.take_along_axis(video, best[None, ..., None], axis=0)[0]
+
+
 def naive_change_mask(frame, background, change_threshold, shadow_min_brightness,
                       shadow_max_brightness, shadow_max_chroma, chroma_noise):
     """Raw background-subtraction test (before clean-up), pixel by pixel in float64 0-255."""
@@ -579,3 +685,21 @@ def naive_deriche_edges(gy, gx, gain, low, high):
     suppression, hysteresis (the steps of :func:`mocap.imaging.detect_edges` after the gradient)."""
     magnitude = gain * np.hypot(gy, gx)
     return naive_hysteresis(naive_nonmax_suppression(gy, gx, magnitude, low), high)
+
+
+# --- run ---
+
+
+def naive_draw_model(frame, labels, edges, n_classes=2, alpha=0.35, class_names=None):
+    """Twin of :func:`mocap.run.overlay.draw_model` (which looks at the model's box only): the
+    whole frame blended where labelled, the edges drawn."""
+    from mocap.imaging.visual import label_palette
+    from mocap.run.overlay import EDGE_COLOUR
+
+    out = frame.copy()
+    model = np.nonzero(labels)
+    colours = label_palette(n_classes, class_names)[labels[model]].astype(np.float32)
+    blended = (1 - alpha) * frame[model].astype(np.float32) + alpha * colours
+    out[model] = np.clip(blended, 0, 255).astype(np.uint8)
+    out[edges] = EDGE_COLOUR
+    return out

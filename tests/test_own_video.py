@@ -186,3 +186,22 @@ def test_bench_video_stage_runs_the_whole_path_on_a_640x480_clip():
     for r in rows:
         assert (r.width, r.height, r.runs) == (640, 480, 3)
         assert r.median_us > 0 and r.triangles > 0
+
+
+def test_overlay_drawn_in_the_model_box_equals_the_whole_frame():
+    """draw_model looks at the model's box only: the same picture as blending the whole frame
+    (tests/naive.py), with edges beyond the silhouette and with nothing drawn."""
+    from mocap.run.overlay import draw_model
+    from tests.naive import naive_draw_model
+    rng = np.random.default_rng(2)
+    frame = rng.integers(0, 256, (48, 64, 3), dtype=np.uint8)
+    labels = np.zeros((48, 64), np.uint8)
+    labels[10:30, 20:41] = rng.integers(0, 5, (20, 21))
+    labels[12, 22] = 255
+    edges = np.zeros((48, 64), bool)
+    edges[9, 18:44] = edges[5, 50] = True
+    names = ("skin", "clothes", "hair", "lower_body")
+    for lab, edg in ((labels, edges), (labels, np.zeros_like(edges)), (np.zeros_like(labels), edges),
+                     (np.zeros_like(labels), np.zeros_like(edges))):
+        np.testing.assert_array_equal(draw_model(frame, lab, edg, 4, class_names=names),
+                                      naive_draw_model(frame, lab, edg, 4, class_names=names))

@@ -17,6 +17,7 @@ follows rings, so the split is exact and costs no triangle.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from types import MappingProxyType
 
 import numpy as np
@@ -60,6 +61,56 @@ def _signed_power(x: np.ndarray, e: float) -> np.ndarray:
     return np.sign(x) * np.abs(x) ** e
 
 
+def _unit_part(n_lon: int, e_long: float, e_cross: float, taper: float, cuts: tuple[float, ...]):
+    """The shape of a part of unit size: what :func:`part_mesh` scales by its length, width and
+    depth. Returns ``u`` (rings,), 0..1 along the axis; ``scale`` (rings,), the cross-section's
+    half-size in half widths; ``cx``, ``cz`` (n_lon,), the cross-section's unit outline."""
+    eta = np.linspace(-np.pi / 2, np.pi / 2, n_lon // 2 + 3)[1:-1]   # latitudes, poles excluded
+    if cuts:
+        cut = np.asarray(cuts, dtype=np.float64)
+        if not ((cut > 0) & (cut < 1)).all():
+            raise ValueError(f"cuts must lie strictly between 0 and 1, got {cuts}")
+        # invert u = (1 + sin(eta)^e_long) / 2 (signed power); each cut moves the nearest ring
+        # not moved yet (same triangle count), or adds one when none is left
+        eta = eta.copy()
+        moved = np.zeros(len(eta), bool)
+        extra = []
+        for e in np.arcsin(_signed_power(2.0 * cut - 1.0, 1.0 / e_long)):
+            free = np.flatnonzero(~moved)
+            if free.size == 0:
+                extra.append(e)
+                continue
+            k = free[np.argmin(np.abs(eta[free] - e))]
+            eta[k], moved[k] = e, True
+        eta = np.unique(np.r_[eta, extra])
+    omega = np.linspace(-np.pi, np.pi, n_lon, endpoint=False)
+    u = 0.5 * (1.0 + _signed_power(np.sin(eta), e_long))             # 0..1 along the axis
+    radial = np.abs(np.cos(eta)) ** e_long
+    scale = radial * (1.0 - taper * u)
+    return u, scale, _signed_power(np.cos(omega), e_cross), _signed_power(np.sin(omega), e_cross)
+
+
+@lru_cache(maxsize=64)
+def _grid_triangles(n_lon: int, rings: int) -> np.ndarray:
+    """Triangles of a part with ``n_lon`` longitudes and ``rings`` latitude rings (vertices ring
+    by ring, then the south and the north pole), longitude by longitude: the south pole's
+    triangle, two per ring gap, the north pole's; shape (2 n_lon rings, 3), int64, read-only.
+    Wound one way; :func:`part_mesh` reverses them when that is inwards."""
+    south, north = rings * n_lon, rings * n_lon + 1
+    k = np.arange(n_lon, dtype=np.int64)[:, None]
+    k1 = (k + 1) % n_lon
+    r = np.arange(rings - 1, dtype=np.int64)[None, :]
+    a, b = r * n_lon + k, r * n_lon + k1
+    c, d = a + n_lon, b + n_lon
+    quads = np.stack([np.stack([a, b, d], axis=-1), np.stack([a, d, c], axis=-1)], axis=2).reshape(n_lon, -1, 3)
+    top = (rings - 1) * n_lon
+    first = np.concatenate([np.full_like(k, south), k1, k], axis=1)[:, None, :]
+    last = np.concatenate([np.full_like(k, north), top + k, top + k1], axis=1)[:, None, :]
+    triangles = np.concatenate([first, quads, last], axis=1).reshape(-1, 3)
+    triangles.setflags(write=False)
+    return triangles
+
+
 def part_mesh(length: float, width: float, depth: float, *, e_long: float, e_cross: float,
               taper: float, resolution: int, start: float = 0.0, axis_sign: int = 1,
               cuts: tuple[float, ...] = ()):
@@ -81,35 +132,13 @@ def part_mesh(length: float, width: float, depth: float, *, e_long: float, e_cro
     Returns
     -------
     vertices : ndarray, shape (V, 3), float64, metres
+        Ring by ring (``n`` longitudes each), then the two poles (start, end).
     triangles : ndarray, shape (T, 3), int64
         Wound counter-clockwise seen from outside (outward normals by the right-hand rule).
     """
     n_lon = int(resolution)
-    eta = np.linspace(-np.pi / 2, np.pi / 2, n_lon // 2 + 3)[1:-1]   # latitudes, poles excluded
-    if cuts:
-        cut = np.asarray(cuts, dtype=np.float64)
-        if not ((cut > 0) & (cut < 1)).all():
-            raise ValueError(f"cuts must lie strictly between 0 and 1, got {cuts}")
-        # invert u = (1 + sin(eta)^e_long) / 2 (signed power); each cut moves the nearest ring
-        # not moved yet (same triangle count), or adds one when none is left
-        eta = eta.copy()
-        moved = np.zeros(len(eta), bool)
-        extra = []
-        for e in np.arcsin(_signed_power(2.0 * cut - 1.0, 1.0 / e_long)):
-            free = np.flatnonzero(~moved)
-            if free.size == 0:
-                extra.append(e)
-                continue
-            k = free[np.argmin(np.abs(eta[free] - e))]
-            eta[k], moved[k] = e, True
-        eta = np.unique(np.r_[eta, extra])
-    rings = len(eta)
-    omega = np.linspace(-np.pi, np.pi, n_lon, endpoint=False)
-    u = 0.5 * (1.0 + _signed_power(np.sin(eta), e_long))             # 0..1 along the axis
-    radial = np.abs(np.cos(eta)) ** e_long
-    scale = radial * (1.0 - taper * u)
-    cx = _signed_power(np.cos(omega), e_cross)
-    cz = _signed_power(np.sin(omega), e_cross)
+    u, scale, cx, cz = _unit_part(n_lon, e_long, e_cross, taper, tuple(cuts))
+    rings = len(u)
     along = start + length * u
     ring = np.stack([
         0.5 * width * scale[:, None] * cx[None, :],
@@ -119,22 +148,10 @@ def part_mesh(length: float, width: float, depth: float, *, e_long: float, e_cro
     poles = np.array([[0.0, start, 0.0], [0.0, start + length, 0.0]])
     vertices = np.concatenate([ring, poles])
     vertices[:, 1] *= axis_sign
-    south, north = rings * n_lon, rings * n_lon + 1
-    tris = []
-    for k in range(n_lon):
-        k1 = (k + 1) % n_lon
-        tris.append((south, k1, k))
-        for r in range(rings - 1):
-            a, b = r * n_lon + k, r * n_lon + k1
-            c, d = a + n_lon, b + n_lon
-            tris.append((a, b, d))
-            tris.append((a, d, c))
-        top = (rings - 1) * n_lon
-        tris.append((north, top + k, top + k1))
-    triangles = np.array(tris, dtype=np.int64)
+    triangles = _grid_triangles(n_lon, rings)
     if signed_volume(vertices, triangles) < 0:
-        triangles = triangles[:, ::-1].copy()
-    return vertices, triangles
+        return vertices, triangles[:, ::-1].copy()
+    return vertices, triangles.copy()
 
 
 def signed_volume(vertices: np.ndarray, triangles: np.ndarray) -> float:
@@ -210,9 +227,109 @@ def hair_triangles(vertices: np.ndarray, triangles: np.ndarray, start: float, le
     return (v >= hairline) | (behind & (v >= hairline - HAIR_NAPE_DROP))
 
 
+@dataclass(frozen=True)
+class _PartTemplate:
+    """A part of unit size, as :func:`_part_template` makes it; per vertex (ring by ring, then
+    the two poles): ``along`` 0..1 along the axis, ``ring_scale`` the cross-section's half-size
+    in half widths (0 at the poles), ``cross_x``/``cross_z`` the unit outline (0 at the poles);
+    ``triangles`` wound outwards for the part's axis sign (read-only)."""
+
+    along: np.ndarray
+    ring_scale: np.ndarray
+    cross_x: np.ndarray
+    cross_z: np.ndarray
+    triangles: np.ndarray
+
+
+@lru_cache(maxsize=256)
+def _part_template(n_lon: int, e_long: float, e_cross: float, taper: float, cuts: tuple[float, ...],
+                   axis_sign: int) -> _PartTemplate:
+    u, scale, cx, cz = _unit_part(n_lon, e_long, e_cross, taper, cuts)
+    rings = len(u)
+    poles = np.zeros(2)
+    along = np.concatenate([np.repeat(u, n_lon), [0.0, 1.0]])
+    ring_scale = np.concatenate([np.repeat(scale, n_lon), poles])
+    cross_x = np.concatenate([np.tile(cx, rings), poles])
+    cross_z = np.concatenate([np.tile(cz, rings), poles])
+    triangles = _grid_triangles(n_lon, rings)
+    # the winding's sense does not change when the axes are scaled by positive sizes or the
+    # part is moved along its axis: the unit part's decides it
+    unit = np.stack([0.5 * ring_scale * cross_x, along * axis_sign, 0.5 * ring_scale * cross_z], axis=1)
+    if signed_volume(unit, triangles) < 0:
+        triangles = triangles[:, ::-1].copy()
+        triangles.setflags(write=False)
+    return _PartTemplate(along, ring_scale, cross_x, cross_z, triangles)
+
+
+@dataclass(frozen=True)
+class _Topology:
+    """Everything of the body mesh that its sizes do not change, for one resolution, hairline
+    and set of parts (see :func:`_topology`). Per present part (``part_names`` order): its mesh
+    part index, axis sign; per vertex: ``vertex_slot`` (which present part) and the unit part's
+    ``along``, ``ring_scale``, ``cross_x``, ``cross_z`` (:class:`_PartTemplate`); the
+    triangles with the part of each (the head's hair not yet marked); ``head``: the head's
+    vertex and triangle ranges and its triangles in its own vertex numbering, when it has a
+    hair region."""
+
+    part_names: tuple[str, ...]
+    part_index: tuple[int, ...]
+    axis_sign: np.ndarray
+    vertex_slot: np.ndarray
+    along: np.ndarray
+    ring_scale: np.ndarray
+    cross_x: np.ndarray
+    cross_z: np.ndarray
+    vertex_segment: np.ndarray
+    triangles: np.ndarray
+    triangle_part: np.ndarray
+    head: tuple[int, int, int, int, np.ndarray] | None
+
+
+@lru_cache(maxsize=32)
+def _topology(resolution: int, hairline: float | None, present: tuple[str, ...]) -> _Topology:
+    names, indices, segments, signs, templates = [], [], [], [], []
+    head = None
+    for p, name in enumerate(MESH_PART_NAMES):
+        if name not in present:
+            continue                                    # hair: part of the head; lower body: optional
+        seg = SEGMENT_NAMES.index(PART_SEGMENT[name])
+        sign = 1 if name == "lower_body" else int(SEGMENT_AXIS_SIGN[seg])    # lower body: downwards
+        cuts = hair_cuts(hairline) if name == "head" and hairline is not None else ()
+        if cuts:
+            head = len(names)
+        names.append(name)
+        indices.append(p)
+        segments.append(seg)
+        signs.append(sign)
+        templates.append(_part_template(part_resolution(name, resolution), *PART_SHAPES[name], cuts, sign))
+    n_vertices = np.array([len(t.along) for t in templates])
+    n_triangles = np.array([len(t.triangles) for t in templates])
+    first_vertex = np.r_[0, np.cumsum(n_vertices)]
+    first_triangle = np.r_[0, np.cumsum(n_triangles)]
+    arrays = [np.repeat(np.arange(len(names)), n_vertices),
+              *(np.concatenate([getattr(t, k) for t in templates]) for k in ("along", "ring_scale", "cross_x", "cross_z")),
+              np.repeat(np.array(signs, dtype=np.float64), n_vertices),
+              np.repeat(np.array(segments, dtype=np.int64), n_vertices),
+              np.concatenate([t.triangles + first for t, first in zip(templates, first_vertex)]),
+              np.repeat(np.array(indices, dtype=np.int64), n_triangles)]
+    for a in arrays:
+        a.setflags(write=False)
+    slot, along, ring_scale, cross_x, cross_z, axis_sign, vseg, tris, tpart = arrays
+    if head is not None:
+        head = (int(first_vertex[head]), int(first_vertex[head + 1]), int(first_triangle[head]),
+                int(first_triangle[head + 1]), templates[head].triangles)
+    return _Topology(tuple(names), tuple(indices), axis_sign, slot, along, ring_scale, cross_x, cross_z, vseg,
+                     tris, tpart, head)
+
+
 def build_mesh(dims: BodyDimensions, resolution: int = 12) -> BodyMesh:
     """Tessellate every body part: the sized parts the dimensions have, the head split into
     face (``head``) and ``hair`` when they have a hairline.
+
+    What does not depend on the sizes (the triangles, each part's unit shape) is made once per
+    resolution, hairline and set of parts and kept (a few dozen such topologies); a build then
+    scales the unit parts, a few array operations (tens of microseconds). The vertices are the
+    same numbers, operation for operation, as tessellating each part with :func:`part_mesh`.
 
     Parameters
     ----------
@@ -224,41 +341,38 @@ def build_mesh(dims: BodyDimensions, resolution: int = 12) -> BodyMesh:
     Returns
     -------
     BodyMesh
+        Its index arrays (``vertex_segment``, ``triangles`` and, without a hair region,
+        ``triangle_part``) are shared, read-only, by the meshes of one topology.
     """
     if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)):
         raise ValueError(f"mesh resolution must be an integer, got {resolution!r}")
     if not MIN_RESOLUTION <= resolution <= MAX_RESOLUTION:
         raise ValueError(f"mesh resolution must be in [{MIN_RESOLUTION}, {MAX_RESOLUTION}], got {resolution}")
+    topology = _topology(int(resolution), dims.hairline, tuple(n for n in MESH_PART_NAMES if dims.has(n)))
     spans = part_spans(dims)
-    verts, vseg, tris, tpart = [], [], [], []
-    offset = 0
-    hair = MESH_PART_NAMES.index("hair")
-    for p, name in enumerate(MESH_PART_NAMES):
-        if not dims.has(name):
-            continue                                    # hair: part of the head; lower body: optional
+    n = len(topology.part_names)
+    half_width, length, half_depth, start = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    for i, (name, p) in enumerate(zip(topology.part_names, topology.part_index)):
         size = dims[name]
-        seg = SEGMENT_NAMES.index(PART_SEGMENT[name])
-        e_long, e_cross, taper = PART_SHAPES[name]
-        if name == "lower_body":
-            start, sign = lower_body_span(dims)[0], 1    # downwards from the chest base
-        else:
-            start, sign = spans[p, 0], SEGMENT_AXIS_SIGN[seg]
-        cuts = hair_cuts(dims.hairline) if name == "head" and dims.hairline is not None else ()
-        v, t = part_mesh(size.length, size.width, size.depth, e_long=e_long, e_cross=e_cross,
-                         taper=taper, resolution=part_resolution(name, resolution), start=start,
-                         axis_sign=sign, cuts=cuts)
-        part = np.full(len(t), p, dtype=np.int64)
-        if cuts:
-            part[hair_triangles(v, t, start, size.length, size.depth, dims.hairline, sign)] = hair
-        verts.append(v)
-        vseg.append(np.full(len(v), seg, dtype=np.int64))
-        tris.append(t + offset)
-        tpart.append(part)
-        offset += len(v)
-    arrays = [np.concatenate(verts), np.concatenate(vseg), np.concatenate(tris), np.concatenate(tpart)]
-    for a in arrays:
-        a.setflags(write=False)
-    return BodyMesh(*arrays, resolution=int(resolution))
+        half_width[i], length[i], half_depth[i] = 0.5 * size.width, size.length, 0.5 * size.depth
+        start[i] = lower_body_span(dims)[0] if name == "lower_body" else spans[p, 0]
+    slot = topology.vertex_slot
+    vertices = np.empty((len(slot), 3))
+    vertices[:, 0] = half_width[slot] * topology.ring_scale * topology.cross_x
+    vertices[:, 1] = (start[slot] + length[slot] * topology.along) * topology.axis_sign
+    vertices[:, 2] = half_depth[slot] * topology.ring_scale * topology.cross_z
+    vertices.setflags(write=False)
+    triangle_part = topology.triangle_part
+    if topology.head is not None:
+        v0, v1, t0, t1, head_triangles = topology.head
+        h = topology.part_names.index("head")
+        size = dims["head"]
+        hair = hair_triangles(vertices[v0:v1], head_triangles, start[h], size.length, size.depth, dims.hairline,
+                              int(topology.axis_sign[v0]))
+        triangle_part = triangle_part.copy()
+        triangle_part[t0:t1][hair] = MESH_PART_NAMES.index("hair")
+        triangle_part.setflags(write=False)
+    return BodyMesh(vertices, topology.vertex_segment, topology.triangles, triangle_part, resolution=int(resolution))
 
 
 def resolution_for_image(width: int, height: int) -> int:

@@ -269,13 +269,38 @@ def estimate_background(frames: Iterable[np.ndarray], config: ImagingConfig | No
 
 def _densest_sample(video: np.ndarray, radius: float) -> np.ndarray:
     """Per pixel, the sample (of ``video`` (N, H, W, 3) uint8) with the most samples within
-    ``radius`` (0-255 units) of it; ties go to the earlier sample."""
-    data = video.astype(np.float32)
-    counts = np.empty(video.shape[:3], np.int32)
-    for i in range(len(data)):
-        counts[i] = (np.sum((data - data[i]) ** 2, axis=3) <= radius * radius).sum(axis=0)
-    best = np.argmax(counts, axis=0)
-    return np.take_along_axis(video, best[None, ..., None], axis=0)[0]
+    ``radius`` (0-255 units) of it; ties go to the earlier sample. Returns (H, W, 3) uint8."""
+    video = np.ascontiguousarray(video)
+    out = np.empty(video.shape[1:], np.uint8)
+    # the squared distances are integers (exact in float32); the radius is compared in float32
+    _densest_sample_kernel(video, np.float32(radius * radius), out)
+    return out
+
+
+@jit
+def _densest_sample_kernel(video, radius2, out):  # pragma: no cover - compiled
+    """Kernel of :func:`_densest_sample`: each pair of samples of a pixel compared once."""
+    n, height, width = video.shape[0], video.shape[1], video.shape[2]
+    counts = np.empty(n, np.int32)
+    for y in range(height):
+        for x in range(width):
+            counts[:] = 0
+            for i in range(n):
+                for j in range(i, n):
+                    d = np.float32(0.0)
+                    for c in range(3):
+                        e = np.float32(video[i, y, x, c]) - np.float32(video[j, y, x, c])
+                        d += e * e
+                    if d <= radius2:
+                        counts[i] += 1
+                        if j != i:
+                            counts[j] += 1
+            best = 0
+            for i in range(1, n):
+                if counts[i] > counts[best]:
+                    best = i
+            for c in range(3):
+                out[y, x, c] = video[best, y, x, c]
 
 
 def person_against_background(frames: Iterable[np.ndarray], background: np.ndarray,

@@ -8,6 +8,8 @@ unsupported channels or dtype, frames of different sizes), never a crash deep in
 """
 from __future__ import annotations
 
+import queue
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -20,6 +22,9 @@ from mocap.io.video_check import ffmpeg_failure
 __all__ = ["IMAGE_SUFFIXES", "read_image", "iter_frames", "sample_frames", "spread_numbers", "count_frames",
            "frame_rate", "image_files", "VideoWriter"]
 
+#: x264's speed presets, fastest first (:class:`VideoWriter`).
+X264_PRESETS: tuple[str, ...] = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower",
+                                 "veryslow")
 #: Suffixes (lower case) of the image files a frame folder may hold.
 IMAGE_SUFFIXES: tuple[str, ...] = (".png", ".jpg", ".jpeg")
 # What decoders raise on a corrupt or unsupported file (Pillow raises SyntaxError on a
@@ -349,50 +354,97 @@ class VideoWriter:
             for frame in frames:
                 video.write(frame)
 
+    A frame is copied and handed to a thread that feeds ffmpeg (at most :data:`FRAMES_AHEAD`
+    waiting), so that the caller goes on while the encoder works; an encoder's failure is
+    raised by the next ``write`` or by ``close``.
+
     Parameters
     ----------
     path : str or Path
         Output file; its folder must exist.
     fps : float
         Frames per second (> 0).
+    preset : str
+        x264's speed preset (``ultrafast`` ... ``veryslow``; default ``medium``, x264's own):
+        a faster one encodes the same pictures with less CPU into a larger file.
     """
 
-    def __init__(self, path: str | Path, fps: float) -> None:
+    #: Frames that may wait for the encoder before ``write`` blocks.
+    FRAMES_AHEAD = 4
+
+    def __init__(self, path: str | Path, fps: float, *, preset: str = "medium") -> None:
         if not fps > 0:
             raise ValueError(f"fps must be > 0, got {fps}")
+        if preset not in X264_PRESETS:
+            raise ValueError(f"unknown x264 preset {preset!r}; known: {', '.join(X264_PRESETS)}")
         self.path = Path(path)
         if not self.path.parent.is_dir():
             raise FileNotFoundError(f"folder {self.path.parent} does not exist")
         self.fps = float(fps)
+        self.preset = preset
         self._writer = None
+        self._queue: queue.Queue | None = None
+        self._thread: threading.Thread | None = None
+        self._error: BaseException | None = None
         self._shape: tuple[int, ...] | None = None
         self.frames = 0
 
     def write(self, frame: np.ndarray) -> None:
-        """Append one frame: uint8 RGB, shape (H, W, 3)."""
+        """Append one frame: uint8 RGB, shape (H, W, 3) (copied: the caller may reuse it)."""
         frame = np.asarray(frame)
         if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3:
             raise ValueError(f"video frames must be uint8 (H, W, 3), got {frame.dtype} "
                              f"{frame.shape}")
+        self._raise_failure()
         if self._shape is None:
             self._shape = frame.shape
             h, w = frame.shape[0] + frame.shape[0] % 2, frame.shape[1] + frame.shape[1] % 2
             self._writer = imageio_ffmpeg.write_frames(
                 str(self.path), (w, h), fps=self.fps, codec="libx264", pix_fmt_out="yuv420p",
-                macro_block_size=1, quality=7)
+                macro_block_size=1, quality=7,
+                output_params=[] if self.preset == "medium" else ["-preset", self.preset])
             self._writer.send(None)
+            self._queue = queue.Queue(maxsize=self.FRAMES_AHEAD)
+            self._thread = threading.Thread(target=self._feed, name="video-writer", daemon=True)
+            self._thread.start()
         elif frame.shape != self._shape:
             raise ValueError(f"frame {self.frames} has shape {frame.shape}, the first "
                              f"{self._shape}")
         pad = ((0, frame.shape[0] % 2), (0, frame.shape[1] % 2), (0, 0))
-        self._writer.send(np.ascontiguousarray(np.pad(frame, pad)))
+        self._queue.put(np.ascontiguousarray(np.pad(frame, pad)))
         self.frames += 1
+
+    def _feed(self) -> None:
+        """The thread: frames to ffmpeg until None; after a failure, frames are dropped."""
+        while True:
+            frame = self._queue.get()
+            if frame is None:
+                return
+            if self._error is None:
+                try:
+                    self._writer.send(frame)
+                except BaseException as exc:        # raised in the caller's thread (write, close)
+                    self._error = exc
+
+    def _raise_failure(self) -> None:
+        if self._error is not None:
+            error, self._error = self._error, None
+            self.close()
+            raise error
 
     def close(self) -> None:
         """Finish the file (safe to call twice)."""
+        if self._thread is not None:
+            self._queue.put(None)
+            self._thread.join()
+            self._thread = None
         if self._writer is not None:
-            self._writer.close()
-            self._writer = None
+            writer, self._writer = self._writer, None
+            if self._error is not None:
+                error, self._error = self._error, None
+                writer.close()
+                raise error
+            writer.close()
 
     def __enter__(self) -> VideoWriter:
         return self

@@ -13,6 +13,7 @@ errors or after lost data, and the frames lost after an early end.
 """
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 from dataclasses import dataclass, field
@@ -22,6 +23,9 @@ import imageio_ffmpeg
 
 __all__ = ["VideoCheck", "RunningCheck", "announced", "check_video", "ffmpeg_failure", "format_frames"]
 
+#: Niceness of the running check's ffmpeg (POSIX): it decodes the whole clip beside the run and
+#: takes the CPU the set-up and the tracker leave (on two cores it used to slow the first frame).
+CHECK_NICENESS = 10
 _DURATION = re.compile(r"Duration: (\d+):(\d\d):(\d\d(?:\.\d+)?)")
 _FPS = re.compile(r"Stream #\d+:\d+.*?: Video: .*?(\d+(?:\.\d+)?)(k?) fps")
 _PREFIX = re.compile(r"(?=\[[^\]\n]* @ 0x[0-9a-f]+\])")
@@ -221,6 +225,11 @@ class RunningCheck:
                "-f", "null", "-"]
         self._proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                       stderr=subprocess.PIPE, text=True, errors="replace")
+        if hasattr(os, "setpriority"):      # behind what the run waits for (the set-up's reads, the tracker)
+            try:
+                os.setpriority(os.PRIO_PROCESS, self._proc.pid, CHECK_NICENESS)
+            except OSError:
+                pass
         self._lines: list[str] = []
         self._pts: list[float] = []             # pts_time of frames 0, 1, ... as they come
         self._result: VideoCheck | Exception | None = None

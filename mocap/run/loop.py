@@ -461,12 +461,16 @@ class RunLoop:
             for frame in prefetch(reader, READ_AHEAD, name="mocap-reader"):
                 self.step(frame, reader)
                 last = frame.index
-            self.damage.take(wait=True)
+            if span.stop is None:
+                self.damage.take(wait=True)         # the end of the frames: damage or a cut file?
             every = journalling.CHECKPOINT_EVERY
             if span.stop is None and last is not None and (last + 1) % every != 0:    # the checkpoint after the last
                 self.checkpoint(last + 1)
             # the held-back frames: not checkpointed, a resume continues from the last checkpoint instead
             self.emit(self.tracker.finish())
+            # a run that stops early (--max-frames) writes its rows before the verdict, which
+            # can take the check's decoding of the whole clip; a damaged video still removes them
+            self.damage.take(wait=True)
         except ValueError:
             self.damage.take(wait=True)   # a damaged video's reader may fail first: the damage is the reason
             raise

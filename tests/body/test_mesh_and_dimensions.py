@@ -93,3 +93,36 @@ def test_part_size_accepts_only_finite_positive(length, width, depth):
     else:
         with pytest.raises(ValueError):
             PartSize(length, width, depth)
+
+
+def test_build_mesh_equals_the_part_by_part_tessellation():
+    """The template build (unit parts scaled) gives the same numbers as tessellating every part
+    afresh (tests/naive.py), on random sizes, hairlines, parts and resolutions."""
+    from tests.naive import naive_build_mesh, naive_part_mesh
+    rng = np.random.default_rng(3)
+    base = BodyDimensions()
+    for case in range(24):
+        parts = {name: PartSize(*(np.array([s.length, s.width, s.depth]) * rng.uniform(0.6, 1.6, 3)))
+                 for name, s in base.parts.items() if name != "lower_body" or case % 3}
+        hairline = None if case % 4 == 0 else float(rng.uniform(-0.9, 0.95))
+        dims = BodyDimensions(parts, hairline)
+        resolution = int(rng.choice([4, 5, 8, 11, 12, 16, 24]))
+        mesh = build_mesh(dims, resolution)
+        vertices, vertex_segment, triangles, triangle_part = naive_build_mesh(dims, resolution)
+        np.testing.assert_allclose(mesh.vertices, vertices, rtol=0, atol=1e-12)
+        for got, want in ((mesh.vertex_segment, vertex_segment), (mesh.triangles, triangles),
+                          (mesh.triangle_part, triangle_part)):
+            assert got.dtype == want.dtype and np.array_equal(got, want)
+        # a second build of the same topology (from the kept templates) with other sizes
+        other = BodyDimensions({k: PartSize(s.length * 1.1, s.width, s.depth * 0.9) for k, s in parts.items()},
+                               hairline)
+        np.testing.assert_allclose(build_mesh(other, resolution).vertices, naive_build_mesh(other, resolution)[0],
+                                   rtol=0, atol=1e-12)
+    for cuts in ((), (0.7,), (0.725, 0.325), (0.2, 0.5, 0.8)):
+        for sign in (1, -1):
+            v, t = part_mesh(0.3, 0.2, 0.1, e_long=0.45, e_cross=0.7, taper=0.2, resolution=7, start=0.05,
+                             axis_sign=sign, cuts=cuts)
+            nv, nt = naive_part_mesh(0.3, 0.2, 0.1, e_long=0.45, e_cross=0.7, taper=0.2, resolution=7, start=0.05,
+                                     axis_sign=sign, cuts=cuts)
+            np.testing.assert_array_equal(v, nv)
+            np.testing.assert_array_equal(t, nt)

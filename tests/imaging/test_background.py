@@ -142,3 +142,14 @@ def test_bad_input_raises_value_error(case):
     frame, background, message = BAD[case]
     with pytest.raises(ValueError, match=message):
         subtract_background(frame, background)
+
+
+@pytest.mark.parametrize("radius", [30.0, 7.3])
+def test_densest_sample_matches_its_twin(radius):
+    """The compiled mode of the background estimate equals its NumPy twin, ties included
+    (few grey levels: many equal counts)."""
+    from mocap.imaging.background import _densest_sample
+    from tests.naive import naive_densest_sample
+    rng = np.random.default_rng(5)
+    video = (rng.integers(0, 9, (13, 7, 11, 3)) * 8).astype(np.uint8)
+    np.testing.assert_array_equal(_densest_sample(video, radius), naive_densest_sample(video, radius))

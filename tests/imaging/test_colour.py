@@ -258,3 +258,15 @@ def test_learn_colour_model_takes_hair_and_lower_body_boxes():
         hair_box.height, hair_box.width, 3)
     merged = learn_colour_model(same, skin_box=face, clothes_box=scene.clothes_box, hair_box=hair_box)
     assert merged.names == ("skin", "clothes")
+
+
+
+def test_chi_square_figures_are_scipy_stats():
+    """The colour model's chi-square figures come from scipy.special (scipy.stats is slow to
+    import): the same numbers as scipy.stats.chi2's."""
+    from scipy import stats
+    from mocap.imaging import colour
+    assert colour.MERGE_DISTANCE2 == float(stats.chi2.ppf(0.5, 3))
+    assert colour.MODE_CUT2 == stats.chi2.ppf(0.95, 3)
+    cut = stats.chi2.ppf(0.95, 3)
+    assert colour.MODE_CONSISTENCY == stats.chi2.cdf(cut, 3) / stats.chi2.cdf(cut, 5)
