@@ -170,6 +170,7 @@ def test_save_unit_rejects_incomplete_results(tmp_path):
     ({"handoff_edge_budgets": (0, 600)}, "handoff_total"), ({"policies": ("2:x",)}, "split"),
     ({"figure_sequence": "turning", "sequences": ("gestures-1",)}, "figure_sequence"),
     ({"table2_sizes": ((8, 8),)}, "table2_sizes"), ({"figure_failure_f": 0}, "figure_failure_f"),
+    ({"gradient": "yes"}, "gradient must be true or false"),
 ])
 def test_bad_config_rejected(changes, match):
     with pytest.raises(ValueError, match=match):
