@@ -106,6 +106,11 @@ class SweepConfig(JsonConfig):
         A frame with mean edge distance above this is a failure of the edge distance (Fig. 12).
     mpjpe_failure_mm : float, millimetres
         A frame with MPJPE above this is a ground-truth failure.
+    gradient : bool
+        Also run the grid of Figs. 9-12 and Fig. 4's two-step runs with the gradient step on
+        (:attr:`mocap.track.TrackerConfig.gradient_step`, taking
+        :func:`mocap.track.config.gradient_budget` of each edge budget, so each total is
+        unchanged); the figures then draw both. Off: the paper's simplex-only sweep.
     """
 
     sequences: tuple[str, ...] = SEQUENCE_NAMES
@@ -135,6 +140,7 @@ class SweepConfig(JsonConfig):
     figure_failure_f: float = 0.3
     figure_failure_edge_px: float = 1.0
     mpjpe_failure_mm: float = 100.0
+    gradient: bool = False
 
     def __post_init__(self) -> None:
         from mocap.track import split_budget
@@ -167,6 +173,8 @@ class SweepConfig(JsonConfig):
             object.__setattr__(self, name, _int_tuple(name, getattr(self, name), minimum=1))
         if max(self.handoff_edge_budgets) > self.handoff_total:
             raise ValueError(f"handoff_edge_budgets must not exceed handoff_total={self.handoff_total}")
+        if not isinstance(self.gradient, bool):
+            raise ValueError(f"gradient must be true or false, got {self.gradient!r}")
         if isinstance(self.policies, str) or not self.policies:
             raise ValueError(f"policies must be a non-empty list of split policies, got {self.policies!r}")
         object.__setattr__(self, "policies", tuple(self.policies))

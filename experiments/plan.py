@@ -3,7 +3,9 @@
 The same :class:`~experiments.config.SweepConfig` gives the same :class:`RunSpec` objects to
 the sweep (to run them) and to the figures (to find their result files), so a figure never
 guesses a file name. Identical settings needed by two figures are one unit (e.g. the 50/50
-policy at 200 evaluations is the grid cell 100 x 100).
+policy at 200 evaluations is the grid cell 100 x 100). With ``SweepConfig.gradient`` the grid
+and Fig. 4's two-step runs get a twin with the gradient step on (a third policy beside the
+region and the edge step: the gradient step takes its share of each edge budget).
 """
 from __future__ import annotations
 
@@ -43,14 +45,19 @@ def data_spec(config: SweepConfig, actor: str, *, motion: str | None = None, siz
     return DataSpec(actor, motion, frames, config.seed, w, h)
 
 
-def grid_specs(config: SweepConfig, data: DataSpec, region_budgets=None, edge_budgets=None) -> dict:
-    """Figs. 9-12: ``{(R, E): RunSpec}`` over the region x edge budgets."""
+def grid_specs(config: SweepConfig, data: DataSpec, region_budgets=None, edge_budgets=None, *,
+               gradient: bool = False) -> dict:
+    """Figs. 9-12: ``{(R, E): RunSpec}`` over the region x edge budgets.
+
+    With ``gradient`` the gradient-step twin of the grid (the gradient step taking its share of
+    each cell's E; cells where that share is 0 are the simplex-only units themselves).
+    """
     rs = config.region_budgets if region_budgets is None else region_budgets
     es = config.edge_budgets if edge_budgets is None else edge_budgets
-    return {(r, e): RunSpec(data, r, e, ftol=config.ftol) for r in rs for e in es}
+    return {(r, e): RunSpec(data, r, e, ftol=config.ftol, gradient=gradient) for r in rs for e in es}
 
 
-def convergence_specs(config: SweepConfig, data: DataSpec) -> dict:
+def convergence_specs(config: SweepConfig, data: DataSpec, *, gradient: bool = False) -> dict:
     """Figs. 4 and 6: region-only and two-step runs, converged and limited.
 
     Keys: ``region_converged``, ``region_limited`` (edge budget 0); ``both_converged``,
@@ -58,13 +65,15 @@ def convergence_specs(config: SweepConfig, data: DataSpec) -> dict:
     simplex); ``both_converged_fresh``, ``both_limited_fresh`` (edge step from a large fresh
     simplex, as before the paper's section 4.2 fix: a fully converged region simplex has
     collapsed, and an edge step started from it cannot move). All use ``converged_ftol`` so
-    that only the budget differs.
+    that only the budget differs. With ``gradient`` the same runs with the gradient step on
+    (region-only runs, and runs whose edge budget leaves the step no evaluation, are unchanged).
     """
-    big, small, tol = config.converged_budget, config.limited_budget, config.converged_ftol
+    big, small, tol, g = config.converged_budget, config.limited_budget, config.converged_ftol, gradient
     return {"region_converged": RunSpec(data, big, 0, ftol=tol), "region_limited": RunSpec(data, small, 0, ftol=tol),
-            "both_converged": RunSpec(data, big, big, ftol=tol), "both_limited": RunSpec(data, small, small, ftol=tol),
-            "both_converged_fresh": RunSpec(data, big, big, edge_start="fresh", ftol=tol),
-            "both_limited_fresh": RunSpec(data, small, small, edge_start="fresh", ftol=tol)}
+            "both_converged": RunSpec(data, big, big, ftol=tol, gradient=g),
+            "both_limited": RunSpec(data, small, small, ftol=tol, gradient=g),
+            "both_converged_fresh": RunSpec(data, big, big, edge_start="fresh", ftol=tol, gradient=g),
+            "both_limited_fresh": RunSpec(data, small, small, edge_start="fresh", ftol=tol, gradient=g)}
 
 
 def handoff_specs(config: SweepConfig, data: DataSpec) -> dict:
@@ -125,6 +134,10 @@ def make_plan(config: SweepConfig, clips=()) -> Plan:
         add(convergence_specs(config, d).values())
         add(handoff_specs(config, d).values())
         add(policy_specs(config, d).values())
+        if config.gradient:
+            add(grid_specs(config, d, gradient=True).values())
+            specs = convergence_specs(config, d, gradient=True)
+            add(specs[k] for k in ("both_converged_fresh", "both_limited_fresh"))     # the runs Fig. 4 draws
     for d in clip_specs(config, clips):
         data.append(d)
         add(grid_specs(config, d, config.motion_budgets, config.motion_budgets).values())

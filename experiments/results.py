@@ -103,8 +103,8 @@ class Results:
         u = self.unit(spec)
         return math.nan if u is None else unit_stat(u, name, self.thresholds())
 
-    def surface(self, data: DataSpec, name: str, region_budgets=None, edge_budgets=None):
-        """Statistic over the budget grid of one sequence.
+    def surface(self, data: DataSpec, name: str, region_budgets=None, edge_budgets=None, *, gradient: bool = False):
+        """Statistic over the budget grid of one sequence (with ``gradient``: its gradient-step twin).
 
         Returns
         -------
@@ -113,18 +113,18 @@ class Results:
         """
         rs = tuple(self.config.region_budgets if region_budgets is None else region_budgets)
         es = tuple(self.config.edge_budgets if edge_budgets is None else edge_budgets)
-        specs = grid_specs(self.config, data, rs, es)
+        specs = grid_specs(self.config, data, rs, es, gradient=gradient)
         z = np.array([[self.stat(specs[(r, e)], name) for e in es] for r in rs])
         return np.array(rs), np.array(es), z
 
-    def mean_surface(self, datas, name: str, region_budgets=None, edge_budgets=None):
+    def mean_surface(self, datas, name: str, region_budgets=None, edge_budgets=None, *, gradient: bool = False):
         """Mean of :meth:`surface` over several sequences (failures: percent of frames)."""
         zs, frames = [], []
         rs = es = None
         for d in datas:
-            rs, es, z = self.surface(d, name, region_budgets, edge_budgets)
+            rs, es, z = self.surface(d, name, region_budgets, edge_budgets, gradient=gradient)
             zs.append(z)
-            frames.append(self.surface(d, "frames", region_budgets, edge_budgets)[2])
+            frames.append(self.surface(d, "frames", region_budgets, edge_budgets, gradient=gradient)[2])
         if not zs:
             raise ValueError("no sequences given")
         z, n = np.array(zs), np.array(frames)

@@ -3,7 +3,8 @@
 Runs, on the named synthetic sequences (and with ``--motion-dir`` on the same actors driven
 by every motion-capture clip there), the tracker over the grid of region-step x edge-step
 budgets (Figs. 9-12), the converged and limited runs (Figs. 4, 6), the edge-start runs
-(Fig. 8), the split policies, the Table 1 timing runs and the Table 2 timings.
+(Fig. 8), the split policies, the Table 1 timing runs and the Table 2 timings. With
+``--gradient`` the grid and Fig. 4's two-step runs are run again with the gradient step on.
 
 Results go to ``--out`` (default ``experiments/results/full`` or ``.../quick``): one file
 per finished unit, written atomically, so an interrupted sweep loses nothing and the same
@@ -303,6 +304,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--frames", type=int, help="frames per sequence")
     p.add_argument("--region-budgets", type=_parse_budgets, help="comma-separated region-step budgets")
     p.add_argument("--edge-budgets", type=_parse_budgets, help="comma-separated edge-step budgets")
+    p.add_argument("--gradient", action="store_true",
+                   help="also run the grid and Fig. 4 with the gradient step on (a twin of each surface)")
     p.add_argument("--max-units", type=int, help="stop after computing this many units (resume later)")
     p.add_argument("--no-table2", action="store_true", help="skip the Table 2 timings")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
@@ -321,6 +324,8 @@ def config_from_args(args: argparse.Namespace) -> SweepConfig:
     for name in ("frames", "region_budgets", "edge_budgets"):
         if getattr(args, name) is not None:
             changes[name] = getattr(args, name)
+    if args.gradient:
+        changes["gradient"] = True
     return config.with_changes(changes) if changes else config
 
 

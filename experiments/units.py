@@ -112,6 +112,11 @@ class RunSpec:
         Convergence test of both steps.
     kind : {"run", "timing"}
         ``timing`` prepares frames afresh inside the unit (Table 1) and runs alone.
+    gradient : bool
+        The gradient step on (:attr:`mocap.track.TrackerConfig.gradient_step`): it takes
+        :func:`mocap.track.config.gradient_budget` of the edge step's ``edge`` evaluations, so the
+        total stays ``region + edge``. Set to False where that share is 0 (the run would be the
+        simplex-only one), so such a unit is not run twice.
     """
 
     data: DataSpec
@@ -120,6 +125,7 @@ class RunSpec:
     edge_start: str = "region_simplex"
     ftol: float = 1e-3
     kind: str = "run"
+    gradient: bool = False
 
     def __post_init__(self) -> None:
         for name in ("region", "edge"):
@@ -132,13 +138,21 @@ class RunSpec:
             raise ValueError(f"kind must be one of {RUN_KINDS}, got {self.kind!r}")
         if self.region == 0 or self.edge == 0:       # the start matters only when both steps run
             object.__setattr__(self, "edge_start", "region_simplex")
+        if not isinstance(self.gradient, bool):
+            raise ValueError(f"gradient must be a bool, got {self.gradient!r}")
+        if self.gradient:
+            from mocap.track.config import gradient_budget
+
+            if gradient_budget(self.edge) == 0:      # the step would not run: the simplex-only unit
+                object.__setattr__(self, "gradient", False)
 
     @property
     def key(self) -> str:
         """File stem of the result below ``units/<data key>/``."""
         start = "" if self.edge_start == "region_simplex" else "_fresh"
         timing = "_timing" if self.kind == "timing" else ""
-        return f"r{self.region:04d}_e{self.edge:04d}{start}_ftol{self.ftol:g}{timing}"
+        gradient = "_gradient" if self.gradient else ""
+        return f"r{self.region:04d}_e{self.edge:04d}{start}_ftol{self.ftol:g}{gradient}{timing}"
 
     def path(self, root: str | Path) -> Path:
         """Where the result file of this unit lives."""
@@ -147,12 +161,13 @@ class RunSpec:
     def tracker_config(self):
         """The :class:`mocap.track.TrackerConfig` of this run: the paper's method
         (:meth:`mocap.track.TrackerConfig.paper`: one hypothesis, no recovery, the paper had
-        none) with this unit's budgets, edge start and ``ftol``."""
+        none) with this unit's budgets, edge start, ``ftol`` and gradient step."""
         from mocap.track import TrackerConfig
 
         total = self.region + self.edge
         split = f"{self.region}:{self.edge}" if total else "1:0"
-        return TrackerConfig.paper(evaluations=total, split=split, edge_start=self.edge_start, ftol=self.ftol)
+        return TrackerConfig.paper(evaluations=total, split=split, edge_start=self.edge_start, ftol=self.ftol,
+                                  gradient_step=self.gradient)
 
 
 # ----------------------------------------------------------------------------- data units

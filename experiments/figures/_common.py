@@ -91,24 +91,32 @@ def surface_figure(results: Results | str | Path, out: str | Path, name: str, st
 
     Left: statistic ``stat`` over region x edge budgets on ``figure_sequence`` (the paper's
     sequence 2), as the paper's surfaces. Right: the same over all sequences (mean; failures
-    as percent of all frames), with values; the red frame marks the minimum.
+    as percent of all frames), with values; the red frame marks the minimum. When the sweep ran
+    with the gradient step (``SweepConfig.gradient``) a second row shows the same with the
+    gradient step taking its share of each edge budget (each row on its own colour scale).
     """
     res = as_results(results)
     cfg = res.config
     label, _ = STATS[stat]
     thr = threshold_text(res, stat)
+    rows = ((False, "simplex"), (True, "with the gradient step")) if cfg.gradient else ((False, ""),)
+    mean_label = (label.replace("(frames)", "(% of frames)") if stat.startswith("fail_") else label)
     with style_context():
-        fig = new_figure(10.0, 4.3)
-        ax3 = fig.add_subplot(1, 2, 1, projection="3d")
-        ax2 = fig.add_subplot(1, 2, 2)
-        rs, es, z = res.surface(res.data(cfg.figure_sequence), stat)
-        n = int(np.nanmax(res.surface(res.data(cfg.figure_sequence), "frames")[2])) if np.isfinite(z).any() else 0
-        surface3d(ax3, rs, es, z, label)
-        ax3.set_title(f"{cfg.figure_sequence} ({n} frames)" + (f"\n{thr}" if thr else ""))
-        mean_label = (label.replace("(frames)", "(% of frames)") if stat.startswith("fail_") else label)
-        rs, es, zm = res.mean_surface([res.data(s) for s in res.sequences], stat)
-        heatmap(ax2, rs, es, zm, mean_label, fig=fig)
-        ax2.set_title(f"all {len(res.sequences)} sequences ({'percent of frames' if stat.startswith('fail_') else 'mean'})"
-                      + (f"; {thr}" if thr else "") + "; red: minimum")
-        fig.suptitle(title)
+        fig = new_figure(10.0, 4.3 * len(rows))
+        for k, (gradient, row_name) in enumerate(rows):
+            ax3 = fig.add_subplot(len(rows), 2, 2 * k + 1, projection="3d")
+            ax2 = fig.add_subplot(len(rows), 2, 2 * k + 2)
+            figure_data = res.data(cfg.figure_sequence)
+            rs, es, z = res.surface(figure_data, stat, gradient=gradient)
+            n = (int(np.nanmax(res.surface(figure_data, "frames", gradient=gradient)[2]))
+                 if np.isfinite(z).any() else 0)
+            surface3d(ax3, rs, es, z, label)
+            prefix = f"{row_name}: " if row_name else ""
+            ax3.set_title(f"{prefix}{cfg.figure_sequence} ({n} frames)" + (f"\n{thr}" if thr else ""))
+            rs, es, zm = res.mean_surface([res.data(s) for s in res.sequences], stat, gradient=gradient)
+            heatmap(ax2, rs, es, zm, mean_label, fig=fig)
+            ax2.set_title(f"{prefix}all {len(res.sequences)} sequences "
+                          f"({'percent of frames' if stat.startswith('fail_') else 'mean'})"
+                          + (f"; {thr}" if thr else "") + "; red: minimum")
+        fig.suptitle(title + (" — simplex (top) and gradient step (bottom)" if cfg.gradient else ""))
         return save(fig, out, name)

@@ -97,6 +97,67 @@ def test_units_are_shared_between_figures():
     assert len(keys) == len(set(keys))
 
 
+def test_gradient_policy_twins_the_grid_and_fig4_only_where_the_step_runs():
+    from mocap.track.config import gradient_budget
+
+    config = SweepConfig.preset("quick")
+    plain, with_gradient = make_plan(config), make_plan(config.with_changes({"gradient": True}))
+    # the default sweep is unchanged: no unit with the gradient step, and all its units still planned
+    assert not any(s.gradient for s in plain.runs + plain.timing)
+    assert set(plain.runs) <= set(with_gradient.runs) and plain.timing == with_gradient.timing
+    added = [s for s in with_gradient.runs if s not in set(plain.runs)]
+    assert all(s.gradient and s.key.endswith("_gradient") for s in added)
+    # per sequence: one twin per grid cell whose edge budget leaves the step evaluations, and Fig. 4's converged run
+    cells = [(r, e) for r in config.region_budgets for e in config.edge_budgets if gradient_budget(e) > 0]
+    assert len(added) == len(config.sequences) * (len(cells) + 1)
+    d = data_spec(config, "gestures-2")
+    twin = grid_specs(config, d, gradient=True)[(100, 250)]
+    assert twin in added and twin.tracker_config().gradient_step and twin.tracker_config().evaluations == 350
+    assert not grid_specs(config, d)[(100, 250)].tracker_config().gradient_step
+    # an edge budget too small for the step (or none): the simplex unit itself, not run twice
+    assert grid_specs(config, d, gradient=True)[(100, 0)] == grid_specs(config, d)[(100, 0)]
+    assert RunSpec(d, 30, 30, gradient=True) == RunSpec(d, 30, 30)
+    keys = [(s.data.key, s.key) for s in with_gradient.runs]
+    assert len(keys) == len(set(keys))
+
+
+def test_gradient_unit_drawn_as_the_second_row(tiny_results, tiny_config, tmp_path):
+    """One gradient-step unit run into a copy of the tiny sweep: the twin surfaces read it, the figures draw it."""
+    import shutil
+
+    from experiments.figures import fig4, fig10
+    from experiments.results import Results
+    from experiments.sweep import CONFIG_FILE
+    from experiments.units import run_unit
+
+    root = tmp_path / "results"
+    shutil.copytree(tiny_results, root)
+    config = tiny_config.with_changes({"gradient": True, "edge_budgets": (0, 30, 40)})
+    config.to_json(root / CONFIG_FILE)
+    d = data_spec(config, "gestures-2")
+    spec = grid_specs(config, d, gradient=True)[(30, 40)]
+    assert spec.gradient
+    save_unit(spec.path(root), run_unit(spec, str(root)))
+    u = load_unit(spec.path(root))
+    assert u["meta"]["tracker"]["gradient_step"] and np.all(u["evaluations"] <= 70)
+    res = Results(root)
+    rs, es, z = res.surface(d, "mean_D", gradient=True)
+    assert z[list(rs).index(30), list(es).index(40)] == pytest.approx(np.mean(u["edge_residual"]))
+    assert np.isnan(res.surface(d, "mean_D")[2][list(rs).index(30), list(es).index(40)])   # simplex: not run
+    for module in (fig10, fig4):
+        assert [p.suffix for p in module.main(res, tmp_path / "figures")] == [".png", ".pdf"]
+    # the report section compares the one cell that has both runs (the simplex twin of (30, 40) was not run)
+    from experiments.report import gradient_sweep_section
+
+    assert "No cell with the gradient step" in gradient_sweep_section(res, "figs", "cmd")
+    simplex = grid_specs(config, d)[(30, 40)]
+    save_unit(simplex.path(root), run_unit(simplex, str(root)))
+    text = gradient_sweep_section(Results(root), "figs", "cmd")
+    row = [line for line in text.splitlines() if line.startswith("| 30 | 40 |")]
+    assert len(row) == 1 and f"{np.mean(u['edge_residual']):.3f}" in row[0].split("|")[4]
+    assert "Over 1 cells" in text
+
+
 def test_save_unit_rejects_incomplete_results(tmp_path):
     with pytest.raises(ValueError, match="lacks"):
         save_unit(tmp_path / "u.npz", {"frame": np.arange(3)})
@@ -109,6 +170,7 @@ def test_save_unit_rejects_incomplete_results(tmp_path):
     ({"handoff_edge_budgets": (0, 600)}, "handoff_total"), ({"policies": ("2:x",)}, "split"),
     ({"figure_sequence": "turning", "sequences": ("gestures-1",)}, "figure_sequence"),
     ({"table2_sizes": ((8, 8),)}, "table2_sizes"), ({"figure_failure_f": 0}, "figure_failure_f"),
+    ({"gradient": "yes"}, "gradient must be true or false"),
 ])
 def test_bad_config_rejected(changes, match):
     with pytest.raises(ValueError, match=match):
