@@ -86,16 +86,19 @@ def cpu_seconds(pid: int) -> float | None:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def time_run(package_root: Path, clip: Path, out: Path) -> dict:
-    """One ``track`` run from ``package_root``: seconds to the first row and to the end, the
-    breakdown, and the Numba cache's loads and saves."""
+def time_run(package_root: Path, clip: Path, out: Path, keypoints: str | None = None) -> dict:
+    """One ``track`` run from ``package_root`` (with ``--keypoints KEYPOINTS`` when given, else
+    the command's default): seconds to the first row and to the end, the breakdown, and the
+    Numba cache's loads and saves."""
     shutil.rmtree(out, ignore_errors=True)
     env = {**os.environ, "PYTHONPATH": str(package_root), "NUMBA_DEBUG_CACHE": "1"}
     journal = out / "poses.csv"
     load = os.getloadavg()[0]
     start = time.perf_counter()
-    process = subprocess.Popen([sys.executable, "-m", "mocap", "track", str(clip), "--max-frames", "1",
-                                "--no-overlay", "--out", str(out)], cwd=package_root, env=env,
+    command = [sys.executable, "-m", "mocap", "track", str(clip), "--max-frames", "1", "--no-overlay", "--out", str(out)]
+    if keypoints is not None:
+        command += ["--keypoints", keypoints]
+    process = subprocess.Popen(command, cwd=package_root, env=env,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     streams = [_Stream(process.stdout, start), _Stream(process.stderr, start)]
     for s in streams:
@@ -136,6 +139,9 @@ def main(argv=None) -> int:
     parser.add_argument("--runs", type=int, default=3, help="runs after the compiling one (default 3)")
     parser.add_argument("--baseline", metavar="REF", help="also time the mocap/ of this git commit, its cached runs "
                                                           "alternating with the working tree's")
+    parser.add_argument("--keypoints", metavar="auto|mediapipe|none",
+                        help="pass --keypoints to track (default: track's own default, auto: MediaPipe where "
+                             "the optional extra is installed)")
     args = parser.parse_args(argv)
     if args.runs < 1:
         parser.error("--runs must be at least 1")
@@ -159,15 +165,16 @@ def main(argv=None) -> int:
             archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.baseline, "mocap"], check=True,
                                      capture_output=True).stdout
             subprocess.run(["tar", "-x", "-C", str(copies[args.baseline])], input=archive, check=True)
-        print(f"clip {clip}; `python -m mocap track CLIP --max-frames 1 --no-overlay` from a fresh copy of mocap/ "
+        given = "" if args.keypoints is None else f" --keypoints {args.keypoints}"
+        print(f"clip {clip}; `python -m mocap track CLIP --max-frames 1 --no-overlay{given}` from a fresh copy of mocap/ "
               f"({os.cpu_count()} cores)", flush=True)
         compiled, cached = {}, {name: [] for name in copies}
         for name, copy in copies.items():
-            compiled[name] = time_run(copy, clip, args.work / "run")
+            compiled[name] = time_run(copy, clip, args.work / "run", args.keypoints)
             print(describe(f"{name or 'this tree'}: compiling run", compiled[name]), flush=True)
         for k in range(args.runs):
             for name, copy in copies.items():
-                cached[name].append(time_run(copy, clip, args.work / "run"))
+                cached[name].append(time_run(copy, clip, args.work / "run", args.keypoints))
                 print(describe(f"{name or 'this tree'}: cached run {k + 1}", cached[name][-1]), flush=True)
         for name in copies:
             runs = cached[name]
