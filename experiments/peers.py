@@ -303,6 +303,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     work = args.work or args.out / "work"
     work.mkdir(parents=True, exist_ok=True)
+    args.out.mkdir(parents=True, exist_ok=True)
     stored = args.out / "results.json"
     results = json.loads(stored.read_text()) if stored.exists() and args.only else {"synthetic": [], "real": []}
     if args.only in (None, "synthetic"):
