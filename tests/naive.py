@@ -18,7 +18,7 @@ compiled kernel                                            twin                 
 ``synth.shading`` (surface samples)                        :func:`naive_surface_samples`     ``tests/synth/test_sequence.py``
 ``imaging.background`` (change mask)                       :func:`naive_change_mask`         ``tests/imaging/test_background.py``
 ``imaging.background`` (densest sample)                    :func:`naive_densest_sample`      ``tests/imaging/test_background.py``
-``run.overlay`` (model box only; not compiled)             :func:`naive_draw_model`          ``tests/test_own_video.py``
+``imaging.visual`` (the overlay, in the model's box)       :func:`naive_draw_model`          ``tests/test_own_video.py``
 ``imaging.colour`` (HSV, classification)                   :func:`naive_hsv`,                ``tests/imaging/test_colour.py``
                                                            :func:`naive_classify`
 ``imaging.edges`` (Deriche recursion)                      :func:`naive_deriche_1d`          ``tests/imaging/test_edges.py``
@@ -691,8 +691,9 @@ def naive_deriche_edges(gy, gx, gain, low, high):
 
 
 def naive_draw_model(frame, labels, edges, n_classes=2, alpha=0.35, class_names=None):
-    """Twin of :func:`mocap.run.overlay.draw_model` (which looks at the model's box only): the
-    whole frame blended where labelled, the edges drawn."""
+    """Twin of the overlay's compiled drawers (:func:`mocap.imaging.visual.draw_model_box` through
+    :class:`mocap.run.overlay.ModelDrawer`, and :func:`mocap.run.overlay.draw_model`, which look at
+    the model's box only): the whole frame blended in float32 where labelled, the edges drawn."""
     from mocap.imaging.visual import label_palette
     from mocap.run.overlay import EDGE_COLOUR
 

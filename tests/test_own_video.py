@@ -188,6 +188,45 @@ def test_bench_video_stage_runs_the_whole_path_on_a_640x480_clip():
         assert r.median_us > 0 and r.triangles > 0
 
 
+def test_compiled_overlay_drawer_equals_numpy_on_the_render():
+    """ModelDrawer (render and blend compiled, in the model's box, buffers reused) draws the
+    picture of the NumPy twin on render()'s labels and edges, bit for bit, for varied poses, a
+    pose out of view and two sizes, and leaves its buffers clean; draw_pose is the same."""
+    from mocap.bench import _poses
+    from mocap.body import BodyModel
+    from mocap.render import Camera, render
+    from mocap.run.overlay import ModelDrawer, draw_pose
+    from tests.naive import naive_draw_model
+
+    rng = np.random.default_rng(5)
+    model = BodyModel.build()
+    away = _poses(1, seed=9)[0].copy()
+    away[:3] = (5.0, 0.0, -3.0)                      # behind the camera: nothing drawn
+    for size in ((160, 120), (320, 240)):
+        camera = Camera.default(*size)
+        frame = rng.integers(0, 256, (size[1], size[0], 3), dtype=np.uint8)
+        kept = frame.copy()
+        drawer = ModelDrawer(model, camera)
+        for pose in [*_poses(6, seed=3), away]:
+            r = render(pose, model, camera)
+            expected = naive_draw_model(frame, r.labels, r.edges, model.n_classes, class_names=model.class_names)
+            np.testing.assert_array_equal(drawer.draw(frame, pose), expected)
+            np.testing.assert_array_equal(draw_pose(frame, pose, model, camera), expected)
+            assert not drawer.buffers.part_ids.any() and not drawer.buffers.inverse_depth.any()
+            assert not drawer.marks.any()
+        np.testing.assert_array_equal(frame, kept)
+
+
+def test_blend_table_is_numpys_float32_blend():
+    from mocap.imaging.visual import blend_table
+    f, c = np.meshgrid(np.arange(256), np.arange(256), indexing="ij")
+    for alpha in (0.0, 0.35, 1.0):
+        expected = np.clip((1 - alpha) * f.astype(np.float32) + alpha * c.astype(np.float32), 0, 255).astype(np.uint8)
+        np.testing.assert_array_equal(blend_table(alpha), expected)
+    with pytest.raises(ValueError):
+        blend_table(1.5)
+
+
 def test_overlay_drawn_in_the_model_box_equals_the_whole_frame():
     """draw_model looks at the model's box only: the same picture as blending the whole frame
     (tests/naive.py), with edges beyond the silhouette and with nothing drawn."""

@@ -138,6 +138,28 @@ def occluding_edge_marks_into(scene, buffers, min_gap, distance, marks):
     return out
 
 
+@jit
+def occluding_edges_into(scene, buffers, min_gap, marks):
+    """Compiled: mark the occluding-edge pixels of the render in ``buffers`` in the flat bool
+    ``marks`` (they lie in ``buffers.box``), keeping the part and depth buffers (a drawer reads
+    them: :func:`clear_render` clears them after)."""
+    _raster._edge_scan(buffers.part_ids, buffers.inverse_depth, scene.width, scene.height, buffers.box, min_gap,
+                       np.empty(0, np.float32), marks, False)
+
+
+@jit
+def clear_render(scene, buffers, marks):
+    """Compiled: the part and depth buffers and the flat bool ``marks`` cleared in ``buffers.box``
+    (zero and False again, ready for the next render)."""
+    box = buffers.box
+    if box[0] > box[2]:
+        return
+    _raster._clear(buffers.part_ids, buffers.inverse_depth, scene.width, box)
+    for y in range(box[1], box[3] + 1):
+        row = y * scene.width
+        marks[row + box[0]: row + box[2] + 1] = False
+
+
 @dataclass(frozen=True)
 class Rendering:
     """What one render produces (all arrays of shape (height, width)).
