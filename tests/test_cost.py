@@ -38,6 +38,30 @@ def test_label_renderer_matches_render_over_a_sequence_of_poses():
     assert got.shape == CAMERA.shape and got.dtype == np.uint8
 
 
+def test_label_renderer_takes_every_pose_form_and_refuses_non_finite_ones():
+    # a plain float64 array takes the compiled check; lists, float32, read-only and strided
+    # arrays and huge finite values (whose sum overflows) go through check_pose: same labels
+    rng = np.random.default_rng(8)
+    renderer = LabelRenderer(MODEL, CAMERA)
+    q = random_pose(rng)
+    expected = render(q, MODEL, CAMERA).labels
+    read_only = q.copy()
+    read_only.setflags(write=False)
+    strided = np.repeat(q, 2)[::2]
+    for form in (q, list(q), read_only, strided):
+        np.testing.assert_array_equal(renderer(form), expected)
+    np.testing.assert_array_equal(renderer(q.astype(np.float32)), render(q.astype(np.float32), MODEL, CAMERA).labels)
+    huge = neutral_pose()
+    huge[3], huge[4] = 1e308, 1e308                 # finite: rendered as render() renders it
+    np.testing.assert_array_equal(renderer(huge), render(huge, MODEL, CAMERA).labels)
+    for value in (np.nan, np.inf):
+        bad = q.copy()
+        bad[5] = value
+        with pytest.raises(ValueError, match="non-finite"):
+            renderer(bad)
+    np.testing.assert_array_equal(renderer(q), expected)      # nothing was drawn by the refused poses
+
+
 def test_label_renderer_output_is_read_only():
     got = LabelRenderer(MODEL, CAMERA)(neutral_pose())
     assert got.any()
