@@ -19,7 +19,7 @@ import collections
 import json
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +33,7 @@ from mocap.imaging import ColourModel, PreparedFrame, prepare_frame
 from mocap.imaging.resample import downscale
 from mocap.imaging.scene import SceneColours
 from mocap.io.frames import VideoSource
+from mocap.io.keypoint_pipeline import DETECT_AHEAD, KeypointPipeline
 from mocap.io.keypoints import KeypointSource, Keypoints
 from mocap.io.lock import one_writer
 from mocap.io.pose_table import PoseTable
@@ -86,6 +87,10 @@ class RunParams:
     keypoints : KeypointSource or None
         2D keypoints of each frame (:mod:`mocap.io.keypoints`), asked on the input-size frame
         and given to the tracker in working pixels.
+    detect_ahead : int
+        Frames the keypoint source may work ahead on a thread of its own
+        (:class:`~mocap.io.keypoint_pipeline.KeypointPipeline`); 0 asks it on the reader thread,
+        frame by frame. The outputs are the same either way (timings aside).
     """
 
     config: TrackerConfig
@@ -100,6 +105,7 @@ class RunParams:
     show: bool = False
     newcomer: Callable[[int, np.ndarray], RunSetup | None] | None = None
     keypoints: KeypointSource | None = None
+    detect_ahead: int = DETECT_AHEAD
 
 
 @dataclass(frozen=True, eq=False)
@@ -179,9 +185,9 @@ class FrameReader:
     """Decoded, reduced and prepared frames (:class:`ReadFrame`) on the reader thread."""
 
     def __init__(self, frames_in, setup: RunSetup, span: Span, colours: Colours, *, keypoints, full: bool,
-                 overlay: OverlayGeometry | None) -> None:
+                 overlay: OverlayGeometry | None, detect_ahead: int = DETECT_AHEAD) -> None:
         self.frames_in, self.setup, self.span, self.colours = frames_in, setup, span, colours
-        self.keypoints, self.full, self.overlay = keypoints, full, overlay
+        self.keypoints, self.full, self.overlay, self.detect_ahead = keypoints, full, overlay, detect_ahead
         camera = setup.calibration.camera
         self.to_working = (camera.width / frames_in.width, camera.height / frames_in.height)
         self.clock = time.perf_counter()
@@ -192,19 +198,44 @@ class FrameReader:
                              scene=self.colours.scene)
 
     def __call__(self):
+        """The frames, each with its keypoints when there is a source: the detector runs on a
+        thread of its own (:class:`~mocap.io.keypoint_pipeline.KeypointPipeline`), given each
+        frame as it is decoded, while this thread prepares the frames; a frame is handed on once
+        its keypoints are back (:data:`~mocap.io.keypoint_pipeline.DETECT_AHEAD` frames behind
+        the newest decoded one at most)."""
         frames_in = self.frames_in
-        for index, frame in enumerate(frames_in.frames(self.span.start, self.span.stop), start=self.span.start):
-            # a live source's frame time is when it came; a file's its own timestamp
-            when = time.perf_counter() - self.clock if frames_in.live else frames_in.time_s(index)
-            small = downscale(frame, self.setup.factor)
-            colours = self.colours
-            seen = None if self.keypoints is None else \
-                self.keypoints.keypoints(index, frame).scaled(*self.to_working)
-            prepared = prepare_frame(small, self.setup.background, colours.model, self.setup.imaging,
-                                     scene=colours.scene)
-            yield ReadFrame(index, when, bool(small.mean() < DARK_MEAN), small, colours.segment, prepared,
-                            frame if self.full else None,
-                            None if self.overlay is None else self.overlay.frame(frame), seen)
+        pipeline = None if self.keypoints is None or self.detect_ahead == 0 else \
+            KeypointPipeline(self.keypoints, self.detect_ahead)
+        waiting: collections.deque[ReadFrame] = collections.deque()
+        try:
+            for index, frame in enumerate(frames_in.frames(self.span.start, self.span.stop), start=self.span.start):
+                # a live source's frame time is when it came; a file's its own timestamp
+                when = time.perf_counter() - self.clock if frames_in.live else frames_in.time_s(index)
+                if pipeline is not None:
+                    if pipeline.pending == pipeline.depth:
+                        yield self._with_keypoints(waiting.popleft(), pipeline)
+                    pipeline.submit(index, frame)
+                small = downscale(frame, self.setup.factor)
+                colours = self.colours
+                prepared = prepare_frame(small, self.setup.background, colours.model, self.setup.imaging,
+                                         scene=colours.scene)
+                read = ReadFrame(index, when, bool(small.mean() < DARK_MEAN), small, colours.segment, prepared,
+                                 frame if self.full else None,
+                                 None if self.overlay is None else self.overlay.frame(frame), None)
+                if pipeline is None:
+                    yield read if self.keypoints is None else \
+                        replace(read, keypoints=self.keypoints.keypoints(index, frame).scaled(*self.to_working))
+                else:
+                    waiting.append(read)
+            while waiting:
+                yield self._with_keypoints(waiting.popleft(), pipeline)
+        finally:
+            if pipeline is not None:
+                pipeline.close()
+
+    def _with_keypoints(self, read: ReadFrame, pipeline: KeypointPipeline) -> ReadFrame:
+        """``read`` with its keypoints from the pipeline, in working pixels."""
+        return replace(read, keypoints=pipeline.take(read.index).scaled(*self.to_working))
 
 
 class DamageCheck:
@@ -451,7 +482,8 @@ class RunLoop:
         reader = FrameReader(frames_in, self.setup, span,
                              Colours(self.people.segment, self.person.colour_model, self.person.scene),
                              keypoints=self.params.keypoints, full=self.params.newcomer is not None,
-                             overlay=geometry if self.overlay is not None else None)
+                             overlay=geometry if self.overlay is not None else None,
+                             detect_ahead=self.params.detect_ahead)
         self.bar = ProgressBar(total=None if span.expected is None else span.expected - span.first,
                                initial=span.start - span.first, desc="tracking", unit="frame",
                                disable=not self.params.progress)
