@@ -111,6 +111,10 @@ def test_fake_camera_gives_the_same_poses_as_the_file(sequence, tmp_path):
     assert poses[0].shape == (N_FRAMES, 23)
     np.testing.assert_array_equal(poses[0], poses[1])
     assert (tmp_path / "camera" / "overlay.mp4").is_file()       # a live run writes its overlay as it goes
+    # a replayed file waits to be read (no frame dropped); the latency is reported
+    live = json.loads((tmp_path / "camera" / "run.json").read_text())["live"]
+    assert live["dropped_frames"] == 0 and 0 < live["latency_ms"]["median"] <= live["latency_ms"]["p90"]
+    assert "live" not in json.loads((tmp_path / "file" / "run.json").read_text())
 
 
 @pytest.mark.slow

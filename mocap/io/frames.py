@@ -192,6 +192,11 @@ class CameraSource:
     count : None
     live : bool
         True.
+    real_time : bool
+        The frames come whether they are read or not (a capture device): a run takes the newest
+        and drops the ones it is too slow for (:func:`mocap.io.prefetch.newest`). False for a
+        file replayed as a camera (:meth:`replaying`): its frames wait to be read, none is
+        dropped, so a rehearsal tracks every frame.
 
     Raises
     ------
@@ -202,8 +207,9 @@ class CameraSource:
     live = True
     count = None
 
-    def __init__(self, device: str, input_params: list[str] | None = None, *, name: str | None = None) -> None:
-        self.device = device
+    def __init__(self, device: str, input_params: list[str] | None = None, *, name: str | None = None,
+                 real_time: bool = True) -> None:
+        self.device, self.real_time = device, real_time
         self.input_params = list(input_params or [])
         self._name = name or device
         self._reader = imageio_ffmpeg.read_frames(device, input_params=self.input_params, pix_fmt="rgb24")
@@ -243,7 +249,7 @@ class CameraSource:
         path = Path(path)
         if not path.is_file():
             raise FileNotFoundError(f"no such video file: {path}")
-        return cls(str(path), [], name=f"fake camera replaying {path}")
+        return cls(str(path), [], name=f"fake camera replaying {path}", real_time=False)
 
     @property
     def name(self) -> str:

@@ -37,7 +37,7 @@ from mocap.io.keypoint_pipeline import DETECT_AHEAD, KeypointPipeline
 from mocap.io.keypoints import KeypointSource, Keypoints
 from mocap.io.lock import one_writer
 from mocap.io.pose_table import PoseTable
-from mocap.io.prefetch import prefetch
+from mocap.io.prefetch import newest, prefetch
 from mocap.run.colours import learn_colours
 from mocap.run.journal import Journal, People, Resumed, previous_run
 from mocap.run.outputs import FinishedRun, RunSummary, finish_run, frame_row
@@ -204,13 +204,19 @@ class FrameReader:
         its keypoints are back (:data:`~mocap.io.keypoint_pipeline.DETECT_AHEAD` frames behind
         the newest decoded one at most)."""
         frames_in = self.frames_in
-        pipeline = None if self.keypoints is None or self.detect_ahead == 0 else \
-            KeypointPipeline(self.keypoints, self.detect_ahead)
+        # live, the detector works beside this thread on one frame: frames ahead would be frames late
+        ahead = min(self.detect_ahead, 1) if frames_in.live else self.detect_ahead
+        pipeline = None if self.keypoints is None or ahead == 0 else KeypointPipeline(self.keypoints, ahead)
         waiting: collections.deque[ReadFrame] = collections.deque()
+        start, stop = self.span.start, self.span.stop
+        if frames_in.live and frames_in.real_time:     # the newest frame each time (drops the ones it is too slow for)
+            arrivals = ((start + a.position, a.time_s - self.clock, a.item)
+                        for a in newest(lambda: frames_in.frames(start, stop), name="mocap-camera"))
+        else:       # a file's frame time is its own timestamp; a replayed one's when it came
+            arrivals = ((index, self.arrived(index), frame)
+                        for index, frame in enumerate(frames_in.frames(start, stop), start=start))
         try:
-            for index, frame in enumerate(frames_in.frames(self.span.start, self.span.stop), start=self.span.start):
-                # a live source's frame time is when it came; a file's its own timestamp
-                when = time.perf_counter() - self.clock if frames_in.live else frames_in.time_s(index)
+            for index, when, frame in arrivals:
                 if pipeline is not None:
                     if pipeline.pending == pipeline.depth:
                         yield self._with_keypoints(waiting.popleft(), pipeline)
@@ -230,8 +236,13 @@ class FrameReader:
             while waiting:
                 yield self._with_keypoints(waiting.popleft(), pipeline)
         finally:
+            arrivals.close()
             if pipeline is not None:
                 pipeline.close()
+
+    def arrived(self, index: int) -> float:
+        """Frame ``index``'s time (seconds): a file's own timestamp, a live frame's arrival now."""
+        return time.perf_counter() - self.clock if self.frames_in.live else self.frames_in.time_s(index)
 
     def _with_keypoints(self, read: ReadFrame, pipeline: KeypointPipeline) -> ReadFrame:
         """``read`` with its keypoints from the pipeline, in working pixels."""
@@ -346,6 +357,8 @@ class RunLoop:
         self.dark: dict[int, bool] = {}            # dark flags of the frames pushed but not decided yet
         self.pictures: dict[int, np.ndarray] = {}  # overlay-size frames not decided yet
         self.results_ms: collections.deque[float] = collections.deque(maxlen=25)   # for the frame rate shown
+        self.latency_ms: list[float] = []          # live: each frame's arrival to its decision
+        self.clock: float | None = None            # live: the reader's clock (frame times count from it)
         self.colour_frame: int | None = None
         self.overlay: OverlayWriter | None = None
         self.bar = None
@@ -435,8 +448,12 @@ class RunLoop:
             picture = self.pictures.pop(result.frame, None)
             if self.overlay is not None and picture is not None:
                 self.overlay.update(picture, result.pose)
-            self.bar.set_postfix(fps=f"{1e3 / np.mean(self.results_ms):.0f}", F=f"{result.region_residual:.2f}",
-                                 D=f"{result.edge_residual:.1f}")
+            shown = {"fps": f"{1e3 / np.mean(self.results_ms):.0f}", "F": f"{result.region_residual:.2f}",
+                     "D": f"{result.edge_residual:.1f}"}
+            if self.frames_in.live and self.clock is not None:
+                self.latency_ms.append(1e3 * (time.perf_counter() - self.clock - when))
+                shown["latency"] = f"{self.latency_ms[-1]:.0f}ms"
+            self.bar.set_postfix(**shown)
 
     def checkpoint(self, next_index: int) -> None:
         self.journal.checkpoint(self.tracker.state(), self.dark, self.people, next_index)
@@ -487,10 +504,10 @@ class RunLoop:
         self.bar = ProgressBar(total=None if span.expected is None else span.expected - span.first,
                                initial=span.start - span.first, desc="tracking", unit="frame",
                                disable=not self.params.progress)
-        self.started = time.perf_counter()
+        self.started, self.clock = time.perf_counter(), reader.clock
         interrupted, last = False, None
-        try:
-            for frame in prefetch(reader, READ_AHEAD, name="mocap-reader"):
+        try:    # (live: one frame waits at most, a newer one is taken instead of a queue of old ones)
+            for frame in prefetch(reader, 1 if frames_in.live else READ_AHEAD, name="mocap-reader"):
                 self.step(frame, reader)
                 last = frame.index
             if span.stop is None:
@@ -533,7 +550,21 @@ class RunLoop:
         return finish_run(FinishedRun(
             self.out_dir, table, self.settings, self.setup.calibration, self.camera, self.params.fps,
             self.span.start, time.perf_counter() - self.started, self.damage.damaged, self.colour_frame,
-            self.people.segments, self.truth, float(np.median(detector_ms)) if detector_ms else None))
+            self.people.segments, self.truth, float(np.median(detector_ms)) if detector_ms else None,
+            self.live_record(table)))
+
+    def live_record(self, table: PoseTable) -> dict | None:
+        """``run.json`` ``live`` of a live run: frames dropped (the gaps between the tracked ones:
+        the run was slower than the camera) and the latency from a frame's arrival to its pose
+        (median and 90th percentile, milliseconds; the decoding's ``lag`` included); None for a file."""
+        if not self.frames_in.live:
+            return None
+        frames = np.asarray(table.frames, dtype=np.int64)
+        record = {"dropped_frames": int(frames[-1] - frames[0] + 1 - len(frames)) if len(frames) else 0}
+        if self.latency_ms:
+            record["latency_ms"] = {"median": float(np.median(self.latency_ms)),
+                                    "p90": float(np.percentile(self.latency_ms, 90))}
+        return record
 
 
 @one_writer("out_dir")

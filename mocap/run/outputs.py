@@ -198,6 +198,8 @@ class FinishedRun:
     ground_truth : PoseTable or None
     keypoints_ms : float or None, milliseconds
         The keypoint detector's median time per frame.
+    live : dict or None
+        A live run's ``run.json`` ``live`` (frames dropped, latency: :meth:`mocap.run.loop.RunLoop.live_record`).
     """
 
     out_dir: Path
@@ -213,6 +215,7 @@ class FinishedRun:
     segments: list[dict]
     ground_truth: PoseTable | None = None
     keypoints_ms: float | None = None
+    live: dict | None = None
 
 
 def _metrics(run: FinishedRun, ms_total: np.ndarray) -> dict | None:
@@ -262,6 +265,8 @@ def finish_run(run: FinishedRun) -> RunSummary:
         record["dark_frames"] = int(extra["dark"].sum())
     if run.keypoints_ms is not None:      # the detector's own time per frame, beside the tracker's ms_total
         record["keypoints_ms_per_frame"] = run.keypoints_ms
+    if run.live is not None:
+        record["live"] = run.live
     write_text_atomic(run.out_dir / "run.json", json.dumps(record, indent=2))
     return RunSummary(run.out_dir, len(table), run.start, record["fps"], metrics, failures, tuple(run.damaged),
                       record["empty_frames"], record.get("dark_frames", 0), run.settings.get("own_video"))
