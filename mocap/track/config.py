@@ -90,9 +90,7 @@ class TrackerConfig(JsonConfig):
         Beyond the paper: skin regions of the image that the model's hands and head leave
         unexplained are taken for a lost hand; either arm is posed to reach each (inverse
         kinematics) and the best such pose is registered (``hypothesis_evaluations``) as a
-        further hypothesis. Not on frames the learned lifter lifts (2D keypoints with
-        ``keypoint_weight`` > 0): there its whole-body proposals and the keypoint term place the
-        hands (issue 36: a sixth of such a frame's time, for no loss on an unseen seed).
+        further hypothesis.
     reacquisition_distance_px : float, pixels
         A skin region (of at least :data:`MIN_SKIN_BLOB_PIXELS`) whose centroid is farther than
         this from both projected hands triggers it.

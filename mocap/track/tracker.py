@@ -246,7 +246,7 @@ class Tracker:
             retry = fit(self.last_good, step_scale=RECOVERY_STEP_SCALE)
             evaluations += retry.evaluations
             candidates.append((retry, "recovery"))
-        if cfg.hand_reacquisition and lifted is None:     # a lifted frame's proposals place the hands
+        if cfg.hand_reacquisition:
             evaluations += self._reacquire(prepared, region_cost, fit, leader, candidates)
         if cfg.jumps:
             evaluations += self._jump(region_cost, fit, leader, candidates)
