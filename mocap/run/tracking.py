@@ -15,10 +15,11 @@ from pathlib import Path
 from mocap._progress import compiling_announced
 from mocap.calibrate import Calibration
 from mocap.imaging.resample import working_factor
+from mocap.io import mediapipe_keypoints
 from mocap.io.frames import CameraSource, VideoSource
 from mocap.io.sequence import find_sequence
 from mocap.io.video import read_image
-from mocap.run.advice import RunFacts, what_to_try
+from mocap.run.advice import RunFacts, mostly_failed, what_to_try
 from mocap.run.loop import RunParams, track_frames
 from mocap.run.options import OwnVideoOptions, keypoint_source, resolve_keypoints
 from mocap.run.outputs import RunSummary
@@ -150,6 +151,10 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
     finally:
         if not frames_in.live:
             frames_in.close()       # the damage check's ffmpeg, when the run ended before it did
-    facts = RunFacts(summary.frames, summary.failures, options.keypoints, account["background"]["mode"],
-                     options.height_m is not None, account["calibration"]["from"])
+    used = resolve_keypoints(options.keypoints)[0]
+    # whether the extra is installed matters only to advice on a run without keypoints (its import takes ~2 s)
+    extra = used is not None or (mostly_failed(summary.frames, summary.failures) and mediapipe_keypoints.available())
+    facts = RunFacts(frames=summary.frames, failures=summary.failures, keypoints=used, keypoints_extra=extra,
+                     background=account["background"]["mode"], height_given=options.height_m is not None,
+                     calibration=account["calibration"]["from"])
     return dataclasses.replace(summary, setup=account, advice=what_to_try(facts))
