@@ -52,7 +52,7 @@ DARK_MEAN = 20.0
 READ_AHEAD = 4
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class RunParams:
     """How to run (:func:`track_frames`).
 

@@ -162,8 +162,8 @@ class _Segmenter:
         mode = background_mode(options.background is not None, options.background_frames is not None,
                                options.no_background)
         image = read_image(options.background) if options.background is not None else None
-        request = SetupRequest(self.factor, mode, image, options.background_frames, imaging=self.config,
-                               progress=False)
+        request = SetupRequest(factor=self.factor, background_mode=mode, background_image=image,
+                               background_frames=options.background_frames, imaging=self.config, progress=False)
         return find_background(FrameAccess(self.source, 0), request, self.factor, FaceSearch(self.factor),
                                self.config).image
 

@@ -107,7 +107,7 @@ class RunSetup:
         return ColourRecipe(self.colour_from, self.background, self.imaging, self.calibration, model)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class SetupRequest:
     """What the set-up is told (:func:`find_setup`); everything else it finds.
 

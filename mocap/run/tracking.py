@@ -82,9 +82,11 @@ class RunInput:
             given = Calibration.from_json(self.calibration)
             factor = factor or working_factor(width, height)
             given = dataclasses.replace(given, camera=given.camera.working(width, height, factor))
-        return SetupRequest(factor, options.background_mode(self.sequence_background),
-                            read_image(self.background) if self.background else None, options.background_frames,
-                            given, options.hfov_deg, options.height_m, progress=progress, keypoints=keypoints)
+        return SetupRequest(factor=factor, background_mode=options.background_mode(self.sequence_background),
+                            background_image=read_image(self.background) if self.background else None,
+                            background_frames=options.background_frames, calibration=given,
+                            hfov_deg=options.hfov_deg, height_m=options.height_m, progress=progress,
+                            keypoints=keypoints)
 
 
 def _check_files(background: str | None, calibration: str | None) -> None:
@@ -144,9 +146,10 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
         if on_setup is not None:
             on_setup(account)
         newcomer = NewcomerFinder.of(setup, width, height, hfov_deg=options.hfov_deg, height_m=options.height_m)
-        params = RunParams(options.tracker, opened.ground_truth, opened.fps, options.max_frames, options.overwrite,
-                           progress, options.overlay, options.allow_damaged, options.start, options.show, newcomer,
-                           keypoints)
+        params = RunParams(config=options.tracker, ground_truth=opened.ground_truth, fps=opened.fps,
+                           max_frames=options.max_frames, overwrite=options.overwrite, progress=progress,
+                           write_overlay=options.overlay, allow_damaged=options.allow_damaged, start_frame=options.start,
+                           show=options.show, newcomer=newcomer, keypoints=keypoints)
         summary = track_frames(frames_in, setup, out_dir, params)
     finally:
         if not frames_in.live:
