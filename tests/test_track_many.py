@@ -17,6 +17,7 @@ import pytest
 
 from mocap.cli import main
 from mocap.io.pose_table import PoseTable
+from mocap.run import files
 from mocap.run.many import SUMMARY_COLUMNS, read_summary
 
 from tests.conftest import REPO_ROOT
@@ -50,7 +51,7 @@ def single_runs(clips, tmp_path_factory):
 
 def assert_same_track(a, b) -> None:
     """The same poses.csv, timing columns (ms_*) aside."""
-    ta, tb = PoseTable.read(a / "poses.csv"), PoseTable.read(b / "poses.csv")
+    ta, tb = PoseTable.read(a / files.POSES_CSV), PoseTable.read(b / files.POSES_CSV)
     np.testing.assert_array_equal(ta.frames, tb.frames)
     np.testing.assert_array_equal(ta.poses, tb.poses)
     np.testing.assert_array_equal(ta.joints, tb.joints)
@@ -68,8 +69,8 @@ def assert_summary_matches_runs(out, inputs) -> list[dict]:
     for row in rows:
         if row["status"] != "finished":
             continue
-        run = json.loads((out / row["output"] / "run.json").read_text())
-        table = PoseTable.read(out / row["output"] / "poses.csv")
+        run = json.loads((out / row["output"] / files.RUN_JSON).read_text())
+        table = PoseTable.read(out / row["output"] / files.POSES_CSV)
         assert run["status"] == "finished" and row["reason"] == ""
         assert int(row["frames"]) == run["frames"] == len(table)
         assert int(row["failed_frames"]) == run["failures"] == int(table.extra["failed"].sum())
@@ -77,7 +78,7 @@ def assert_summary_matches_runs(out, inputs) -> list[dict]:
         assert float(row["time_s"]) == pytest.approx(run["wall_seconds_this_session"], abs=0.006)
         assert row["background"] == run["settings"]["own_video"]["background"]["mode"]
         assert row["calibration"] == run["settings"]["own_video"]["calibration"]["from"]
-    assert (out / "summary.png").stat().st_size > 0
+    assert (out / files.SUMMARY_PNG).stat().st_size > 0
     return rows
 
 
@@ -111,9 +112,9 @@ def test_an_interrupted_run_resumes_without_retracking_finished_videos(clips, si
            "track-many", str(a), str(b), "--out", str(out), "--workers", "0", "--no-progress", *TRACK_ARGS]
     proc = subprocess.run(cmd, cwd=REPO_ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == -9, proc.stderr
-    assert json.loads((out / a.name / "run.json").read_text())["status"] == "finished"
-    assert json.loads((out / b.name / "run.json").read_text())["status"] == "running"
-    assert not (out / "summary.csv").exists()
+    assert json.loads((out / a.name / files.RUN_JSON).read_text())["status"] == "finished"
+    assert json.loads((out / b.name / files.RUN_JSON).read_text())["status"] == "running"
+    assert not (out / files.SUMMARY_CSV).exists()
     finished = {p.name: (p.read_bytes(), p.stat().st_mtime_ns) for p in (out / a.name).iterdir()}
     proc = subprocess.run([sys.executable, "-m", "mocap", "track-many", str(a), str(b), "--out", str(out),
                            "--workers", "0", "--no-progress", *TRACK_ARGS],
@@ -121,7 +122,7 @@ def test_an_interrupted_run_resumes_without_retracking_finished_videos(clips, si
     assert proc.returncode == 0, proc.stderr
     assert "2 of 2 inputs finished (1 already were), 0 failed" in proc.stdout
     assert {p.name: (p.read_bytes(), p.stat().st_mtime_ns) for p in (out / a.name).iterdir()} == finished
-    assert json.loads((out / b.name / "run.json").read_text())["resumed_from_frame"] == CHECKPOINT_EVERY
+    assert json.loads((out / b.name / files.RUN_JSON).read_text())["resumed_from_frame"] == CHECKPOINT_EVERY
     for clip in (a, b):
         assert_same_track(out / clip.name, single_runs[clip.name])
     assert [r["status"] for r in assert_summary_matches_runs(out, [a, b])] == ["finished", "finished"]
@@ -190,7 +191,7 @@ def test_a_killed_worker_s_video_resumes_elsewhere_and_every_video_is_its_single
         assert many.returncode == 0, stderr
     assert processes["worker-b"].returncode == -signal.SIGKILL
     assert "3 of 3 inputs finished (0 already were), 0 failed, " in stdout and f"on dask {address}" in stdout
-    resumed = [json.loads((out / clip.name / "run.json").read_text())["resumed_from_frame"] for clip in clips]
+    resumed = [json.loads((out / clip.name / files.RUN_JSON).read_text())["resumed_from_frame"] for clip in clips]
     assert sorted(resumed) == [0, 0, CHECKPOINT_EVERY]  # the killed worker's video went on from its checkpoint
     for clip in clips:
         assert_same_track(out / clip.name, single_runs[clip.name])

@@ -74,8 +74,7 @@ def run(args: argparse.Namespace) -> int:
         camera = setup.calibration.camera.enlarged(setup.factor, source.width, source.height)
         calibration = Calibration(setup.calibration.dims, setup.calibration.initial_pose, camera)
         note = setup.record
-        how = (f"frame {note['calibration']['frame']}, background {note['background']['mode']} "
-               f"({note['background']['reason']})")
+        how = f"frame {note.calibration.frame}, background {note.background_mode} ({note.background.reason})"
     calibration.to_json(args.out)
     q = calibration.initial_pose
     print(f"calibration written to {args.out} ({how}): actor at {q[2]:.2f} m, torso "

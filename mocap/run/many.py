@@ -20,9 +20,10 @@ What a crash leaves behind, and what happens next:
   reason; the others go on.
 
 At the end ``OUT/summary.csv`` (:data:`SUMMARY_COLUMNS`, one row per input, from each
-video's ``run.json``) and ``OUT/summary.png`` are written atomically. ``OUT/track-many.json``
-keeps the options (:class:`mocap.run.OwnVideoOptions`), so that a rerun with other
-options is refused instead of mixing results.
+video's :class:`mocap.run.RunSummary`: the run's own, or its ``run.json`` read back) and
+``OUT/summary.png`` are written atomically. ``OUT/track-many.json`` keeps the options
+(:class:`mocap.run.OwnVideoOptions`), so that a rerun with other options is refused instead of
+mixing results.
 """
 from __future__ import annotations
 
@@ -38,13 +39,15 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from mocap.io.files import write_bytes_atomic, write_text_atomic
+from mocap.run import files
 from mocap.run.options import OwnVideoOptions
+from mocap.run.outputs import RunSummary
 
 __all__ = ["PER_VIDEO_OPTIONS", "ManySummary", "SUMMARY_COLUMNS", "expand_inputs", "track_input", "track_many",
            "read_summary", "summary_row"]
 
-#: Files written at the top of the output folder.
-SUMMARY_CSV, SUMMARY_PNG, OPTIONS_FILE = "summary.csv", "summary.png", "track-many.json"
+#: Files written at the top of the output folder (:mod:`mocap.run.files`).
+SUMMARY_CSV, SUMMARY_PNG, OPTIONS_FILE = files.SUMMARY_CSV, files.SUMMARY_PNG, files.TRACK_MANY_JSON
 #: Columns of ``summary.csv``: the input as given, its output folder (relative to ``OUT``),
 #: ``finished`` or ``failed``, frames tracked, frames whose residual marked them failed, frames
 #: per second (one core, run.json ``fps``), background mode and calibration source
@@ -139,36 +142,28 @@ def expand_inputs(patterns: list[str]) -> list[tuple[Path, str]]:
     return [(p, output_name(p)) for p in unique.values()]
 
 
-def _read_run(out_dir: Path) -> dict | None:
-    """The video's ``run.json``, or None when it has none (or a damaged one)."""
-    try:
-        return json.loads((Path(out_dir) / "run.json").read_text())
-    except (OSError, json.JSONDecodeError):
-        return None
-
-
 def _finished(out_dir: Path) -> bool:
-    run = _read_run(out_dir)
-    return run is not None and run.get("status") == "finished"
+    return RunSummary.read(out_dir) is not None
 
 
-def summary_row(source: str | Path, out_dir: str | Path, reason: str | None = None) -> dict:
-    """The ``summary.csv`` row of one input (keys :data:`SUMMARY_COLUMNS`), from its ``run.json``.
+def summary_row(source: str | Path, out_dir: str | Path, reason: str | None = None, *,
+                summary: RunSummary | None = None) -> dict:
+    """The ``summary.csv`` row of one input (keys :data:`SUMMARY_COLUMNS`), from its run's
+    ``summary`` (default: its ``run.json`` read back, :meth:`mocap.run.RunSummary.read`).
 
     ``reason`` given: the input failed for it. Numbers of a failed input are left empty.
     """
     out_dir = Path(out_dir)
     row = dict.fromkeys(SUMMARY_COLUMNS, "")
     row.update(input=str(source), output=out_dir.name)
-    run = _read_run(out_dir)
-    if reason is not None or run is None or run.get("status") != "finished":
+    run = None if reason is not None else summary if summary is not None else RunSummary.read(out_dir)
+    if run is None:
         row.update(status="failed", reason=reason or "no finished run.json")
         return row
-    own = run["settings"].get("own_video", {})
-    row.update(status="finished", frames=run["frames"], failed_frames=run["failures"], fps=round(run["fps"], 2),
-               background=own.get("background", {}).get("mode", ""),
-               calibration=own.get("calibration", {}).get("from", ""),
-               time_s=round(run["wall_seconds_this_session"], 2))
+    setup = run.setup
+    row.update(status="finished", frames=run.frames, failed_frames=run.failures, fps=round(run.fps, 2),
+               background="" if setup is None else setup.background_mode,
+               calibration="" if setup is None else setup.calibration_from, time_s=round(run.wall_s, 2))
     return row
 
 
@@ -183,12 +178,13 @@ def track_input(source: str, out_dir: str, options: OwnVideoOptions) -> dict:
     """
     import mocap.run
 
-    if not _finished(Path(out_dir)):
+    summary = RunSummary.read(out_dir)
+    if summary is None:
         try:
-            mocap.run.track(source, out_dir, options, progress=False)
+            summary = mocap.run.track(source, out_dir, options, progress=False)
         except (ValueError, OSError) as exc:
             return summary_row(source, out_dir, reason=_one_line(exc))
-    return summary_row(source, out_dir)
+    return summary_row(source, out_dir, summary=summary)
 
 
 def _one_line(exc: BaseException) -> str:
@@ -199,12 +195,11 @@ def _one_line(exc: BaseException) -> str:
 def _clear_run(out_dir: Path) -> None:
     """Remove a video's run (journal, checkpoint, run.json) under its lock, to start it afresh."""
     from mocap.io.lock import FolderLock
-    from mocap.run.journal import STATE_FILE
 
     if not out_dir.is_dir():
         return
     with FolderLock(out_dir):
-        for name in ("poses.csv", STATE_FILE, "run.json"):
+        for name in (files.POSES_CSV, files.STATE_FILE, files.RUN_JSON):
             (out_dir / name).unlink(missing_ok=True)
 
 
@@ -438,7 +433,7 @@ class _ManyBar:
             if row is not None and row["status"] == "finished":
                 done[name] = self.expected[name] = int(row["frames"])
             elif row is None:
-                done[name] = self.count(self.out / name / "poses.csv")
+                done[name] = self.count(self.out / name / files.POSES_CSV)
         self.bar.total = sum(self.expected.values())
         self.bar.n = sum(done.values())
         n_failed = sum(r["status"] == "failed" for r in rows.values())

@@ -24,7 +24,7 @@ from mocap.run.loop import RunParams, track_frames
 from mocap.run.options import OwnVideoOptions, keypoint_source, resolve_keypoints
 from mocap.run.outputs import RunSummary
 from mocap.run.person import NewcomerFinder
-from mocap.run.setup import SetupRequest, find_setup
+from mocap.run.setup import SetupAccount, SetupRequest, find_setup
 
 __all__ = ["RunInput", "track"]
 
@@ -97,7 +97,7 @@ def _check_files(background: str | None, calibration: str | None) -> None:
 
 
 def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *, progress: bool = True,
-          on_setup: Callable[[dict], None] | None = None) -> RunSummary:
+          on_setup: Callable[[SetupAccount], None] | None = None) -> RunSummary:
     """Track a video: set-up from the video (or as given), then the run.
 
     Parameters
@@ -112,9 +112,9 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
     progress : bool
         Progress bars.
     on_setup : callable, optional
-        Called with the set-up's account (``run.json`` ``settings.own_video``, plus
-        ``input_width``, ``input_height``, ``working_width``, ``working_height``) before the
-        first frame is tracked (the CLI prints it).
+        Called with the set-up's account (:class:`mocap.run.setup.SetupAccount`: ``run.json``
+        ``settings.own_video``, and the input and working sizes) before the first frame is
+        tracked (the CLI prints it).
 
     Returns
     -------
@@ -139,10 +139,11 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
             frames_in.hold(found.consumed)
         setup = dataclasses.replace(found.setup, colour_from=options.colour,
                                     background_file=Path(opened.background) if opened.background else None,
-                                    record={**found.setup.record, "keypoints": keypoints_used})
+                                    record=dataclasses.replace(found.setup.record, keypoints=keypoints_used))
         width, height = frames_in.width, frames_in.height
-        account = {**setup.record, "input_width": width, "input_height": height,
-                   "working_width": setup.calibration.camera.width, "working_height": setup.calibration.camera.height}
+        account = dataclasses.replace(setup.record, input_width=width, input_height=height,
+                                      working_width=setup.calibration.camera.width,
+                                      working_height=setup.calibration.camera.height)
         if on_setup is not None:
             on_setup(account)
         newcomer = NewcomerFinder.of(setup, width, height, hfov_deg=options.hfov_deg, height_m=options.height_m)
@@ -158,6 +159,6 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
     # whether the extra is installed matters only to advice on a run without keypoints (its import takes ~2 s)
     extra = used is not None or (mostly_failed(summary.frames, summary.failures) and mediapipe_keypoints.available())
     facts = RunFacts(frames=summary.frames, failures=summary.failures, keypoints=used, keypoints_extra=extra,
-                     background=account["background"]["mode"], height_given=options.height_m is not None,
-                     calibration=account["calibration"]["from"])
+                     background=account.background_mode, height_given=options.height_m is not None,
+                     calibration=account.calibration_from)
     return dataclasses.replace(summary, setup=account, advice=what_to_try(facts))
