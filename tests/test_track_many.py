@@ -307,11 +307,10 @@ def test_a_hung_worker_s_video_is_resumed_elsewhere_after_the_timeout_and_report
     held = stopped.read_text()                           # the folder of the video the stopped process held
     name = os.path.basename(held)
     assert "3 of 3 inputs finished (0 already were), 0 failed, " in many.stdout
-    assert f"{os.path.relpath(out.parent / name, tmp_path)}" in many.stdout or name in many.stdout
     rows = {r["output"]: r for r in assert_summary_matches_runs(out, inputs)}
     assert [r["status"] for r in rows.values()] == ["finished"] * 3
     assert int(rows[name]["hung_restarts"]) >= 1
-    assert f": a worker it was on stopped responding and was restarted" in many.stdout
+    assert f"{rows[name]['input']}: a worker it was on stopped responding and was restarted" in many.stdout
     assert json.loads((out / name / files.RUN_JSON).read_text())["resumed_from_frame"] == CHECKPOINT_EVERY
     for clip in clips:
         assert_same_track(out / clip.name, single_runs[clip.name])
