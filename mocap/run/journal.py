@@ -18,6 +18,7 @@ from mocap.calibrate import Calibration
 from mocap.imaging import ColourModel
 from mocap.io.checkpoint import Checkpoint, read_checkpoint, truncate_journal, write_checkpoint
 from mocap.io.pose_table import PoseTable
+from mocap.run import files
 
 __all__ = ["CHECKPOINT_EVERY", "STATE_FILE", "Journal", "People", "previous_run"]
 
@@ -25,8 +26,9 @@ __all__ = ["CHECKPOINT_EVERY", "STATE_FILE", "Journal", "People", "previous_run"
 #: most this many frames (the journal is cut back to the checkpoint), bit for bit the same.
 CHECKPOINT_EVERY = 25
 #: Checkpoint (:mod:`mocap.io.checkpoint`): the tracker's exact state after the last pushed
-#: frame and the length of ``poses.csv`` that goes with it, for bit-identical resumes.
-STATE_FILE = ".tracker_state.npz"
+#: frame and the length of ``poses.csv`` that goes with it, for bit-identical resumes
+#: (:data:`mocap.run.files.STATE_FILE`).
+STATE_FILE = files.STATE_FILE
 #: Checkpoint entry holding the people's bookkeeping (:class:`People`, JSON text).
 PEOPLE = "run_people"
 #: Checkpoint entry holding ``(frame, dark)`` of the frames the tracker still holds back.
@@ -124,7 +126,7 @@ class Journal:
 
     @classmethod
     def in_folder(cls, out_dir: Path) -> "Journal":
-        return cls(out_dir / "poses.csv", out_dir / STATE_FILE)
+        return cls(out_dir / files.POSES_CSV, out_dir / STATE_FILE)
 
     def append(self, row: PoseTable) -> None:
         """A decided frame's row (synced with the next checkpoint)."""
