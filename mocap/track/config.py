@@ -29,11 +29,6 @@ RECOVERY_STEP_SCALE = 2.5
 MIN_SKIN_BLOB_PIXELS = 2
 #: Kinematic jumps refined per frame: the lowest-F ones.
 JUMPS_REFINED = 2
-#: On a frame with the lifter's hypotheses, a leader whose lifter energy (nats,
-#: :meth:`mocap.track.Tracker.lifter_energy`) is under this is one the lifter is confident of:
-#: its kinematic jumps are not proposed (about 8 cm per joint from the most probable hypothesis;
-#: issue 36).
-LIFTER_AGREES_NATS = 2.0
 #: Share of the edge step's evaluations that the gradient step takes when it is on (one
 #: gradient is one render, counted as one evaluation).
 GRADIENT_SHARE = 0.1
@@ -107,8 +102,7 @@ class TrackerConfig(JsonConfig):
     jumps : bool
         Propose the kinematic jumps of the leading hypothesis (each arm's depth branches and the
         torso's front/back mirror, :mod:`mocap.body.jumps`); the :data:`JUMPS_REFINED`
-        lowest-F ones are refined by a short registration of ``jump_evaluations``. Not on a
-        frame whose lifted hypotheses agree with the leader (:data:`LIFTER_AGREES_NATS`).
+        lowest-F ones are refined by a short registration of ``jump_evaluations``.
     jump_evaluations : int
         Evaluations of each jump's refinement.
     lag : int, frames

@@ -41,8 +41,8 @@ from mocap.body.pose import check_pose, clamp_to_limits
 from mocap.body.prior import PosePrior, default_prior
 from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.render.camera import Camera
-from mocap.track.config import (EDGE_WEIGHT, JUMPS_REFINED, LIFTER_AGREES_NATS, MERGE_DISTANCE_M, MOTION_CAP,
-                                MOTION_SIGMA_M, RECOVERY_STEP_SCALE, REGION_WEIGHT, TrackerConfig)
+from mocap.track.config import (EDGE_WEIGHT, JUMPS_REFINED, MERGE_DISTANCE_M, MOTION_CAP, MOTION_SIGMA_M,
+                                RECOVERY_STEP_SCALE, REGION_WEIGHT, TrackerConfig)
 from mocap.track.decode import backtrack, viterbi_step
 from mocap.track.lifter import MIN_VISIBLE, Lifter, relative_joints
 from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, jump_proposals,
@@ -248,7 +248,7 @@ class Tracker:
             candidates.append((retry, "recovery"))
         if cfg.hand_reacquisition:
             evaluations += self._reacquire(prepared, region_cost, fit, leader, candidates)
-        if cfg.jumps and not self.lifter_agrees(lifted, leader.pose):
+        if cfg.jumps:
             evaluations += self._jump(region_cost, fit, leader, candidates)
         t3 = time.perf_counter()
         if self.sources and cfg.proposals_refined > 0:
@@ -281,13 +281,6 @@ class Tracker:
         if self.lifter is None:
             self.lifter = Lifter.load()
         return self.lifter.lift(uv, present, self.camera, self.model)
-
-    def lifter_agrees(self, lifted, pose: np.ndarray) -> bool:
-        """Whether the lifter is confident of ``pose`` (the leader's) on a lifted frame: its
-        energy there (:meth:`lifter_energy`) under :data:`~mocap.track.config.LIFTER_AGREES_NATS`.
-        The leader's kinematic jumps (other depth branches) are then not proposed: the lifter's
-        own hypotheses, which cover the depth branches the keypoints allow, are."""
-        return lifted is not None and self.lifter_energy(lifted, self.model.joint_positions(pose)) < LIFTER_AGREES_NATS
 
     def lifter_energy(self, lifted, joints: np.ndarray) -> float:
         """The lifter term of the score before its weight (nats): the lifter's log-density at its
