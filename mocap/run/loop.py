@@ -11,7 +11,9 @@ run — even killed at any instant — resumes with the same command from the la
 gives bit for bit the poses of an uninterrupted run (the settings must be the same; they are
 kept in ``run.json``). One run at a time may write to an output folder (:mod:`mocap.io.lock`).
 A file's damage check decodes it alongside the run (:class:`DamageCheck`); people changing
-start new segments (:class:`mocap.run.journal.People`).
+start new segments (:class:`mocap.run.journal.People`). The progress bar is drawn from the
+check's verdict on (:meth:`RunLoop.advance`): a refused video's run writes its one-line refusal
+to stderr and nothing else, however fast the frames come.
 """
 from __future__ import annotations
 
@@ -317,7 +319,8 @@ class RunLoop:
         self.results_ms: collections.deque[float] = collections.deque(maxlen=25)   # for the frame rate shown
         self.colour_frame: int | None = None
         self.overlay: OverlayWriter | None = None
-        self.bar = None
+        self.bar: ProgressBar | None = None
+        self.tracked = 0                           # frames tracked in this session
 
     @classmethod
     def open(cls, frames_in, setup: RunSetup, out_dir: Path, params: RunParams) -> "RunLoop":
@@ -404,8 +407,9 @@ class RunLoop:
             picture = self.pictures.pop(result.frame, None)
             if self.overlay is not None and picture is not None:
                 self.overlay.update(picture, result.pose)
-            self.bar.set_postfix(fps=f"{1e3 / np.mean(self.results_ms):.0f}", F=f"{result.region_residual:.2f}",
-                                 D=f"{result.edge_residual:.1f}")
+            if self.bar is not None:
+                self.bar.set_postfix(fps=f"{1e3 / np.mean(self.results_ms):.0f}", F=f"{result.region_residual:.2f}",
+                                     D=f"{result.edge_residual:.1f}")
 
     def checkpoint(self, next_index: int) -> None:
         self.journal.checkpoint(self.tracker.state(), self.dark, self.people, next_index)
@@ -442,7 +446,20 @@ class RunLoop:
         self.damage.take(wait=False)
         if (index + 1) % journalling.CHECKPOINT_EVERY == 0 or index + 1 == self.span.stop:
             self.checkpoint(index + 1)
-        self.bar.update(1)
+        self.advance(1)
+
+    def advance(self, frames: int) -> None:
+        """``frames`` more tracked. The bar is drawn once the damage check's verdict is in (at
+        once for an image folder or a camera): before it, the run may still be refused, and a
+        refusal must be the only thing it writes to stderr."""
+        self.tracked += frames
+        if self.bar is not None:
+            self.bar.update(frames)
+        elif self.damage.damaged is not None:
+            span = self.span
+            self.bar = ProgressBar(total=None if span.expected is None else span.expected - span.first,
+                                   initial=span.start - span.first + self.tracked, desc="tracking", unit="frame",
+                                   disable=not self.params.progress)
 
     def run(self) -> None:
         """Track the session's frames (Ctrl-C ends a live run and keeps what was tracked)."""
@@ -452,9 +469,7 @@ class RunLoop:
                              Colours(self.people.segment, self.person.colour_model, self.person.scene),
                              keypoints=self.params.keypoints, full=self.params.newcomer is not None,
                              overlay=geometry if self.overlay is not None else None)
-        self.bar = ProgressBar(total=None if span.expected is None else span.expected - span.first,
-                               initial=span.start - span.first, desc="tracking", unit="frame",
-                               disable=not self.params.progress)
+        self.advance(0)
         self.started = time.perf_counter()
         interrupted, last = False, None
         try:
@@ -471,6 +486,7 @@ class RunLoop:
             # a run that stops early (--max-frames) writes its rows before the verdict, which
             # can take the check's decoding of the whole clip; a damaged video still removes them
             self.damage.take(wait=True)
+            self.advance(0)
         except ValueError:
             self.damage.take(wait=True)   # a damaged video's reader may fail first: the damage is the reason
             raise
@@ -480,7 +496,8 @@ class RunLoop:
             interrupted = True          # Ctrl-C ends a live run: what was tracked is kept
             self.emit(self.tracker.finish())
         finally:
-            self.bar.close()
+            if self.bar is not None:
+                self.bar.close()
             if self.overlay is not None:
                 self.overlay.close()
         if interrupted:
