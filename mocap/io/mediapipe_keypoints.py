@@ -1,10 +1,18 @@
 """2D keypoints from MediaPipe Pose (the optional extra ``keypoints``).
 
 MediaPipe Pose's legacy solution (``mediapipe.solutions.pose``, BlazePose GHUM 3D, Apache 2.0)
-in video mode with model complexity 1, whose landmark model ``pose_landmark_full.tflite`` the
+in image mode (``static_image_mode``) with model complexity 1, whose landmark model ``pose_landmark_full.tflite`` the
 pinned wheel (``mediapipe==0.10.14``) bundles: nothing is downloaded at run time. It runs on the
 input-resolution RGB frame; landmarks come back normalised to the frame, so ``u = x * width``
 and ``v = y * height`` in input pixels, the confidence is the landmark's ``visibility``.
+
+Image mode finds the person afresh in every frame: a frame's keypoints depend on that frame
+alone, so a run resumed at any frame (or re-run on another worker) gets the keypoints of an
+uninterrupted run, bit for bit. Video mode tracks the person from frame to frame and smooths
+the landmarks: its state cannot be rebuilt at a resume point short of replaying every earlier
+frame (docs/research-log.md, issue 35: image mode's detector costs 1.4 times video mode's and
+its joints are nearer the truth on a synthetic clip). ``image_mode=False`` gives video mode for
+comparisons (:mod:`experiments.keypoint_resume`).
 
 Joints (:data:`mocap.body.skeleton.JOINT_NAMES`) from landmarks (the person's left and right, as
 MediaPipe's): ``head`` the midpoint of the ears (the centre of the head), shoulders, elbows and
@@ -59,8 +67,14 @@ def available() -> bool:
 class MediaPipeKeypoints:
     """A :class:`~mocap.io.keypoints.KeypointSource` running MediaPipe Pose on each frame.
 
-    Video mode: frames must come in order (MediaPipe tracks the person between them). Use as a
-    context manager, or call :meth:`close`.
+    Image mode by default: every frame on its own (see the module); with ``image_mode=False``,
+    video mode, where frames must come in order (MediaPipe tracks the person between them). Use
+    as a context manager, or call :meth:`close`.
+
+    Parameters
+    ----------
+    image_mode : bool
+        Image mode (the run's: exact resumes), else video mode.
 
     Attributes
     ----------
@@ -73,7 +87,7 @@ class MediaPipeKeypoints:
         When the extra is not installed (:data:`MISSING_EXTRA`).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, *, image_mode: bool = True) -> None:
         try:
             from mediapipe.python.solutions import pose as mp_pose
         except ImportError:
@@ -85,10 +99,11 @@ class MediaPipeKeypoints:
                                 category=UserWarning, module=r"google\.protobuf\.symbol_database")
 
         with _native_noise_dropped():       # the graph opens its calculators on threads of its own: waited for
-            self._pose = mp_pose.Pose(static_image_mode=False, model_complexity=1)
+            self._pose = mp_pose.Pose(static_image_mode=image_mode, model_complexity=1)
             self._pose._graph.wait_until_idle()
         self.milliseconds: list[float] = []
-        self.description = f"mediapipe {__version__} pose, model complexity 1"
+        mode = "image" if image_mode else "video"
+        self.description = f"mediapipe {__version__} pose, model complexity 1, {mode} mode"
 
     def keypoints(self, frame_index: int, image: np.ndarray | None) -> Keypoints:
         """Keypoints of one frame.
@@ -96,7 +111,7 @@ class MediaPipeKeypoints:
         Parameters
         ----------
         frame_index : int
-            Unused (MediaPipe's video mode relies on the frames' order).
+            Unused (video mode relies on the frames' order).
         image : ndarray, shape (H, W, 3), uint8
             The input-resolution RGB frame.
 

@@ -144,6 +144,8 @@ class ReadFrame:
         At the overlay's size (None without an overlay).
     keypoints : Keypoints or None
         In working pixels.
+    detected : Keypoints or None
+        The same in input pixels, as the source gave them (for ``keypoints.csv``).
     """
 
     index: int
@@ -155,6 +157,7 @@ class ReadFrame:
     full: np.ndarray | None
     picture: np.ndarray | None
     keypoints: Keypoints | None
+    detected: Keypoints | None
 
 
 @dataclass(frozen=True, eq=False)
@@ -200,13 +203,13 @@ class FrameReader:
             when = time.perf_counter() - self.clock if frames_in.live else frames_in.time_s(index)
             small = downscale(frame, self.setup.factor)
             colours = self.colours
-            seen = None if self.keypoints is None else \
-                self.keypoints.keypoints(index, frame).scaled(*self.to_working)
+            detected = None if self.keypoints is None else self.keypoints.keypoints(index, frame)
             prepared = prepare_frame(small, self.setup.background, colours.model, self.setup.imaging,
                                      scene=colours.scene)
             yield ReadFrame(index, when, bool(small.mean() < DARK_MEAN), small, colours.segment, prepared,
                             frame if self.full else None,
-                            None if self.overlay is None else self.overlay.frame(frame), seen)
+                            None if self.overlay is None else self.overlay.frame(frame),
+                            None if detected is None else detected.scaled(*self.to_working), detected)
 
 
 class DamageCheck:
@@ -362,7 +365,8 @@ class RunLoop:
         """The tracker: fresh (``run.json`` says running) or restored from ``checkpoint``."""
         if checkpoint is None:
             self.damage.made.extend([self.journal.path, self.run_json, self.journal.state_path,
-                                     self.out_dir / "colour_model.json", self.out_dir / "overlay.mp4"])
+                                     self.journal.keypoints_path, self.out_dir / "colour_model.json",
+                                     self.out_dir / "overlay.mp4"])
             self.tracker = Tracker(self.person.model, self.camera, self.config, self.person.calibration.initial_pose)
             write_text_atomic(self.run_json, json.dumps({"status": "running", "settings": self.settings}, indent=2))
             return
@@ -441,6 +445,8 @@ class RunLoop:
             if found is not None:                           # someone new: a segment of their own
                 self.switch_person(index, found, reader)
                 prepared = reader.prepare(frame.small)
+        if frame.detected is not None:
+            self.journal.append_keypoints(index, frame.detected)
         self.emit(self.tracker.push(index, prepared, frame.keypoints))
         self.people.saw(index, prepared.is_empty)
         self.damage.take(wait=False)

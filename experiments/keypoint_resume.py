@@ -1,0 +1,112 @@
+"""``python -m experiments.keypoint_resume``: what an exact resume with MediaPipe keypoints costs.
+
+MediaPipe Pose's video mode carries state from frame to frame (the region it tracks the person
+in, its landmark smoothing), so a run resumed at frame ``k`` with a fresh detector gets other
+keypoints from ``k`` on than the uninterrupted run (issue 35). The ways out, measured here on a
+synthetic clip (``gestures-3``, ``--frames`` frames of ``--seed``, at its 160x120 input size,
+as ``track --keypoints mediapipe`` runs the detector):
+
+* ``video``: the uninterrupted video mode (the reference), per-frame milliseconds;
+* ``image``: image mode (``static_image_mode``: no state; every frame detected afresh);
+* ``refeed-N``: a fresh video-mode detector fed the ``N`` frames before each resume point, then
+  the 25 frames from it: are they the reference's, bit for bit? (``N = k``: a replay from the
+  start);
+* for each: PCK@0.5 (half the reference's shoulder width) against the video mode, and the mean
+  pixel distance to the ground truth's projected joints (shoulders, elbows, wrists; MediaPipe's
+  other joints are defined apart from the model's).
+
+Prints one JSON object.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+JOINTS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
+
+
+def detect(frames, image_mode: bool) -> tuple[np.ndarray, float]:
+    """Keypoints (frames, 10, 2) input pixels and the median ms per frame."""
+    from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
+
+    with MediaPipeKeypoints(image_mode=image_mode) as detector:
+        uv = np.stack([detector.keypoints(i, f).uv for i, f in enumerate(frames)])
+        return uv, float(np.median(detector.milliseconds))
+
+
+def refed(frames, first: int, resume: int, frames_after: int) -> np.ndarray:
+    """Video-mode keypoints of ``resume .. resume + frames_after - 1`` from a detector fed
+    ``first .. resume - 1`` before them."""
+    from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
+
+    with MediaPipeKeypoints() as detector:
+        for i in range(first, resume):
+            detector.keypoints(i, frames[i])
+        return np.stack([detector.keypoints(i, frames[i]).uv for i in range(resume, resume + frames_after)])
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m experiments.keypoint_resume", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--frames", type=int, default=300)
+    parser.add_argument("--seed", type=int, default=41)
+    parser.add_argument("--resume-at", type=int, nargs="+", default=[50, 100, 175, 250])
+    parser.add_argument("--refeed", type=int, nargs="+", default=[0, 5, 25])
+    args = parser.parse_args(argv)
+
+    from mocap.body.skeleton import JOINT_NAMES
+    from mocap.io.pose_table import PoseTable
+    from mocap.io.video import iter_frames
+    from mocap.metrics import pck_2d
+    from mocap.render.calibration import Calibration
+    from mocap.synth.sequence import generate_sequence
+
+    with tempfile.TemporaryDirectory() as work:
+        seq = generate_sequence("gestures-3", Path(work) / "seq", frames=args.frames, seed=args.seed, progress=False)
+        frames = list(iter_frames(seq / "frames"))
+        camera = Calibration.from_json(seq / "calibration.json").camera
+        truth = camera.project(PoseTable.read(seq / "ground_truth.csv").joints)
+    picked = [JOINT_NAMES.index(j) for j in JOINTS]
+    result = {"frames": len(frames), "seed": args.seed, "size": list(frames[0].shape[1::-1])}
+    reference, ref_ms = None, None
+    started = time.perf_counter()
+    runs = {}
+    for name, image_mode in (("video", False), ("image", True)):
+        started = time.perf_counter()
+        uv, ms = detect(frames, image_mode)
+        runs[name] = uv
+        result[name] = {"median_ms": round(ms, 2), "wall_s": round(time.perf_counter() - started, 2)}
+    reference = runs["video"]
+    shoulders = np.linalg.norm(reference[:, JOINT_NAMES.index("r_shoulder")]
+                               - reference[:, JOINT_NAMES.index("l_shoulder")], axis=1)
+    for name, uv in runs.items():
+        error = np.linalg.norm(uv[:, picked] - truth[:, picked], axis=2)
+        result[name].update(pck_vs_video=round(pck_2d(uv, reference, shoulders), 4),
+                            detected=round(float(np.isfinite(uv[:, picked, 0]).mean()), 4),
+                            px_to_truth=round(float(np.nanmean(error)), 3))
+    after = 25
+    for n in args.refeed:
+        rows = {}
+        for k in args.resume_at:
+            got = refed(frames, k - n, k, after)
+            want = reference[k:k + after]
+            same = np.array_equal(got, want, equal_nan=True)
+            rows[str(k)] = {"identical": bool(same), "max_px": round(float(np.nanmax(np.abs(got - want))), 4)}
+        result[f"refeed-{n}"] = rows
+    rows = {}
+    for k in args.resume_at:
+        started = time.perf_counter()
+        got = refed(frames, 0, k, after)
+        rows[str(k)] = {"identical": bool(np.array_equal(got, reference[k:k + after], equal_nan=True)),
+                        "wall_s": round(time.perf_counter() - started, 2)}
+    result["replay"] = rows
+    print(json.dumps(result, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
