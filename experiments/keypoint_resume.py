@@ -13,7 +13,9 @@ as ``track --keypoints mediapipe`` runs the detector):
   start);
 * for each: PCK@0.5 (half the reference's shoulder width) against the video mode, and the mean
   pixel distance to the ground truth's projected joints (shoulders, elbows, wrists; MediaPipe's
-  other joints are defined apart from the model's).
+  other joints are defined apart from the model's);
+* with ``--track``: the tracker's accuracy (``run.json`` ``metrics``) on the clip with each
+  mode's keypoints (given as a keypoint file, so that only the keypoints differ).
 
 Prints one JSON object.
 """
@@ -50,12 +52,31 @@ def refed(frames, first: int, resume: int, frames_after: int) -> np.ndarray:
         return np.stack([detector.keypoints(i, frames[i]).uv for i in range(resume, resume + frames_after)])
 
 
+def tracked_with_each_mode(seq: Path, frames, work: Path) -> dict:
+    """``run.json`` ``metrics`` of ``track`` on ``seq`` with each mode's keypoints (a file each)."""
+    from mocap.io.keypoints import write_keypoints
+    from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
+    from mocap.run import OwnVideoOptions, track
+
+    out = {}
+    for name, image_mode in (("video", False), ("image", True)):
+        with MediaPipeKeypoints(image_mode=image_mode) as detector:
+            write_keypoints(work / f"{name}.csv", {i: detector.keypoints(i, f) for i, f in enumerate(frames)})
+        summary = track(seq, work / name, OwnVideoOptions(keypoints=str(work / f"{name}.csv"), overlay=False),
+                        progress=False)
+        metrics = json.loads((work / name / "run.json").read_text())["metrics"]
+        out[name] = {k: round(metrics[k], 4) for k in ("mpjpe_mm", "pa_mpjpe_mm", "failure_rate")}
+        out[name]["frames"] = summary.frames
+    return out
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m experiments.keypoint_resume", description=__doc__.split("\n\n")[0])
     parser.add_argument("--frames", type=int, default=300)
     parser.add_argument("--seed", type=int, default=41)
     parser.add_argument("--resume-at", type=int, nargs="+", default=[50, 100, 175, 250])
     parser.add_argument("--refeed", type=int, nargs="+", default=[0, 5, 25])
+    parser.add_argument("--track", action="store_true", help="also track the clip with each mode's keypoints")
     args = parser.parse_args(argv)
 
     from mocap.body.skeleton import JOINT_NAMES
@@ -70,6 +91,7 @@ def main(argv=None) -> int:
         frames = list(iter_frames(seq / "frames"))
         camera = Calibration.from_json(seq / "calibration.json").camera
         truth = camera.project(PoseTable.read(seq / "ground_truth.csv").joints)
+        tracked = tracked_with_each_mode(seq, frames, Path(work)) if args.track else None
     picked = [JOINT_NAMES.index(j) for j in JOINTS]
     result = {"frames": len(frames), "seed": args.seed, "size": list(frames[0].shape[1::-1])}
     reference, ref_ms = None, None
@@ -104,6 +126,8 @@ def main(argv=None) -> int:
         rows[str(k)] = {"identical": bool(np.array_equal(got, reference[k:k + after], equal_nan=True)),
                         "wall_s": round(time.perf_counter() - started, 2)}
     result["replay"] = rows
+    if tracked is not None:
+        result["tracked"] = tracked
     print(json.dumps(result, indent=1))
     return 0
 

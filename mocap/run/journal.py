@@ -23,7 +23,8 @@ from mocap.io.checkpoint import (Checkpoint, cut_journal, read_checkpoint, synce
 from mocap.io.keypoints import Keypoints, append_keypoints
 from mocap.io.pose_table import PoseTable
 
-__all__ = ["CHECKPOINT_EVERY", "KEYPOINTS_FILE", "STATE_FILE", "Journal", "People", "previous_run"]
+__all__ = ["CHECKPOINT_EVERY", "KEYPOINTS_FILE", "STATE_FILE", "Journal", "People", "other_settings",
+           "previous_run"]
 
 #: Frames between two checkpoints (and after the last frame of a file): a resumed run redoes at
 #: most this many frames (the journal is cut back to the checkpoint), bit for bit the same.
@@ -180,7 +181,8 @@ def previous_run(journal: Journal, run_json: Path, settings: dict, overwrite: bo
     Raises
     ------
     ValueError
-        The folder holds a run with other settings (or no ``run.json``).
+        The folder holds a run with other settings (or no ``run.json``): one line saying which
+        (:func:`other_settings`).
     """
     if overwrite or not (journal.path.exists() or journal.state_path.exists()):
         for path in (journal.path, journal.state_path, journal.keypoints_path):
@@ -190,15 +192,34 @@ def previous_run(journal: Journal, run_json: Path, settings: dict, overwrite: bo
         previous = json.loads(run_json.read_text()) if run_json.exists() else {}
     except json.JSONDecodeError:
         previous = {}
-    if previous.get("settings") != json.loads(json.dumps(settings)):
-        raise ValueError(f"{journal.path.parent} holds a run with other settings (or no run.json); "
-                         "use --overwrite or another --out")
+    wanted = json.loads(json.dumps(settings))
+    if previous.get("settings") != wanted:
+        raise ValueError(other_settings(journal.path.parent, previous.get("settings"), wanted))
     checkpoint = read_checkpoint(journal.path.parent / STATE_FILE)
     truncate_journal(journal.path, checkpoint)   # rows after the checkpoint (and a partial line) are redone
     keypoint_bytes = None if checkpoint is None else checkpoint.state.get(KEYPOINTS_BYTES)
-    if checkpoint is not None and keypoint_bytes is None:
+    if checkpoint is not None and keypoint_bytes is None and settings.get("keypoints") != "none":
         raise ValueError(f"{journal.path.parent} holds a run of an earlier mocap (its checkpoint has no keypoint "
                          "journal), which cannot be resumed exactly: start afresh with --overwrite or use another "
                          "--out")
     cut_journal(journal.keypoints_path, 0 if keypoint_bytes is None else int(keypoint_bytes))
     return checkpoint
+
+
+def other_settings(folder: Path, held: dict | None, wanted: dict) -> str:
+    """Why ``folder``'s run (``run.json`` ``settings``: ``held``) is not resumed with ``wanted``,
+    and what to do, in one line: no ``run.json``; a run of an earlier mocap (no
+    ``settings.keypoints``); other keypoints (``--keypoints`` changed, or the optional extra
+    ``keypoints`` installed or removed under ``auto``); else the settings that differ."""
+    what = "start afresh with --overwrite or use another --out"
+    if not isinstance(held, dict):
+        return f"{folder} holds a run without a readable run.json: {what}"
+    if "keypoints" not in held:
+        return (f"{folder} holds a run of an earlier mocap (its run.json has no settings.keypoints), which cannot be "
+                f"resumed exactly: {what}")
+    if held["keypoints"] != wanted.get("keypoints"):
+        return (f"{folder} holds a run tracked with keypoints from {held['keypoints']!r}, this run's would come from "
+                f"{wanted.get('keypoints')!r} (--keypoints changed, or the optional extra 'keypoints' was installed or "
+                f"removed since): resume it with the keypoints it had, or {what}")
+    differ = sorted(key for key in held.keys() | wanted.keys() if held.get(key) != wanted.get(key))
+    return f"{folder} holds a run with other settings ({', '.join(differ)}): {what}"

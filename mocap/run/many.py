@@ -197,14 +197,14 @@ def _one_line(exc: BaseException) -> str:
 
 
 def _clear_run(out_dir: Path) -> None:
-    """Remove a video's run (journal, checkpoint, run.json) under its lock, to start it afresh."""
+    """Remove a video's run (journals, checkpoint, run.json) under its lock, to start it afresh."""
     from mocap.io.lock import FolderLock
-    from mocap.run.journal import STATE_FILE
+    from mocap.run.journal import KEYPOINTS_FILE, STATE_FILE
 
     if not out_dir.is_dir():
         return
     with FolderLock(out_dir):
-        for name in ("poses.csv", STATE_FILE, "run.json"):
+        for name in ("poses.csv", KEYPOINTS_FILE, STATE_FILE, "run.json"):
             (out_dir / name).unlink(missing_ok=True)
 
 
