@@ -11,9 +11,12 @@ as ``track --keypoints mediapipe`` runs the detector):
 * ``refeed-N``: a fresh video-mode detector fed the ``N`` frames before each resume point, then
   the 25 frames from it: are they the reference's, bit for bit? (``N = k``: a replay from the
   start);
-* for each: PCK@0.5 (half the reference's shoulder width) against the video mode, and the mean
+* for each: whether a second detector of the same mode gives the same keypoints, bit for bit;
+  PCK@0.5 (half the reference's shoulder width) against the video mode, and the mean
   pixel distance to the ground truth's projected joints (shoulders, elbows, wrists; MediaPipe's
   other joints are defined apart from the model's);
+* with ``--clip VIDEO``: the same two modes on the first ``--clip-frames`` frames of a real
+  clip instead of the synthetic one (no ground truth: PCK against the video mode only);
 * with ``--track``: the tracker's accuracy (``run.json`` ``metrics``) on the clip with each
   mode's keypoints (given as a keypoint file, so that only the keypoints differ).
 
@@ -70,6 +73,27 @@ def tracked_with_each_mode(seq: Path, frames, work: Path) -> dict:
     return out
 
 
+def compare_on_clip(clip: Path, count: int) -> dict:
+    """Video and image mode on the first ``count`` frames of ``clip``: ms, joints found, PCK
+    (0.5 and 0.1 of the video mode's shoulder width) and the median pixel distance to the video mode."""
+    from mocap.body.skeleton import JOINT_NAMES
+    from mocap.io.video import iter_frames
+    from mocap.metrics import pck_2d
+
+    frames = [frame for _, frame in zip(range(count), iter_frames(clip))]
+    out = {"clip": str(clip), "frames": len(frames), "size": list(frames[0].shape[1::-1])}
+    uv = {}
+    for name, image_mode in (("video", False), ("image", True)):
+        uv[name], ms = detect(frames, image_mode)
+        out[name] = {"median_ms": round(ms, 2), "found": round(float(np.isfinite(uv[name][:, :, 0]).mean()), 4)}
+    ref = uv["video"]
+    width = np.linalg.norm(ref[:, JOINT_NAMES.index("r_shoulder")] - ref[:, JOINT_NAMES.index("l_shoulder")], axis=1)
+    out["image"].update(pck_vs_video=round(pck_2d(uv["image"], ref, width), 4),
+                        pck_0_1_vs_video=round(pck_2d(uv["image"], ref, width, 0.1), 4),
+                        median_px_to_video=round(float(np.nanmedian(np.linalg.norm(uv["image"] - ref, axis=2))), 2))
+    return out
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m experiments.keypoint_resume", description=__doc__.split("\n\n")[0])
     parser.add_argument("--frames", type=int, default=300)
@@ -77,6 +101,8 @@ def main(argv=None) -> int:
     parser.add_argument("--resume-at", type=int, nargs="+", default=[50, 100, 175, 250])
     parser.add_argument("--refeed", type=int, nargs="+", default=[0, 5, 25])
     parser.add_argument("--track", action="store_true", help="also track the clip with each mode's keypoints")
+    parser.add_argument("--clip", type=Path, default=None, help="a real clip: compare the two modes on it only")
+    parser.add_argument("--clip-frames", type=int, default=65)
     args = parser.parse_args(argv)
 
     from mocap.body.skeleton import JOINT_NAMES
@@ -86,6 +112,9 @@ def main(argv=None) -> int:
     from mocap.render.calibration import Calibration
     from mocap.synth.sequence import generate_sequence
 
+    if args.clip is not None:
+        print(json.dumps(compare_on_clip(args.clip, args.clip_frames), indent=1))
+        return 0
     with tempfile.TemporaryDirectory() as work:
         seq = generate_sequence("gestures-3", Path(work) / "seq", frames=args.frames, seed=args.seed, progress=False)
         frames = list(iter_frames(seq / "frames"))
@@ -101,7 +130,8 @@ def main(argv=None) -> int:
         started = time.perf_counter()
         uv, ms = detect(frames, image_mode)
         runs[name] = uv
-        result[name] = {"median_ms": round(ms, 2), "wall_s": round(time.perf_counter() - started, 2)}
+        result[name] = {"median_ms": round(ms, 2), "wall_s": round(time.perf_counter() - started, 2),
+                        "repeat_identical": bool(np.array_equal(detect(frames, image_mode)[0], uv, equal_nan=True))}
     reference = runs["video"]
     shoulders = np.linalg.norm(reference[:, JOINT_NAMES.index("r_shoulder")]
                                - reference[:, JOINT_NAMES.index("l_shoulder")], axis=1)
