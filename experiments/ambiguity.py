@@ -41,7 +41,10 @@ losses; the gap between it and ``mpjpe_mm`` is what tracking loses on the way.
 
 Results go to ``--out`` (default ``experiments/results/ambiguity``): the generated sequences
 (reused, as by :mod:`experiments.sweep`) and one JSON file per sequence and configuration
-(written atomically; a second run reuses them). A Markdown table is printed.
+(written atomically). A second run reuses a result only when it was measured with the same code
+(:func:`code_key`: the ``mocap`` package and this experiment's modules, byte for byte); a result
+from other code is measured again, with a line on stderr, and overwritten. A Markdown table is
+printed.
 """
 from __future__ import annotations
 
@@ -361,6 +364,64 @@ def config_key(config: TrackerConfig) -> str:
     return hashlib.sha1(text.encode()).hexdigest()[:10]
 
 
+#: The experiment's own modules whose code shapes a result, beside the whole ``mocap`` package.
+CODE_MODULES: tuple[str, ...] = ("ambiguity.py", "units.py", "keypoints.py")
+
+
+def code_key(package: Path | None = None, modules: tuple[Path, ...] | None = None) -> str:
+    """Short stable name of the code a result is measured with (part of the cache's key).
+
+    SHA-256 over every file git would track in ``package`` (its ``.py`` sources and its fitted
+    models, ``.json`` and ``.npz``; caches such as ``__pycache__`` and Numba's ``.nbi``/``.nbc``
+    are left out) and over ``modules``, each with its path relative to its folder.
+
+    Parameters
+    ----------
+    package : Path, optional
+        The package folder (default: the imported ``mocap``).
+    modules : tuple of Path, optional
+        Further source files (default: :data:`CODE_MODULES` beside this module).
+
+    Returns
+    -------
+    str
+        12 hex digits.
+    """
+    import mocap
+
+    package = Path(mocap.__file__).resolve().parent if package is None else Path(package)
+    here = Path(__file__).resolve().parent
+    modules = tuple(here / m for m in CODE_MODULES) if modules is None else tuple(modules)
+    files = sorted(f for f in package.rglob("*") if f.is_file() and f.suffix in (".py", ".json", ".npz")
+                   and "__pycache__" not in f.relative_to(package).parts)
+    digest = hashlib.sha256()
+    for name, f in [(f.relative_to(package).as_posix(), f) for f in files] + [(m.name, m) for m in modules]:
+        data = f.read_bytes()
+        digest.update(f"{name}\0{len(data)}\0".encode())
+        digest.update(data)
+    return digest.hexdigest()[:12]
+
+
+def cached_result(path: Path, code: str, lags: tuple[int, ...] | None) -> dict | None:
+    """The result stored at ``path`` if it can be reused, else None.
+
+    Reused only when it was measured with the code ``code`` (:func:`code_key`) and holds the
+    fields this kind of run reports (tracking, or ``--from-truth`` with ``lags``). A file from
+    other code is reported on stderr (it is measured again and overwritten).
+    """
+    if not path.is_file():
+        return None
+    stored = read_json(path)
+    if stored.get("code") != code:
+        print(f"{path.name}: measured with other code ({stored.get('code', 'before code keys')}, now {code}); "
+              f"measuring again", file=sys.stderr)
+        return None
+    cached = stored["result"]
+    if ("cost_equivalent_failure_rate" in cached if lags is None else f"lag{lags[0]}_frame_mpjpe_mm" in cached):
+        return cached
+    return None
+
+
 def table(rows: list[dict]) -> str:
     """Markdown table of :func:`measure` results, with the medians over the sequences."""
     cols = ("mpjpe_mm", "failure_rate", "reprojection_px", "flip_oracle_mpjpe_mm", "flip_oracle_failure_rate",
@@ -475,6 +536,7 @@ def main(argv=None) -> int:
         print(f"error: --seed takes an integer or comma-separated integers, got {args.seed!r}", file=sys.stderr)
         return 2
     key = config_key(config)
+    code = code_key()
     suffix = ("-two-way" if args.two_way else "") if lags is None else "-truth" + "_".join(map(str, lags))
     suffix += {PREPARED_FILE_PAPER: "-paper", PREPARED_FILE: ""}.get(
         prepared_file(without), "-without-" + "-".join(e for e in EXTENSIONS if e in without))
@@ -483,18 +545,15 @@ def main(argv=None) -> int:
         rows = []
         for name in names:
             path = args.out / "units" / f"{name}-s{seed}-{key}{suffix}.json"
-            if path.is_file():
-                cached = read_json(path)["result"]
-                # older files lack the newer fields
-                if ("cost_equivalent_failure_rate" in cached if lags is None
-                        else f"lag{lags[0]}_frame_mpjpe_mm" in cached):
-                    rows.append(cached)
-                    continue
+            cached = cached_result(path, code, lags)
+            if cached is not None:
+                rows.append(cached)
+                continue
             print(f"{'tracking' if lags is None else 'registering'} {name} (seed {seed}) ...", file=sys.stderr,
                   flush=True)
             row = (measure(name, config, args.out, seed, args.two_way, without) if lags is None
                    else measure_from_truth(name, config, args.out, seed, lags, without))
-            write_json(path, {"config": config.to_dict(), "result": row})
+            write_json(path, {"config": config.to_dict(), "code": code, "result": row})
             rows.append(row)
         every += [{**r, "seed": seed} for r in rows]
         if args.json:

@@ -18,8 +18,8 @@ This compares the registration with the step off and on:
 
 Seeds are tabled apart from ``--unseen-seeds`` (seeds never used for tuning). Results are the
 unit files of :mod:`experiments.ambiguity` and :mod:`experiments.tracking` under ``--out``
-(default: ambiguity's folder; a unit already there is reused). ``--report`` writes the tables
-and the verdict into ``experiments/REPORT.md`` (section ``gradient``, generated).
+(default: ambiguity's folder; a unit already there is reused when the same code measured it).
+``--report`` writes the tables and the verdict into ``experiments/REPORT.md`` (section ``gradient``, generated).
 """
 from __future__ import annotations
 
@@ -42,16 +42,17 @@ REPORT_SECTION = "gradient"
 
 def truth_rows(config: TrackerConfig, seed: int, sequences, out: Path) -> list[dict]:
     """:func:`experiments.ambiguity.measure_from_truth` rows (lag 1), reusing ambiguity's unit files."""
-    from experiments.ambiguity import config_key, measure_from_truth
+    from experiments.ambiguity import cached_result, code_key, config_key, measure_from_truth
 
     rows = []
+    code = code_key()
     for name in sequences:
         path = out / "units" / f"{name}-s{seed}-{config_key(config)}-truth1.json"
-        row = read_json(path)["result"] if path.is_file() else None
-        if row is None or "lag1_frame_mpjpe_mm" not in row:
+        row = cached_result(path, code, (1,))
+        if row is None:
             print(f"registering {name} (seed {seed}) ...", file=sys.stderr, flush=True)
             row = measure_from_truth(name, config, out, seed, (1,))
-            write_json(path, {"config": config.to_dict(), "result": row})
+            write_json(path, {"config": config.to_dict(), "code": code, "result": row})
         rows.append({**row, "seed": seed})
     return rows
 

@@ -68,6 +68,7 @@ def main(argv=None) -> int:
         p.error("need 1 <= --from < --frames and --iterations >= 1")
 
     import mocap.run
+    from mocap.run.files import POSES_CSV
     from mocap.synth import generate_sequence
     from mocap.track import TrackerConfig
 
@@ -82,7 +83,7 @@ def main(argv=None) -> int:
             if not link.exists():
                 link.symlink_to(frames[i % len(frames)])
         out = work / "run"
-        sampler = _Sampler(out / "poses.csv")
+        sampler = _Sampler(out / POSES_CSV)
         sampler.start()
         try:
             options = mocap.run.OwnVideoOptions(background=str(seq / "background.png"),

@@ -42,6 +42,7 @@ import numpy as np
 
 from mocap.io.mediapipe_keypoints import MEDIAPIPE_LANDMARKS
 from mocap.metrics import pa_mpjpe, pck_2d
+from mocap.run.files import POSES_CSV, RUN_JSON
 
 #: Joints compared (ours), in order.
 ARM_JOINTS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
@@ -115,7 +116,7 @@ def _track(video: Path, out: Path, *, overlay: bool, keypoints: str = "none") ->
     import mocap.run
 
     mocap.run.track(video, out, mocap.run.OwnVideoOptions(overlay=overlay, overwrite=True, keypoints=keypoints))
-    return PoseTable.read(out / "poses.csv")
+    return PoseTable.read(out / POSES_CSV)
 
 
 def ours_uv(table) -> np.ndarray:
@@ -184,10 +185,10 @@ def real_row(video: Path, work: Path, out: Path) -> dict:
     ours, ref = ours[:n], mp["uv"][:n]
     width = shoulder_width(ref)
     per_joint = {j: pck_2d(ours[:, [k]], ref[:, [k]], width) for k, j in enumerate(ARM_JOINTS)}
-    run = json.loads((work / f"{video.stem}-run" / "run.json").read_text())
+    run = json.loads((work / f"{video.stem}-run" / RUN_JSON).read_text())
     _still(frames[n // 2], ours[n // 2], ref[n // 2], out / f"still_{video.stem}.png")
     keyed = _track(video, work / f"{video.stem}-keypoints-run", overlay=False, keypoints="mediapipe")
-    keyed_run = json.loads((work / f"{video.stem}-keypoints-run" / "run.json").read_text())
+    keyed_run = json.loads((work / f"{video.stem}-keypoints-run" / RUN_JSON).read_text())
     found = np.isfinite(ref).all(axis=(1, 2))
     quarter = {f"ours_{k}": v for k, v in within_quarter(ours, ref).items()}
     quarter |= {f"ours_keypoints_{k}": v for k, v in within_quarter(ours_uv(keyed)[:n], ref).items()}

@@ -25,7 +25,7 @@ from types import MappingProxyType
 import numpy as np
 
 from experiments import RESULTS_DIR
-from mocap.io.files import read_json, write_json
+from mocap.io.files import write_json
 from mocap.metrics import DEFAULT_FAILURE_MM
 from mocap.synth import SEQUENCE_NAMES
 from mocap.track import TrackerConfig
@@ -76,17 +76,20 @@ def unit_path(out: Path, name: str, sequence: str, seed: int) -> Path:
 
 
 def run_unit(out: Path, name: str, sequence: str, seed: int) -> dict:
-    """Measure one (configuration, sequence, seed), reusing its file when present."""
-    from experiments.ambiguity import measure
+    """Measure one (configuration, sequence, seed), reusing its file when the same code measured it
+    (:func:`experiments.ambiguity.cached_result`)."""
+    from experiments.ambiguity import cached_result, code_key, measure
     from experiments.units import EXTENSIONS
 
     path = unit_path(out, name, sequence, seed)
-    if path.is_file():
-        return read_json(path)["result"]
+    code = code_key()
+    row = cached_result(path, code, None)
+    if row is not None:
+        return row
     config = config_of(name)
     row = measure(sequence, config, out, seed, without=EXTENSIONS if name in TWO_CLASS_MODEL else (),
                   oracle_sigma_px=ORACLE_KEYPOINTS.get(name))
-    write_json(path, {"config": config.to_dict(), "name": name, "seed": seed, "result": row})
+    write_json(path, {"config": config.to_dict(), "name": name, "seed": seed, "code": code, "result": row})
     return row
 
 

@@ -281,6 +281,7 @@ def video_rows(*, frames: int, cpus: set[int] | None = None) -> list[BenchRow]:
     from mocap.io.video import VideoWriter, iter_frames, read_image
     import mocap.run
     from mocap.run import OwnVideoOptions
+    from mocap.run.files import POSES_CSV
     from mocap.synth import generate_sequence
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -311,7 +312,7 @@ def video_rows(*, frames: int, cpus: set[int] | None = None) -> list[BenchRow]:
                 os.sched_setaffinity(0, pinned)
         after = resource.getrusage(resource.RUSAGE_CHILDREN)      # ffmpeg: decoding and the overlay's encoding
         cpu += (after.ru_utime - children.ru_utime) + (after.ru_stime - children.ru_stime)
-        per_frame = PoseTable.read(tmp / "run" / "poses.csv").extra["ms_total"] * 1e3
+        per_frame = PoseTable.read(tmp / "run" / POSES_CSV).extra["ms_total"] * 1e3
         n = source.count
         p10, p90 = np.percentile(per_frame, [10, 90])
         from mocap.body.mesh import resolution_for_image

@@ -92,8 +92,9 @@ def cluster_env() -> dict[str, str]:
 
 @contextlib.contextmanager
 def local_cluster(folder: Path, workers: dict[str, dict], certificates: dict[str, Path] | None = None):
-    """Start a scheduler and the ``workers`` (name -> ``{"prelude": STATEMENTS, "env": {...}}``,
-    both optional) with their logs in ``folder``; yield ``(address, processes)``, ``processes``
+    """Start a scheduler and the ``workers`` (name -> ``{"prelude": STATEMENTS, "env": {...},
+    "nanny": bool, "preload": MODULE}``, all optional; without ``nanny`` a worker is its own
+    process, with it a nanny process watches the worker's) with their logs in ``folder``; yield ``(address, processes)``, ``processes``
     a dict name -> Popen to which the test may add its own; kill whatever still runs at the end.
     With ``certificates`` (:func:`make_certificates`) the cluster speaks TLS only (``tls://``)."""
     scheduler_file = folder / "scheduler.json"
@@ -114,13 +115,24 @@ def local_cluster(folder: Path, workers: dict[str, dict], certificates: dict[str
         for name, extra in workers.items():
             processes[name] = subprocess.Popen(
                 dask_command("worker", address, "--host", "127.0.0.1", "--nworkers", "1", "--nthreads", "1",
-                             "--no-nanny", "--no-dashboard", "--memory-limit", "0", "--name", name,
+                             *([] if extra.get("nanny") else ["--no-nanny"]),
+                             *(["--preload", extra["preload"]] if extra.get("preload") else []),
+                             "--no-dashboard", "--memory-limit", "0", "--name", name,
                              *(tls_options(certificates) if certificates else []), prelude=extra.get("prelude", "")),
                 cwd=REPO_ROOT, env={**env, **extra.get("env", {})}, stdout=logs[name], stderr=subprocess.STDOUT)
         wait_for(lambda: all("Registered to" in (folder / f"{n}.log").read_text() for n in workers),
                  STARTUP_S, "the workers", processes.values())
         yield address, processes
     finally:
+        # a nanny is asked to stop first (SIGTERM: it stops its worker's process, which a SIGKILL
+        # of the nanny would leave running); whatever still runs then is killed
+        for name, p in processes.items():
+            if p.poll() is None and workers.get(name, {}).get("nanny"):
+                p.terminate()
+                try:
+                    p.wait(timeout=30)
+                except subprocess.TimeoutExpired:
+                    pass
         for p in processes.values():
             if p.poll() is None:
                 p.kill()

@@ -10,13 +10,19 @@ this process) does what ``MODE`` says:
 ``after-state``  SIGKILL itself right after the checkpoint
 ``pause``        after the checkpoint, create the file ``$KILLPOINTS_PAUSED`` and wait until
                  it has been removed (another run can then meet the held lock)
+``stop``         after the checkpoint, unless the file ``$KILLPOINTS_PAUSED`` exists already
+                 (once per test, whichever process gets there first), create it holding the
+                 run's output folder and stop itself with SIGSTOP (a hung process: alive,
+                 holding its lock, never answering)
 
 The checkpoint interval is :data:`CHECKPOINT_EVERY` frames (instead of the run's default), so
 that the kill points of a short clip fall on every position inside an interval.
 
 SIGKILL cannot be caught: nothing of the run's own clean-up happens, as with ``kill -9``.
 :func:`install` does the same inside any process (the track-many cluster test starts a Dask
-worker with it).
+worker with it); as a Dask preload (``dask worker --preload tests.killpoints``, :func:`dask_setup`)
+it reaches the worker's own process also under a nanny, with ``$KILLPOINTS_MODE`` and
+``$KILLPOINTS_N``.
 """
 from __future__ import annotations
 
@@ -35,7 +41,7 @@ def install(mode: str, n: int) -> None:
     """Wrap the run's two writes in this process so that the ``n``-th one does what ``mode`` says,
     and checkpoint every :data:`CHECKPOINT_EVERY` frames (also before starting something else
     than the CLI, e.g. a Dask worker)."""
-    if mode not in ("after-row", "mid-row", "after-state", "pause"):
+    if mode not in ("after-row", "mid-row", "after-state", "pause", "stop"):
         raise SystemExit(f"unknown mode {mode!r}")
     import mocap.run.journal as run
     from mocap.io.pose_table import PoseTable
@@ -64,6 +70,14 @@ def install(mode: str, n: int) -> None:
         counts["state"] += 1
         if counts["state"] == n and mode == "after-state":
             die()
+        if counts["state"] == n and mode == "stop":
+            try:
+                fd = os.open(os.environ["KILLPOINTS_PAUSED"], os.O_WRONLY | os.O_CREAT | os.O_EXCL)
+            except FileExistsError:
+                return
+            os.write(fd, str(Path(args[0]).parent).encode())
+            os.close(fd)
+            os.kill(os.getpid(), signal.SIGSTOP)
         if counts["state"] == n and mode == "pause":
             flag = Path(os.environ["KILLPOINTS_PAUSED"])
             flag.touch()
@@ -73,6 +87,12 @@ def install(mode: str, n: int) -> None:
     PoseTable.append_to = append_and_maybe_die
     run.write_checkpoint = checkpoint_and_maybe_die
     run.CHECKPOINT_EVERY = CHECKPOINT_EVERY
+
+
+def dask_setup(worker) -> None:
+    """Dask preload hook (``dask worker --preload tests.killpoints``): :func:`install` with
+    ``$KILLPOINTS_MODE`` and ``$KILLPOINTS_N`` in the worker's process."""
+    install(os.environ["KILLPOINTS_MODE"], int(os.environ["KILLPOINTS_N"]))
 
 
 def main(argv: list[str]) -> int:

@@ -164,6 +164,7 @@ def test_keypoints_auto_without_the_extra_tracks_as_before_and_says_so(sequence,
     import builtins
 
     from mocap.io import mediapipe_keypoints
+    from mocap.run import advice
 
     real_import = builtins.__import__
 
@@ -173,12 +174,16 @@ def test_keypoints_auto_without_the_extra_tracks_as_before_and_says_so(sequence,
         return real_import(name, *args, **kwargs)
 
     monkeypatch.setattr(builtins, "__import__", no_mediapipe)
+    monkeypatch.setattr(advice, "MOSTLY_FAILED", -1.0)     # every run ends with its advice
     assert not mediapipe_keypoints.available()
     args = ["--iterations", "60", "--max-frames", "3", "--no-overlay"]
     capsys.readouterr()
     assert main(["track", str(sequence), "--out", str(tmp_path / "auto"), *args]) == 0
     printed = capsys.readouterr().out
     assert "keypoints: none (auto: MediaPipe Pose, the optional extra 'keypoints', is not installed" in printed
+    # the closing line names the extra (the option auto found no MediaPipe), not an option that cannot run
+    assert f"frames were marked failed; try the keypoints extra ({advice.KEYPOINTS_EXTRA_INSTALL}:" in printed
+    assert "--keypoints mediapipe" not in printed
     assert main(["track", str(sequence), "--out", str(tmp_path / "none"), "--keypoints", "none", *args]) == 0
     runs = {name: json.loads((tmp_path / name / "run.json").read_text()) for name in ("auto", "none")}
     assert runs["auto"]["settings"]["keypoints"] == runs["none"]["settings"]["keypoints"] == "none"
@@ -189,12 +194,23 @@ def test_keypoints_auto_without_the_extra_tracks_as_before_and_says_so(sequence,
 
 
 @pytest.mark.mediapipe
-def test_keypoints_auto_with_the_extra_uses_mediapipe(sequence, tmp_path, capsys):
+def test_keypoints_auto_with_the_extra_uses_mediapipe(sequence, tmp_path, capsys, monkeypatch):
     pytest.importorskip("mediapipe", reason="the optional extra 'keypoints' (MediaPipe Pose) is not installed")
+    from mocap.run import advice
+
+    monkeypatch.setattr(advice, "MOSTLY_FAILED", -1.0)     # every run ends with its advice
     out = tmp_path / "auto"
     assert main(["track", str(sequence), "--out", str(out), "--iterations", "40", "--max-frames", "2",
                  "--no-overlay"]) == 0
-    assert "keypoints: mediapipe (auto: the optional extra 'keypoints' is installed)" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "keypoints: mediapipe (auto: the optional extra 'keypoints' is installed)" in printed
+    hint = [line for line in printed.splitlines() if "frames were marked failed" in line]
+    assert len(hint) == 1 and "keypoints" not in hint[0]
+    # the extra installed but not used: the closing line names the option, not the install
+    assert main(["track", str(sequence), "--out", str(tmp_path / "none"), "--keypoints", "none", "--iterations", "40",
+                 "--max-frames", "2", "--no-overlay"]) == 0
+    hint = [line for line in capsys.readouterr().out.splitlines() if "frames were marked failed" in line]
+    assert len(hint) == 1 and "failed; try --keypoints mediapipe (2D keypoints" in hint[0] and "extra" not in hint[0]
     run = json.loads((out / "run.json").read_text())
     assert run["settings"]["keypoints"].startswith("mediapipe ") and run["settings"]["keypoints"].endswith(
         "(--keypoints auto)")

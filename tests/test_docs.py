@@ -191,7 +191,7 @@ def _written_by_commands() -> set[str]:
     return {w for w in written if w.upper() != w}           # not placeholders (DIR, JSON)
 
 
-def test_what_the_commands_write_is_git_ignored():
+def test_what_the_commands_write_and_a_virtual_environment_are_git_ignored():
     written = _written_by_commands()
     assert {"my_track", "my_clip", "my_calibration.json", "api-demo", "calibration-notebook.json"} <= written
     probe = subprocess.run(["git", "rev-parse", "--git-dir"], cwd=ROOT, capture_output=True, text=True)
@@ -201,6 +201,10 @@ def test_what_the_commands_write_is_git_ignored():
                              text=True, input="\n".join(f"{w}/poses.csv" if "." not in w else w
                                                         for w in sorted(written))).stdout.split()
     assert sorted(w for w in written if (f"{w}/poses.csv" if "." not in w else w) not in ignored) == []
+    # a virtual environment made in the checkout (python -m venv .venv) is ignored too
+    venv = subprocess.run(["git", "check-ignore", "--no-index", ".venv/bin/python", ".venv/pyvenv.cfg"], cwd=ROOT,
+                          capture_output=True, text=True).stdout.split()
+    assert venv == [".venv/bin/python", ".venv/pyvenv.cfg"]
 
 
 # -- the code blocks run

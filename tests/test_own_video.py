@@ -100,12 +100,13 @@ def test_fake_camera_gives_the_same_poses_as_the_file(sequence, tmp_path):
     background = read_image(sequence / "background.png")
     poses = []
     for name, source in (("file", VideoSource(video)), ("camera", CameraSource.replaying(video))):
-        found = find_setup(source, SetupRequest(1, "image", background, calibration=calibration, progress=False))
+        found = find_setup(source, SetupRequest(factor=1, background_mode="image", background_image=background,
+                                                 calibration=calibration, progress=False))
         setup, consumed = found.setup, found.consumed
         if source.live:
             assert 1 <= len(consumed) <= N_FRAMES          # read by the set-up, tracked first
             source.hold(consumed)
-        track_frames(source, setup, tmp_path / name, RunParams(TrackerConfig(evaluations=60), progress=False,
+        track_frames(source, setup, tmp_path / name, RunParams(config=TrackerConfig(evaluations=60), progress=False,
                                                                write_overlay=False))
         poses.append(PoseTable.read(tmp_path / name / "poses.csv").poses)
     assert poses[0].shape == (N_FRAMES, 23)

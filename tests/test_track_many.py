@@ -17,6 +17,7 @@ import pytest
 
 from mocap.cli import main
 from mocap.io.pose_table import PoseTable
+from mocap.run import files
 from mocap.run.many import SUMMARY_COLUMNS, read_summary
 
 from tests.conftest import REPO_ROOT
@@ -50,7 +51,7 @@ def single_runs(clips, tmp_path_factory):
 
 def assert_same_track(a, b) -> None:
     """The same poses.csv, timing columns (ms_*) aside."""
-    ta, tb = PoseTable.read(a / "poses.csv"), PoseTable.read(b / "poses.csv")
+    ta, tb = PoseTable.read(a / files.POSES_CSV), PoseTable.read(b / files.POSES_CSV)
     np.testing.assert_array_equal(ta.frames, tb.frames)
     np.testing.assert_array_equal(ta.poses, tb.poses)
     np.testing.assert_array_equal(ta.joints, tb.joints)
@@ -68,8 +69,8 @@ def assert_summary_matches_runs(out, inputs) -> list[dict]:
     for row in rows:
         if row["status"] != "finished":
             continue
-        run = json.loads((out / row["output"] / "run.json").read_text())
-        table = PoseTable.read(out / row["output"] / "poses.csv")
+        run = json.loads((out / row["output"] / files.RUN_JSON).read_text())
+        table = PoseTable.read(out / row["output"] / files.POSES_CSV)
         assert run["status"] == "finished" and row["reason"] == ""
         assert int(row["frames"]) == run["frames"] == len(table)
         assert int(row["failed_frames"]) == run["failures"] == int(table.extra["failed"].sum())
@@ -77,7 +78,7 @@ def assert_summary_matches_runs(out, inputs) -> list[dict]:
         assert float(row["time_s"]) == pytest.approx(run["wall_seconds_this_session"], abs=0.006)
         assert row["background"] == run["settings"]["own_video"]["background"]["mode"]
         assert row["calibration"] == run["settings"]["own_video"]["calibration"]["from"]
-    assert (out / "summary.png").stat().st_size > 0
+    assert (out / files.SUMMARY_PNG).stat().st_size > 0
     return rows
 
 
@@ -111,9 +112,9 @@ def test_an_interrupted_run_resumes_without_retracking_finished_videos(clips, si
            "track-many", str(a), str(b), "--out", str(out), "--workers", "0", "--no-progress", *TRACK_ARGS]
     proc = subprocess.run(cmd, cwd=REPO_ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == -9, proc.stderr
-    assert json.loads((out / a.name / "run.json").read_text())["status"] == "finished"
-    assert json.loads((out / b.name / "run.json").read_text())["status"] == "running"
-    assert not (out / "summary.csv").exists()
+    assert json.loads((out / a.name / files.RUN_JSON).read_text())["status"] == "finished"
+    assert json.loads((out / b.name / files.RUN_JSON).read_text())["status"] == "running"
+    assert not (out / files.SUMMARY_CSV).exists()
     finished = {p.name: (p.read_bytes(), p.stat().st_mtime_ns) for p in (out / a.name).iterdir()}
     proc = subprocess.run([sys.executable, "-m", "mocap", "track-many", str(a), str(b), "--out", str(out),
                            "--workers", "0", "--no-progress", *TRACK_ARGS],
@@ -121,7 +122,7 @@ def test_an_interrupted_run_resumes_without_retracking_finished_videos(clips, si
     assert proc.returncode == 0, proc.stderr
     assert "2 of 2 inputs finished (1 already were), 0 failed" in proc.stdout
     assert {p.name: (p.read_bytes(), p.stat().st_mtime_ns) for p in (out / a.name).iterdir()} == finished
-    assert json.loads((out / b.name / "run.json").read_text())["resumed_from_frame"] == CHECKPOINT_EVERY
+    assert json.loads((out / b.name / files.RUN_JSON).read_text())["resumed_from_frame"] == CHECKPOINT_EVERY
     for clip in (a, b):
         assert_same_track(out / clip.name, single_runs[clip.name])
     assert [r["status"] for r in assert_summary_matches_runs(out, [a, b])] == ["finished", "finished"]
@@ -199,7 +200,7 @@ def test_a_killed_worker_s_video_resumes_elsewhere_and_every_video_is_its_single
         assert many.returncode == 0, stderr
     assert processes["worker-b"].returncode == -signal.SIGKILL
     assert "3 of 3 inputs finished (0 already were), 0 failed, " in stdout and f"on dask {address}" in stdout
-    resumed = [json.loads((out / clip.name / "run.json").read_text())["resumed_from_frame"] for clip in clips]
+    resumed = [json.loads((out / clip.name / files.RUN_JSON).read_text())["resumed_from_frame"] for clip in clips]
     assert sorted(resumed) == [0, 0, CHECKPOINT_EVERY]  # the killed worker's video went on from its checkpoint
     for clip in clips:
         assert_same_track(out / clip.name, single_runs[clip.name])
@@ -265,3 +266,63 @@ def test_track_many_runs_on_a_tls_cluster_that_refuses_clients_without_its_crede
     assert many.returncode == 0, many.stderr
     assert "1 of 1 inputs finished" in many.stdout and f"on dask {address}" in many.stdout
     assert_same_track(tmp_path / "out" / clips[0].name, single_runs[clips[0].name])
+
+
+def test_hung_workers_are_those_holding_a_video_whose_heartbeat_stopped_for_the_timeout():
+    """:class:`mocap.run.many.HungWorkers` on a hand-made clock and scheduler views."""
+    from mocap.run.many import HungWorkers
+
+    now = [0.0]
+    hung = HungWorkers(6.0, clock=lambda: now[0])
+
+    def look(t, seen, busy=("a", "b", "c")):
+        now[0] = t
+        return hung.look({w: {"last_seen": s} for w, s in seen.items()}, set(busy))
+
+    assert look(0, {"a": 1.0, "b": 1.0, "c": 1.0, "idle": 1.0}, busy="abc") == []
+    assert look(5.5, {"a": 1.0, "b": 6.5, "c": 1.0, "idle": 1.0}, busy="abc") == []
+    # a: no heartbeat for 6 s; b's came at 5.5; c's last one is unchanged but c holds no video now;
+    # an idle worker is never hung
+    assert look(6.0, {"a": 1.0, "b": 6.5, "c": 1.0, "idle": 1.0}, busy="ab") == ["a"]
+    assert look(11.0, {"a": 1.0, "b": 6.5, "c": 1.0, "idle": 1.0}, busy="abc") == ["c"]
+    assert look(11.5, {"a": 1.0, "b": 6.5, "c": 1.0, "idle": 1.0}, busy="abc") == ["b"]
+    # each once: a worker reported is watched afresh (a restarted worker has a new address anyway)
+    assert look(12.0, {"a": 1.0, "b": 6.5, "c": 1.0}) == []
+    assert look(16.5, {"a": 1.0}) == []              # b and c gone from the cluster: forgotten
+    assert look(17.0, {"a": 1.0, "b": 6.5}) == ["a"]     # a: watched afresh since 11.0
+    assert look(22.5, {"b": 6.5}) == []                  # b: since 17.0, not since 12.0
+    assert look(23.0, {"b": 6.5}) == ["b"]
+
+
+@pytest.mark.slow
+def test_a_hung_worker_s_video_is_resumed_elsewhere_after_the_timeout_and_reported(clips, single_runs, tmp_path):
+    """A scheduler and two workers under nannies on 127.0.0.1; worker b's process stops itself
+    (SIGSTOP) right after its first checkpoint (:func:`tests.killpoints.install`, mode ``stop``,
+    preloaded into the worker's process), holding its video's folder. With ``--hung-after 6``
+    track-many restarts it through its nanny (the stopped process killed, its lock with it) and
+    the video is resumed elsewhere from its checkpoint.
+
+    The timeout only decides when a worker is taken for hung: a healthy worker taken for one on
+    a slow machine would be restarted too and its video resumed from its checkpoint to the same
+    rows, so what is asserted (every video its single run, the stopped one reported) holds
+    either way."""
+    pytest.importorskip("distributed")
+    out, stopped = tmp_path / "out", tmp_path / "stopped"
+    stop = {"KILLPOINTS_MODE": "stop", "KILLPOINTS_N": "1", "KILLPOINTS_PAUSED": str(stopped)}
+    workers = {"worker-a": {"nanny": True}, "worker-b": {"nanny": True, "preload": "tests.killpoints", "env": stop}}
+    inputs = [os.path.relpath(clip, tmp_path) for clip in clips]
+    with local_cluster(tmp_path, workers) as (address, processes):
+        many = subprocess.run([sys.executable, "-m", "mocap", "track-many", *inputs, "--out", "out",
+                               "--scheduler", address, "--no-progress", "--hung-after", "6", *TRACK_ARGS],
+                              cwd=tmp_path, env=cluster_env(), capture_output=True, text=True, timeout=600)
+    assert many.returncode == 0, many.stderr
+    held = stopped.read_text()                           # the folder of the video the stopped process held
+    name = os.path.basename(held)
+    assert "3 of 3 inputs finished (0 already were), 0 failed, " in many.stdout
+    rows = {r["output"]: r for r in assert_summary_matches_runs(out, inputs)}
+    assert [r["status"] for r in rows.values()] == ["finished"] * 3
+    assert int(rows[name]["hung_restarts"]) >= 1
+    assert f"{rows[name]['input']}: a worker it was on stopped responding and was restarted" in many.stdout
+    assert json.loads((out / name / files.RUN_JSON).read_text())["resumed_from_frame"] == CHECKPOINT_EVERY
+    for clip in clips:
+        assert_same_track(out / clip.name, single_runs[clip.name])

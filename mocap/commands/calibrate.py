@@ -61,15 +61,15 @@ def run(args: argparse.Namespace) -> int:
     else:
         if args.frame is not None:
             raise ValueError("--frame needs --background IMG (without one the first usable frame is found)")
-        request = SetupRequest(None, choices.background_mode,
-                               read_image(background) if background is not None else None, args.background_frames,
-                               hfov_deg=args.hfov, height_m=args.height, keypoints=keypoints)
+        request = SetupRequest(background_mode=choices.background_mode,
+                               background_image=read_image(background) if background is not None else None,
+                               background_frames=args.background_frames, hfov_deg=args.hfov, height_m=args.height,
+                               keypoints=keypoints)
         setup = find_setup(source, request).setup
         camera = setup.calibration.camera.enlarged(setup.factor, source.width, source.height)
         calibration = Calibration(setup.calibration.dims, setup.calibration.initial_pose, camera)
         note = setup.record
-        how = (f"frame {note['calibration']['frame']}, background {note['background']['mode']} "
-               f"({note['background']['reason']})")
+        how = f"frame {note.calibration.frame}, background {note.background_mode} ({note.background.reason})"
     calibration.to_json(args.out)
     q = calibration.initial_pose
     print(f"calibration written to {args.out} ({how}): actor at {q[2]:.2f} m, torso "

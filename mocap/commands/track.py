@@ -44,20 +44,20 @@ def add_parser(subparsers) -> None:
     p.set_defaults(run=run)
 
 
-def print_setup(account: dict) -> None:
-    """What the set-up found (:func:`mocap.run.track`'s ``on_setup``)."""
-    factor = account["working_factor"]
-    print(f"working resolution {account['working_width']}x{account['working_height']} "
-          f"(input {account['input_width']}x{account['input_height']} reduced {factor}x)")
-    background, calibration = account["background"], account["calibration"]
-    print(f"background: {background['mode']} ({background['reason']})")
-    if "keypoints" in account:
-        print(f"keypoints: {account['keypoints']}")
-    if calibration["from"] == "automatic":
-        height = account["height_m"]
-        print(f"calibration: automatic on frame {calibration['frame']}, person at {calibration['depth_m']:.2f} m "
-              f"(hfov {account['hfov_deg']:g} deg" + (f", height {height:g} m)" if height else
-                                                      ", default adult size: scale unknown)"))
+def print_setup(account) -> None:
+    """What the set-up found (:func:`mocap.run.track`'s ``on_setup``: a
+    :class:`mocap.run.setup.SetupAccount`)."""
+    print(f"working resolution {account.working_width}x{account.working_height} "
+          f"(input {account.input_width}x{account.input_height} reduced {account.working_factor}x)")
+    background, calibration = account.background, account.calibration
+    print(f"background: {background.mode} ({background.reason})")
+    if account.keypoints is not None:
+        print(f"keypoints: {account.keypoints}")
+    if calibration.source == "automatic":
+        height = account.height_m
+        print(f"calibration: automatic on frame {calibration.frame}, person at {calibration.depth_m:.2f} m "
+              f"(hfov {account.hfov_deg:g} deg" + (f", height {height:g} m)" if height else
+                                                   ", default adult size: scale unknown)"))
 
 
 def run(args: argparse.Namespace) -> int:

@@ -4,6 +4,7 @@
 uses: the commands ``track``, ``track-many``, ``demo``, ``bench``, the experiments and the
 notebooks. One module a job:
 
+- :mod:`~mocap.run.files`    the names of the files a run writes (one table)
 - :mod:`~mocap.run.options`  what a person may set (:class:`OwnVideoOptions`), the background's mode
 - :mod:`~mocap.run.setup`    working resolution, background, calibration, decided once
 - :mod:`~mocap.run.person`   finding and calibrating a person on one frame, newcomers

@@ -3,13 +3,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["MOSTLY_FAILED", "RunFacts", "what_to_try"]
+__all__ = ["KEYPOINTS_EXTRA_INSTALL", "MOSTLY_FAILED", "RunFacts", "mostly_failed", "what_to_try"]
 
 #: Share of the tracked frames marked failed above which the run ends with advice.
 MOSTLY_FAILED = 0.5
+#: How the optional extra ``keypoints`` (MediaPipe Pose) is installed from the checkout (as the README).
+KEYPOINTS_EXTRA_INSTALL = 'python -m pip install -e ".[keypoints]"'
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class RunFacts:
     """What the advice looks at.
 
@@ -20,7 +22,11 @@ class RunFacts:
     failures : int
         Frames marked failed.
     keypoints : str or None
-        The keypoint cue used (``"mediapipe"``, a file), None without.
+        The keypoint cue used, as resolved (``"mediapipe"``, a file; ``--keypoints auto`` gives
+        ``"mediapipe"`` or None: :func:`mocap.run.options.resolve_keypoints`), None without.
+    keypoints_extra : bool
+        MediaPipe Pose (the optional extra ``keypoints``) is installed
+        (:func:`mocap.io.mediapipe_keypoints.available`).
     background : str or None
         How the background was found (``image``, ``frames``, ``estimated``, ``none``); None: unknown.
     height_given : bool
@@ -32,19 +38,30 @@ class RunFacts:
     frames: int
     failures: int
     keypoints: str | None = None
+    keypoints_extra: bool
     background: str | None = None
     height_given: bool = False
     calibration: str | None = None
 
 
+def mostly_failed(frames: int, failures: int) -> bool:
+    """More than :data:`MOSTLY_FAILED` of ``frames`` (at least one) were marked failed: the run
+    ends with advice."""
+    return frames > 0 and failures > MOSTLY_FAILED * frames
+
+
 def what_to_try(facts: RunFacts) -> str | None:
-    """One line for a run whose frames mostly failed (more than :data:`MOSTLY_FAILED` of them):
-    the options not used yet that most often help, best first; None for a run that went well."""
-    if facts.frames == 0 or facts.failures <= MOSTLY_FAILED * facts.frames:
+    """One line for a run whose frames mostly failed (:func:`mostly_failed`): the options not
+    used yet that most often help, best first (the keypoints extra first where it is not
+    installed); None for a run that went well."""
+    if not mostly_failed(facts.frames, facts.failures):
         return None
     tries = []
-    if facts.keypoints is None:
-        tries.append("--keypoints mediapipe (2D keypoints as a further cue; optional extra 'keypoints')")
+    if facts.keypoints is None and not facts.keypoints_extra:
+        tries.append(f"the keypoints extra ({KEYPOINTS_EXTRA_INSTALL}: MediaPipe Pose's 2D keypoints as a further "
+                     "cue, used by default once installed)")
+    elif facts.keypoints is None:
+        tries.append("--keypoints mediapipe (2D keypoints as a further cue)")
     if facts.background in ("estimated", "none"):
         tries.append("a background plate (--background IMG, a picture of the empty scene, or "
                      "--background-frames A:B where nobody is in view)")

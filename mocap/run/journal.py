@@ -22,6 +22,7 @@ from mocap.io.checkpoint import (Checkpoint, cut_journal, read_checkpoint, synce
                                   write_checkpoint)
 from mocap.io.keypoints import Keypoints, append_keypoints
 from mocap.io.pose_table import PoseTable
+from mocap.run import files
 
 __all__ = ["CHECKPOINT_EVERY", "KEYPOINTS_FILE", "STATE_FILE", "Journal", "People", "other_settings",
            "previous_run"]
@@ -30,10 +31,12 @@ __all__ = ["CHECKPOINT_EVERY", "KEYPOINTS_FILE", "STATE_FILE", "Journal", "Peopl
 #: most this many frames (the journal is cut back to the checkpoint), bit for bit the same.
 CHECKPOINT_EVERY = 25
 #: Checkpoint (:mod:`mocap.io.checkpoint`): the tracker's exact state after the last pushed
-#: frame and the length of ``poses.csv`` that goes with it, for bit-identical resumes.
-STATE_FILE = ".tracker_state.npz"
-#: The keypoint journal: every pushed frame's keypoints (input pixels), when the run has keypoints.
-KEYPOINTS_FILE = "keypoints.csv"
+#: frame and the lengths of ``poses.csv`` and ``keypoints.csv`` that go with it, for bit-identical
+#: resumes (:data:`mocap.run.files.STATE_FILE`).
+STATE_FILE = files.STATE_FILE
+#: The keypoint journal: every pushed frame's keypoints (input pixels), when the run has keypoints
+#: (:data:`mocap.run.files.KEYPOINTS_CSV`).
+KEYPOINTS_FILE = files.KEYPOINTS_CSV
 #: Checkpoint entry holding the keypoint journal's length in bytes.
 KEYPOINTS_BYTES = "run_keypoints_bytes"
 #: Checkpoint entry holding the people's bookkeeping (:class:`People`, JSON text).
@@ -136,7 +139,7 @@ class Journal:
 
     @classmethod
     def in_folder(cls, out_dir: Path) -> "Journal":
-        return cls(out_dir / "poses.csv", out_dir / STATE_FILE, out_dir / KEYPOINTS_FILE)
+        return cls(out_dir / files.POSES_CSV, out_dir / STATE_FILE, out_dir / KEYPOINTS_FILE)
 
     def append(self, row: PoseTable) -> None:
         """A decided frame's row (synced with the next checkpoint)."""

@@ -39,6 +39,7 @@ from mocap.io.keypoints import KeypointSource, Keypoints
 from mocap.io.lock import one_writer
 from mocap.io.pose_table import PoseTable
 from mocap.io.prefetch import prefetch
+from mocap.run import files
 from mocap.run.colours import learn_colours
 from mocap.run.journal import Journal, People, Resumed, previous_run
 from mocap.run.outputs import FinishedRun, RunSummary, finish_run, frame_row
@@ -54,7 +55,7 @@ DARK_MEAN = 20.0
 READ_AHEAD = 4
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class RunParams:
     """How to run (:func:`track_frames`).
 
@@ -276,7 +277,7 @@ def run_settings(frames_in, setup: RunSetup, params: RunParams, resolution: int)
                 "working_resolution": {"factor": setup.factor, "width": camera.width, "height": camera.height,
                                        "input_width": frames_in.width, "input_height": frames_in.height}}
     if setup.record is not None:
-        settings["own_video"] = setup.record
+        settings["own_video"] = setup.record.to_dict()
     settings["start_frame"] = params.start_frame
     settings["keypoints"] = "none" if params.keypoints is None else getattr(params.keypoints, "description",
                                                                             type(params.keypoints).__name__)
@@ -315,7 +316,7 @@ class RunLoop:
         self.config = params.config
         self.camera = setup.calibration.camera
         self.journal = Journal.in_folder(out_dir)
-        self.run_json = out_dir / "run.json"
+        self.run_json = out_dir / files.RUN_JSON
         self.times: dict[int, float] = {}          # a live source's frame times, until the frames are decided
         self.dark: dict[int, bool] = {}            # dark flags of the frames pushed but not decided yet
         self.pictures: dict[int, np.ndarray] = {}  # overlay-size frames not decided yet
@@ -352,7 +353,7 @@ class RunLoop:
                                                                             start=start_frame))
             learnt = learn_colours(frames, setup.colour_recipe(model), frames_in.name)
             colour_model, loop.colour_frame = learnt.model, learnt.frame
-        colour_model.to_json(out_dir / "colour_model.json")
+        colour_model.to_json(out_dir / files.COLOUR_MODEL_JSON)
         loop.person = Person(model.with_class_names(colour_model.names), colour_model, setup.scene,
                              setup.calibration)     # classes the first frame supports
         loop.people = People.first(start_frame, setup.calibration, colour_model)
@@ -365,8 +366,8 @@ class RunLoop:
         """The tracker: fresh (``run.json`` says running) or restored from ``checkpoint``."""
         if checkpoint is None:
             self.damage.made.extend([self.journal.path, self.run_json, self.journal.state_path,
-                                     self.journal.keypoints_path, self.out_dir / "colour_model.json",
-                                     self.out_dir / "overlay.mp4"])
+                                     self.journal.keypoints_path, self.out_dir / files.COLOUR_MODEL_JSON,
+                                     self.out_dir / files.OVERLAY_MP4])
             self.tracker = Tracker(self.person.model, self.camera, self.config, self.person.calibration.initial_pose)
             write_text_atomic(self.run_json, json.dumps({"status": "running", "settings": self.settings}, indent=2))
             return
@@ -423,7 +424,8 @@ class RunLoop:
         and a fresh tracker."""
         self.emit(self.tracker.finish())
         self.person = Person.of_setup(found, self.resolution)
-        self.people.begin(index, self.person.calibration, self.person.colour_model, found.record)
+        self.people.begin(index, self.person.calibration, self.person.colour_model,
+                          None if found.record is None else found.record.to_dict(source=False))
         reader.colours = Colours(self.people.segment, self.person.colour_model, self.person.scene)
         self.tracker = Tracker(self.person.model, self.camera, self.config, self.person.calibration.initial_pose)
         if self.overlay is not None:

@@ -14,15 +14,23 @@ What a crash leaves behind, and what happens next:
 - A worker that dies mid-video: Dask gives the task to another worker, which resumes the video
   from its checkpoint (the dead process's lock went with it). Never restarted from zero, never
   two writers.
+- A worker that stops responding mid-video (stopped by SIGSTOP, a stalled machine): once the
+  scheduler has had no heartbeat from it for ``hung_after_s`` seconds (:data:`HUNG_AFTER_S`,
+  ``--hung-after``) it is restarted through its nanny (``Client.restart_workers``: the hung
+  process is killed, its folder lock with it) and its videos go to other workers, which resume
+  them from their checkpoints; ``summary.csv`` counts it (``hung_restarts``). A worker without a
+  nanny (``dask worker --no-nanny``) can only be removed from the cluster: its process keeps its
+  video's folder, which is then reported failed ("in use by another run").
 - The command itself stopped (Ctrl-C, killed): every finished video has its ``run.json`` with
   ``status: finished``; the same command again skips those and resumes the others.
 - A video that cannot be tracked (damaged, nobody found, ...) is recorded with its one-line
   reason; the others go on.
 
 At the end ``OUT/summary.csv`` (:data:`SUMMARY_COLUMNS`, one row per input, from each
-video's ``run.json``) and ``OUT/summary.png`` are written atomically. ``OUT/track-many.json``
-keeps the options (:class:`mocap.run.OwnVideoOptions`), so that a rerun with other
-options is refused instead of mixing results.
+video's :class:`mocap.run.RunSummary`: the run's own, or its ``run.json`` read back) and
+``OUT/summary.png`` are written atomically. ``OUT/track-many.json`` keeps the options
+(:class:`mocap.run.OwnVideoOptions`), so that a rerun with other options is refused instead of
+mixing results.
 """
 from __future__ import annotations
 
@@ -38,25 +46,35 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from mocap.io.files import write_bytes_atomic, write_text_atomic
+from mocap.run import files
 from mocap.run.options import OwnVideoOptions
+from mocap.run.outputs import RunSummary
 
 __all__ = ["PER_VIDEO_OPTIONS", "ManySummary", "SUMMARY_COLUMNS", "expand_inputs", "track_input", "track_many",
            "read_summary", "summary_row"]
 
-#: Files written at the top of the output folder.
-SUMMARY_CSV, SUMMARY_PNG, OPTIONS_FILE = "summary.csv", "summary.png", "track-many.json"
+#: Files written at the top of the output folder (:mod:`mocap.run.files`).
+SUMMARY_CSV, SUMMARY_PNG, OPTIONS_FILE = files.SUMMARY_CSV, files.SUMMARY_PNG, files.TRACK_MANY_JSON
 #: Columns of ``summary.csv``: the input as given, its output folder (relative to ``OUT``),
 #: ``finished`` or ``failed``, frames tracked, frames whose residual marked them failed, frames
 #: per second (one core, run.json ``fps``), background mode and calibration source
 #: (run.json ``settings.own_video``), seconds of the session that finished it (run.json
-#: ``wall_seconds_this_session``), and for a failed video its one-line reason.
+#: ``wall_seconds_this_session``), for a failed video its one-line reason, and how many times
+#: a worker it was given to stopped responding and was restarted (:class:`HungWorkers`; 0 or
+#: more on a cluster, empty in this process).
 SUMMARY_COLUMNS = ("input", "output", "status", "frames", "failed_frames", "fps", "background", "calibration",
-                   "time_s", "reason")
+                   "time_s", "reason", "hung_restarts")
 #: Options of :class:`mocap.run.OwnVideoOptions` that name one video's files or a window:
 #: not for many videos (a sequence folder brings its own background, calibration, ground truth).
 PER_VIDEO_OPTIONS = ("background", "background_frames", "calibration", "ground_truth", "show")
-#: Seconds between two looks at the output folders for the progress bar.
+#: Seconds between two looks at the output folders for the progress bar (and at the workers).
 POLL_S = 0.5
+#: Seconds without a heartbeat after which a worker that holds a video is taken as hung
+#: (``--hung-after``): Dask workers send one every 0.5 s to 2 s (more with many workers), also
+#: while they compute.
+HUNG_AFTER_S = 120.0
+#: Seconds a hung worker's nanny is given to kill it and start it afresh.
+RESTART_TIMEOUT_S = 30.0
 
 
 @dataclass
@@ -139,36 +157,28 @@ def expand_inputs(patterns: list[str]) -> list[tuple[Path, str]]:
     return [(p, output_name(p)) for p in unique.values()]
 
 
-def _read_run(out_dir: Path) -> dict | None:
-    """The video's ``run.json``, or None when it has none (or a damaged one)."""
-    try:
-        return json.loads((Path(out_dir) / "run.json").read_text())
-    except (OSError, json.JSONDecodeError):
-        return None
-
-
 def _finished(out_dir: Path) -> bool:
-    run = _read_run(out_dir)
-    return run is not None and run.get("status") == "finished"
+    return RunSummary.read(out_dir) is not None
 
 
-def summary_row(source: str | Path, out_dir: str | Path, reason: str | None = None) -> dict:
-    """The ``summary.csv`` row of one input (keys :data:`SUMMARY_COLUMNS`), from its ``run.json``.
+def summary_row(source: str | Path, out_dir: str | Path, reason: str | None = None, *,
+                summary: RunSummary | None = None) -> dict:
+    """The ``summary.csv`` row of one input (keys :data:`SUMMARY_COLUMNS`), from its run's
+    ``summary`` (default: its ``run.json`` read back, :meth:`mocap.run.RunSummary.read`).
 
     ``reason`` given: the input failed for it. Numbers of a failed input are left empty.
     """
     out_dir = Path(out_dir)
     row = dict.fromkeys(SUMMARY_COLUMNS, "")
     row.update(input=str(source), output=out_dir.name)
-    run = _read_run(out_dir)
-    if reason is not None or run is None or run.get("status") != "finished":
+    run = None if reason is not None else summary if summary is not None else RunSummary.read(out_dir)
+    if run is None:
         row.update(status="failed", reason=reason or "no finished run.json")
         return row
-    own = run["settings"].get("own_video", {})
-    row.update(status="finished", frames=run["frames"], failed_frames=run["failures"], fps=round(run["fps"], 2),
-               background=own.get("background", {}).get("mode", ""),
-               calibration=own.get("calibration", {}).get("from", ""),
-               time_s=round(run["wall_seconds_this_session"], 2))
+    setup = run.setup
+    row.update(status="finished", frames=run.frames, failed_frames=run.failures, fps=round(run.fps, 2),
+               background="" if setup is None else setup.background_mode,
+               calibration="" if setup is None else setup.calibration_from, time_s=round(run.wall_s, 2))
     return row
 
 
@@ -183,12 +193,13 @@ def track_input(source: str, out_dir: str, options: OwnVideoOptions) -> dict:
     """
     import mocap.run
 
-    if not _finished(Path(out_dir)):
+    summary = RunSummary.read(out_dir)
+    if summary is None:
         try:
-            mocap.run.track(source, out_dir, options, progress=False)
+            summary = mocap.run.track(source, out_dir, options, progress=False)
         except (ValueError, OSError) as exc:
             return summary_row(source, out_dir, reason=_one_line(exc))
-    return summary_row(source, out_dir)
+    return summary_row(source, out_dir, summary=summary)
 
 
 def _one_line(exc: BaseException) -> str:
@@ -199,12 +210,11 @@ def _one_line(exc: BaseException) -> str:
 def _clear_run(out_dir: Path) -> None:
     """Remove a video's run (journals, checkpoint, run.json) under its lock, to start it afresh."""
     from mocap.io.lock import FolderLock
-    from mocap.run.journal import KEYPOINTS_FILE, STATE_FILE
 
     if not out_dir.is_dir():
         return
     with FolderLock(out_dir):
-        for name in ("poses.csv", KEYPOINTS_FILE, STATE_FILE, "run.json"):
+        for name in (files.POSES_CSV, files.KEYPOINTS_CSV, files.STATE_FILE, files.RUN_JSON):
             (out_dir / name).unlink(missing_ok=True)
 
 
@@ -293,7 +303,8 @@ def _dask_client(workers: int, scheduler: str | None):
 
 
 def track_many(inputs: list[str | Path], out: str | Path, options: OwnVideoOptions | None = None, *,
-               workers: int | None = None, scheduler: str | None = None, progress: bool = True) -> ManySummary:
+               workers: int | None = None, scheduler: str | None = None, progress: bool = True,
+               hung_after_s: float = HUNG_AFTER_S) -> ManySummary:
     """Track every input, one Dask task per video, and write ``summary.csv`` and ``summary.png``.
 
     Parameters
@@ -314,6 +325,10 @@ def track_many(inputs: list[str | Path], out: str | Path, options: OwnVideoOptio
         ``out`` at the same path and import this ``mocap``.
     progress : bool
         One progress bar over all frames of all videos.
+    hung_after_s : float, seconds
+        A worker holding a video that sends the scheduler no heartbeat for this long is taken as
+        hung: restarted, its videos resumed elsewhere (:class:`HungWorkers`; not with
+        ``workers=0``).
 
     Returns
     -------
@@ -323,12 +338,14 @@ def track_many(inputs: list[str | Path], out: str | Path, options: OwnVideoOptio
     ------
     ValueError
         Bad inputs (missing, name clashes), a per-video option, a folder tracked with other
-        options, a bad worker count, Dask missing for ``workers > 0``.
+        options, a bad worker count or hang timeout, Dask missing for ``workers > 0``.
     """
     options = OwnVideoOptions() if options is None else options
     workers = default_workers() if workers is None else workers
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 0:
         raise ValueError(f"workers must be a non-negative integer, got {workers!r}")
+    if isinstance(hung_after_s, bool) or not isinstance(hung_after_s, (int, float)) or not hung_after_s > 0:
+        raise ValueError(f"the hang timeout must be a positive number of seconds, got {hung_after_s!r}")
     default = OwnVideoOptions()
     per_video = [name for name in PER_VIDEO_OPTIONS if getattr(options, name) != getattr(default, name)]
     if per_video:
@@ -363,7 +380,7 @@ def track_many(inputs: list[str | Path], out: str | Path, options: OwnVideoOptio
         else:
             client, summary.backend = _dask_client(workers, scheduler)
             try:
-                _run_on_dask(client, todo, out, options, rows, bar)
+                _run_on_dask(client, todo, out, options, rows, bar, HungWorkers(hung_after_s))
             finally:
                 _close_client(client, scheduler)
     finally:
@@ -381,9 +398,39 @@ def _close_client(client, scheduler: str | None) -> None:
         cluster.close()
 
 
-def _run_on_dask(client, todo, out: Path, options: OwnVideoOptions, rows: dict, bar: "_ManyBar") -> None:
+class HungWorkers:
+    """Which workers have stopped responding: no new heartbeat at the scheduler (its
+    ``last_seen`` unchanged) for ``after_s`` seconds of this process's ``clock``, while they
+    hold one of the videos. Each look (:meth:`look`) compares the scheduler's view with the
+    previous one, so the scheduler's clock is never compared with this machine's.
+    """
+
+    def __init__(self, after_s: float, clock=time.monotonic) -> None:
+        self.after_s, self.clock = after_s, clock
+        self.seen: dict[str, tuple[float, float]] = {}     # worker -> (its last_seen, our time it changed)
+
+    def look(self, workers: dict[str, dict], busy: set[str]) -> list[str]:
+        """The hung workers among ``busy`` (addresses), from ``workers`` (``scheduler_info()``'s:
+        address -> ``{"last_seen": ...}``); each one once (it is forgotten)."""
+        now = self.clock()
+        self.seen = {w: seen for w, seen in self.seen.items() if w in workers}
+        hung = []
+        for address, info in workers.items():
+            last = info.get("last_seen")
+            previous = self.seen.get(address)
+            if previous is None or previous[0] != last:
+                self.seen[address] = (last, now)
+            elif address in busy and now - previous[1] >= self.after_s:
+                hung.append(address)
+                del self.seen[address]
+        return hung
+
+
+def _run_on_dask(client, todo, out: Path, options: OwnVideoOptions, rows: dict, bar: "_ManyBar",
+                 hung: HungWorkers) -> None:
     """Submit one task per video and collect the rows as they finish (a task whose workers
-    kept dying, or that raised, becomes a failed row with the reason)."""
+    kept dying, or that raised, becomes a failed row with the reason); restart the workers
+    that stop responding (``hung``), counting it in the rows of the videos they held."""
     from distributed import wait
 
     token = uuid.uuid4().hex[:8]
@@ -392,7 +439,8 @@ def _run_on_dask(client, todo, out: Path, options: OwnVideoOptions, rows: dict, 
     futures = {client.submit(track_input, str(path.resolve()), str((out / name).resolve()), options, pure=False,
                              key=f"track-many-{name}-{token}", priority=bar.expected[name]): (path, name)
                for path, name in todo}
-    keys = {f.key for f in futures}
+    keys = {f.key: name for f, (_, name) in futures.items()}
+    restarts = {name: 0 for _, name in todo}
     pending = dict(futures)
     try:
         while pending:
@@ -402,10 +450,18 @@ def _run_on_dask(client, todo, out: Path, options: OwnVideoOptions, rows: dict, 
                     rows[name] = {**fut.result(), "input": str(path)}
                 except Exception as exc:     # the task raised, or its workers died too often (KilledWorker)
                     rows[name] = summary_row(path, out / name, reason=_one_line(exc))
+                rows[name]["hung_restarts"] = restarts[name]
             # a worker's processing list also holds what it has queued: at most nthreads of them run
-            threads = client.nthreads()
-            running = sum(min(sum(k in keys for k in ks), threads.get(w, 1)) for w, ks in client.processing().items())
+            threads, processing = client.nthreads(), client.processing()
+            running = sum(min(sum(k in keys for k in ks), threads.get(w, 1)) for w, ks in processing.items())
             bar.update(rows, running=running)
+            busy = {w for w, ks in processing.items() if any(k in keys for k in ks)}
+            for worker in hung.look(client.scheduler_info()["workers"], busy) if pending else ():
+                held = [keys[k] for k in processing.get(worker, ()) if k in keys]
+                # its nanny kills it (its folder locks go with it) and starts it afresh; its tasks go elsewhere
+                client.restart_workers([worker], timeout=RESTART_TIMEOUT_S, raise_for_error=False)
+                for name in held:
+                    restarts[name] += 1
             if pending:
                 try:                        # until a task ends, or the bar's next look
                     wait(list(pending), timeout=POLL_S, return_when="FIRST_COMPLETED")
@@ -438,7 +494,7 @@ class _ManyBar:
             if row is not None and row["status"] == "finished":
                 done[name] = self.expected[name] = int(row["frames"])
             elif row is None:
-                done[name] = self.count(self.out / name / "poses.csv")
+                done[name] = self.count(self.out / name / files.POSES_CSV)
         self.bar.total = sum(self.expected.values())
         self.bar.n = sum(done.values())
         n_failed = sum(r["status"] == "failed" for r in rows.values())

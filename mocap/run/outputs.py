@@ -25,6 +25,8 @@ from mocap.io.files import write_bytes_atomic, write_text_atomic
 from mocap.io.pose_table import PoseTable
 from mocap.io.video_check import format_frames
 from mocap.render.camera import Camera
+from mocap.run import files
+from mocap.run.setup import SetupAccount
 from mocap.track.config import EDGE_FAILURE_THRESHOLD_PX, REGION_FAILURE_THRESHOLD
 
 __all__ = ["EXTRA_COLUMNS", "PIXEL_COLUMNS", "FinishedRun", "RunSummary", "finish_run", "frame_row",
@@ -38,9 +40,10 @@ EXTRA_COLUMNS = ("region_residual", "edge_residual", "edge_residual_after_region
 PIXEL_COLUMNS = tuple(f"{j}_{a}" for j in JOINT_NAMES for a in "uv")
 
 
-@dataclass
+@dataclass(kw_only=True)
 class RunSummary:
-    """What a tracking run did (:func:`mocap.run.track`).
+    """What a tracking run did (:func:`mocap.run.track`), or a finished run's ``run.json`` as
+    read back (:meth:`read`).
 
     Attributes
     ----------
@@ -59,9 +62,11 @@ class RunSummary:
         Frames that did not decode cleanly.
     empty_frames, dark_frames : int
         Frames with nobody in view, very dark frames.
-    setup : dict or None
-        How the set-up was found (``run.json`` ``settings.own_video``, plus the input and
-        working sizes).
+    wall_s : float, seconds
+        The time of the session that finished the run (``run.json`` ``wall_seconds_this_session``).
+    setup : SetupAccount or None
+        How the set-up was found (``run.json`` ``settings.own_video``; from :func:`mocap.run.track`
+        with the input and working sizes).
     advice : str or None
         One line on what to try when most frames failed (:func:`mocap.run.advice.what_to_try`).
     """
@@ -75,8 +80,31 @@ class RunSummary:
     damaged_frames: tuple[int, ...] = ()
     empty_frames: int = 0
     dark_frames: int = 0
-    setup: dict | None = None
+    wall_s: float = 0.0
+    setup: SetupAccount | None = None
     advice: str | None = None
+
+    @classmethod
+    def read(cls, out_dir: str | Path) -> "RunSummary | None":
+        """The summary of the finished run in ``out_dir`` from its ``run.json``; None where there
+        is none, an unreadable one, an unfinished run or one of another version (``advice`` is
+        not kept: None)."""
+        out_dir = Path(out_dir)
+        try:
+            record = json.loads((out_dir / files.RUN_JSON).read_text())
+        except (OSError, ValueError):
+            return None
+        if not isinstance(record, dict) or record.get("status") != "finished":
+            return None
+        try:
+            own = record["settings"].get("own_video")
+            return cls(out_dir=out_dir, frames=record["frames"], resumed_from=record["resumed_from_frame"],
+                       fps=record["fps"], metrics=record.get("metrics"), failures=record["failures"],
+                       damaged_frames=tuple(record.get("damaged_frames", ())), empty_frames=record["empty_frames"],
+                       dark_frames=record.get("dark_frames", 0), wall_s=record["wall_seconds_this_session"],
+                       setup=None if own is None else SetupAccount.from_dict(own))
+        except (KeyError, TypeError, AttributeError):          # a run.json of another version
+            return None
 
 
 def joint_pixels(joints: np.ndarray, camera, work_factor: int = 1) -> np.ndarray:
@@ -256,12 +284,15 @@ def finish_run(run: FinishedRun) -> RunSummary:
         record["damaged_frames"] = run.damaged
         record["damaged_frames_text"] = format_frames(run.damaged)
     record["segments"] = run.segments
-    write_bvh(run.out_dir / "poses.bvh", table.poses, run.calibration.dims, run.fps)
-    residual_plot(run.out_dir / "residuals.png", table)
+    write_bvh(run.out_dir / files.POSES_BVH, table.poses, run.calibration.dims, run.fps)
+    residual_plot(run.out_dir / files.RESIDUALS_PNG, table)
     if "dark" in extra:
         record["dark_frames"] = int(extra["dark"].sum())
     if run.keypoints_ms is not None:      # the detector's own time per frame, beside the tracker's ms_total
         record["keypoints_ms_per_frame"] = run.keypoints_ms
-    write_text_atomic(run.out_dir / "run.json", json.dumps(record, indent=2))
-    return RunSummary(run.out_dir, len(table), run.start, record["fps"], metrics, failures, tuple(run.damaged),
-                      record["empty_frames"], record.get("dark_frames", 0), run.settings.get("own_video"))
+    write_text_atomic(run.out_dir / files.RUN_JSON, json.dumps(record, indent=2))
+    own = run.settings.get("own_video")
+    return RunSummary(out_dir=run.out_dir, frames=len(table), resumed_from=run.start, fps=record["fps"],
+                      metrics=metrics, failures=failures, damaged_frames=tuple(run.damaged),
+                      empty_frames=record["empty_frames"], dark_frames=record.get("dark_frames", 0), wall_s=run.wall_s,
+                      setup=None if own is None else SetupAccount.from_dict(own))

@@ -23,6 +23,7 @@ from mocap.imaging.resample import downscale
 from mocap.imaging.visual import label_palette
 from mocap.io.pose_table import PoseTable
 from mocap.render.camera import Camera
+from mocap.run import files
 
 __all__ = ["EDGE_COLOUR", "OVERLAY_MAX_WIDTH", "OverlayGeometry", "OverlayWriter", "draw_model", "draw_pose",
            "redraw_overlay"]
@@ -128,7 +129,7 @@ class OverlayWriter:
         from mocap.io.video import VideoWriter
 
         self.model, self.camera = model, camera
-        self.path, self.tmp = Path(out_dir) / "overlay.mp4", Path(out_dir) / ".overlay.tmp.mp4"
+        self.path, self.tmp = Path(out_dir) / files.OVERLAY_MP4, Path(out_dir) / files.OVERLAY_TMP
         self.video = VideoWriter(self.tmp, fps, preset=OVERLAY_PRESET) if write else None
         self.figure = self.image = None
         if show and (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") or platform.system() != "Linux"):

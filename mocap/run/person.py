@@ -170,7 +170,10 @@ class NewcomerFinder:
         if found is None:
             return None
         person, face = found.person, found.face
-        record = {"frame": int(index), "face_input_px": None if face is None else [int(v) for v in face],
-                  "depth_m": round(float(person.calibration.initial_pose[2]), 3)}
+        from mocap.run.setup import CalibrationAccount
+
+        record = CalibrationAccount(source="automatic", frame=int(index),
+                                    face_input_px=None if face is None else [int(v) for v in face],
+                                    depth_m=round(float(person.calibration.initial_pose[2]), 3))
         return dataclasses.replace(setup, calibration=person.calibration, colour_model=person.colour_model,
                                    scene=person.scene, record=record)

@@ -29,6 +29,7 @@ from mocap.imaging.visual import colour_distance, colour_labels, label_palette, 
 from mocap.io.frames import VideoSource
 from mocap.io.lock import FolderLock
 from mocap.io.video import VideoWriter, read_image
+from mocap.run import files
 from mocap.run.colours import ColourRecipe, SampleBoxes, learn_colours
 from mocap.run.options import background_mode, keypoint_source, resolve_keypoints
 from mocap.run.setup import FaceSearch, FrameAccess, SetupRequest, find_background
@@ -173,15 +174,15 @@ class _Segmenter:
         mode = background_mode(options.background is not None, options.background_frames is not None,
                                options.no_background)
         image = read_image(options.background) if options.background is not None else None
-        request = SetupRequest(self.factor, mode, image, options.background_frames, imaging=self.config,
-                               progress=False)
+        request = SetupRequest(factor=self.factor, background_mode=mode, background_image=image,
+                               background_frames=options.background_frames, imaging=self.config, progress=False)
         return find_background(FrameAccess(self.source, 0), request, self.factor, FaceSearch(self.factor),
                                self.config).image
 
     def colours(self, background: np.ndarray | None) -> ColourModel:
         """The given colour model, a resumed run's, or one learnt on the first frame that shows the person."""
         options, out = self.options, self.out
-        learned = out / "colour_model.json"
+        learned = out / files.COLOUR_MODEL_JSON
         if options.colour_model is not None:
             model = ColourModel.from_json(options.colour_model)
         elif learned.is_file():                   # a resumed run: the model its first images were made with
@@ -201,7 +202,7 @@ class _Segmenter:
         options, out, source, factor = self.options, self.out, self.source, self.factor
         keypoints = keypoint_source(options.keypoints)      # a bad keypoint file stops before anything is written
         settings = _settings(self.video, options, self.stop, factor)
-        settings_file = out / "segment.json"
+        settings_file = out / files.SEGMENT_JSON
         if settings_file.is_file():
             held, wanted = read_json(settings_file), json.loads(json.dumps(settings))
             if held != wanted:

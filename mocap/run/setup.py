@@ -21,7 +21,8 @@ find what is not given, from the video itself, at the tracker's working resoluti
    background, the first frame with a person-sized foreground clear of the borders. The
    camera is a pinhole of horizontal field of view ``hfov_deg``; ``height_m`` fixes the scale.
 
-What was chosen and why is the set-up's ``record`` (``run.json`` ``settings.own_video``).
+What was chosen and why is the set-up's ``record``, a :class:`SetupAccount` (``run.json``
+``settings.own_video`` is its :meth:`SetupAccount.to_dict`).
 """
 from __future__ import annotations
 
@@ -43,8 +44,8 @@ from mocap.run.colours import ColourRecipe, learn_colours
 from mocap.run.options import BACKGROUND_MODES, COLOUR_SOURCES
 from mocap.run.person import find_face, plausible_face, whole_person
 
-__all__ = ["FoundSetup", "RunSetup", "SetupRequest", "choose_background", "find_setup", "spread",
-           "working_camera"]
+__all__ = ["BackgroundAccount", "CalibrationAccount", "FoundSetup", "RunSetup", "SetupAccount", "SetupRequest",
+           "choose_background", "find_setup", "spread", "working_camera"]
 
 #: Share of the sample frames with someone in view (against the estimate) needed to use it.
 MIN_FRAMES_WITH_PERSON = 0.3
@@ -57,6 +58,128 @@ MIN_PERSON_FRACTION = 0.01
 FACE_WORKING_PX = 14
 #: Share of the face box that must be foreground against the estimate to use it.
 MIN_FACE_FOREGROUND = 0.5
+
+
+@dataclass(frozen=True, kw_only=True)
+class BackgroundAccount:
+    """How the background was found (``run.json`` ``settings.own_video.background``).
+
+    Attributes
+    ----------
+    mode : {"image", "frames", "estimated", "none"}
+    reason : str
+        Why, in words.
+    details : dict
+        What the choice rests on, JSON-ready: ``frames`` ``[A, B]`` (mode ``frames``), or
+        ``sample_frames`` and ``evidence`` (an estimate, used or not: :func:`choose_background`).
+    """
+
+    mode: str
+    reason: str
+    details: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return {"mode": self.mode, **self.details, "reason": self.reason}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "BackgroundAccount":
+        details = {k: v for k, v in data.items() if k not in ("mode", "reason")}
+        return cls(mode=data["mode"], reason=data["reason"], details=details)
+
+
+@dataclass(frozen=True, kw_only=True)
+class CalibrationAccount:
+    """Where the calibration came from (``run.json`` ``settings.own_video.calibration``; a
+    newcomer's ``segments[].found`` without ``source``).
+
+    Attributes
+    ----------
+    source : {"given", "automatic"}
+        (JSON ``from``.)
+    frame : int or None
+        The frame calibrated on (automatic).
+    face_input_px : list of int or None, input pixels
+        The face found there (``x0, y0, x1, y1`` as :class:`mocap.imaging.Box`), None without one.
+    depth_m : float or None, metres
+        The person's distance found (the initial pose's depth, 3 decimals).
+    """
+
+    source: str
+    frame: int | None = None
+    face_input_px: list[int] | None = None
+    depth_m: float | None = None
+
+    def to_dict(self, source: bool = True) -> dict:
+        """JSON-ready (``source``: with ``from``, as in ``settings.own_video``; without, as a
+        newcomer's ``found``)."""
+        if self.source == "given":
+            return {"from": "given"}
+        found = {"frame": self.frame, "face_input_px": self.face_input_px, "depth_m": self.depth_m}
+        return {"from": self.source, **found} if source else found
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "CalibrationAccount":
+        return cls(source=data["from"], frame=data.get("frame"), face_input_px=data.get("face_input_px"),
+                   depth_m=data.get("depth_m"))
+
+
+@dataclass(frozen=True, kw_only=True)
+class SetupAccount:
+    """How the set-up was found: what was chosen and why (:func:`find_setup`; the
+    ``on_setup`` of :func:`mocap.run.track` prints it; ``RunSummary.setup``).
+
+    :meth:`to_dict` is ``run.json`` ``settings.own_video`` (the sizes left out).
+
+    Attributes
+    ----------
+    hfov_deg : float, degrees
+        The camera's horizontal field of view (without a calibration).
+    height_m : float or None, metres
+        The person's stature as given.
+    background : BackgroundAccount
+    working_factor : int
+        Input pixels per working pixel.
+    calibration : CalibrationAccount
+    keypoints : str or None
+        What keypoints run and why (:func:`mocap.run.options.resolve_keypoints`); None: not
+        said (a set-up found outside :func:`mocap.run.track`).
+    input_width, input_height, working_width, working_height : int or None, pixels
+        The input's and the working frames' sizes (:func:`mocap.run.track` fills them).
+    """
+
+    hfov_deg: float
+    height_m: float | None
+    background: BackgroundAccount
+    working_factor: int
+    calibration: CalibrationAccount
+    keypoints: str | None = None
+    input_width: int | None = None
+    input_height: int | None = None
+    working_width: int | None = None
+    working_height: int | None = None
+
+    @property
+    def background_mode(self) -> str:
+        return self.background.mode
+
+    @property
+    def calibration_from(self) -> str:
+        return self.calibration.source
+
+    def to_dict(self) -> dict:
+        """``run.json`` ``settings.own_video``, JSON-ready."""
+        record = {"hfov_deg": self.hfov_deg, "height_m": self.height_m, "background": self.background.to_dict(),
+                  "working_factor": self.working_factor, "calibration": self.calibration.to_dict()}
+        if self.keypoints is not None:
+            record["keypoints"] = self.keypoints
+        return record
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "SetupAccount":
+        """From ``run.json`` ``settings.own_video`` (the sizes unknown)."""
+        return cls(hfov_deg=data["hfov_deg"], height_m=data["height_m"],
+                   background=BackgroundAccount.from_dict(data["background"]), working_factor=data["working_factor"],
+                   calibration=CalibrationAccount.from_dict(data["calibration"]), keypoints=data.get("keypoints"))
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,9 +204,10 @@ class RunSetup:
         detected face and a box under it (the paper's way).
     scene : SceneColours or None
         The scene's colours, for a foreground without background (:func:`mocap.imaging.prepare_frame`).
-    record : dict or None
-        How background and calibration were found, JSON-ready, kept in ``run.json``
-        (``settings.own_video``).
+    record : SetupAccount, CalibrationAccount or None
+        How background and calibration were found (``run.json`` ``settings.own_video``); a
+        newcomer's set-up (:class:`mocap.run.person.NewcomerFinder`): how they were calibrated
+        (``run.json`` ``segments[].found``).
     background_file : Path or None
         The file the background came from, for ``run.json``.
     """
@@ -95,7 +219,7 @@ class RunSetup:
     colour_model: ColourModel | None = None
     colour_from: str = "calibration"
     scene: SceneColours | None = None
-    record: dict | None = None
+    record: SetupAccount | CalibrationAccount | None = None
     background_file: Path | None = None
 
     def __post_init__(self) -> None:
@@ -107,7 +231,7 @@ class RunSetup:
         return ColourRecipe(self.colour_from, self.background, self.imaging, self.calibration, model)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class SetupRequest:
     """What the set-up is told (:func:`find_setup`); everything else it finds.
 
@@ -325,13 +449,11 @@ class BackgroundFound:
     ----------
     image : ndarray of uint8, shape (h, w, 3), or None
         The empty scene at the working resolution; None: colour-only foreground.
-    record : dict
-        ``mode`` (``image``, ``frames``, ``estimated``, ``none``), ``reason`` and what else
-        the choice rests on (JSON-ready).
+    record : BackgroundAccount
     """
 
     image: np.ndarray | None
-    record: dict
+    record: BackgroundAccount
 
 
 def find_background(access: FrameAccess, request: SetupRequest, factor: int, face: FaceSearch,
@@ -343,23 +465,24 @@ def find_background(access: FrameAccess, request: SetupRequest, factor: int, fac
         if image.shape[:2] != (source.height, source.width):
             raise ValueError(f"background is {image.shape[1]}x{image.shape[0]} but the video is "
                              f"{source.width}x{source.height}")
-        return BackgroundFound(downscale(image, factor), {"mode": "image", "reason": "given"})
+        return BackgroundFound(downscale(image, factor), BackgroundAccount(mode="image", reason="given"))
     if mode == "frames":
         a, b = request.background_frames
         empty = [downscale(f, factor) for _, f in access.at(spread(a, min(b, access.count), request.sample_frames))]
         if not empty:
             raise ValueError(f"background frames {a}:{b}: the video has no such frames")
-        return BackgroundFound(median_background(empty), {"mode": "frames", "frames": [a, b],
-                                                          "reason": "median of the given empty frames"})
+        return BackgroundFound(median_background(empty), BackgroundAccount(
+            mode="frames", reason="median of the given empty frames", details={"frames": [a, b]}))
     if mode == "none":
-        return BackgroundFound(None, {"mode": "none", "reason": "asked for: colour-only foreground"})
+        return BackgroundFound(None, BackgroundAccount(mode="none", reason="asked for: colour-only foreground"))
     if source.live:
-        return BackgroundFound(None, {"mode": "none",
-                                      "reason": "live camera without --background: colour-only foreground"})
+        return BackgroundFound(None, BackgroundAccount(
+            mode="none", reason="live camera without --background: colour-only foreground"))
     sample = source.sample(request.sample_frames, min(request.sample_limit, access.count),
                            lambda frame: downscale(frame, factor))
     face_frame = downscale(face.frame, factor) if face.face_input is not None else None
-    return BackgroundFound(*choose_background(sample, imaging, face=face.face, face_frame=face_frame))
+    image, record = choose_background(sample, imaging, face=face.face, face_frame=face_frame)
+    return BackgroundFound(image, BackgroundAccount.from_dict(record))
 
 
 def setup_with_calibration(first: np.ndarray, request: SetupRequest, background: np.ndarray | None, factor: int,
@@ -440,7 +563,6 @@ def find_setup(source, request: SetupRequest | None = None) -> FoundSetup:
     if request.background_mode in ("auto", "none"):
         imaging = dataclasses.replace(imaging, min_object_fraction=max(imaging.min_object_fraction,
                                                                        MIN_PERSON_FRACTION))
-    record: dict = {"hfov_deg": request.hfov_deg, "height_m": request.height_m}
     access = FrameAccess(source, request.search_frames)
     first = next(iter(access.at([0])), (0, None))[1]
     if first is None:
@@ -448,16 +570,20 @@ def find_setup(source, request: SetupRequest | None = None) -> FoundSetup:
     face = look_for_face(access, request, factor, request.factor is None)
     factor = face.factor
     background = find_background(access, request, factor, face, imaging)
-    record["background"] = background.record
-    record["working_factor"] = factor
+
+    def account(calibration: CalibrationAccount) -> SetupAccount:
+        return SetupAccount(hfov_deg=request.hfov_deg, height_m=request.height_m, background=background.record,
+                            working_factor=factor, calibration=calibration)
+
     if request.calibration is not None:
         setup = setup_with_calibration(first, request, background.image, factor, imaging, source)
-        record["calibration"] = {"from": "given"}
-        return FoundSetup(dataclasses.replace(setup, record=record), access.consumed)
+        return FoundSetup(dataclasses.replace(setup, record=account(CalibrationAccount(source="given"))),
+                          access.consumed)
     camera = working_camera(source.width, source.height, factor, request.hfov_deg)
     person, index = calibrate_automatically(access, request, camera, background.image, face, imaging)
-    record["calibration"] = {"from": "automatic", "frame": int(index),
-                             "face_input_px": None if face.face_input is None else [int(v) for v in face.face_input],
-                             "depth_m": round(float(person.calibration.initial_pose[2]), 3)}
+    record = account(CalibrationAccount(
+        source="automatic", frame=int(index),
+        face_input_px=None if face.face_input is None else [int(v) for v in face.face_input],
+        depth_m=round(float(person.calibration.initial_pose[2]), 3)))
     return FoundSetup(RunSetup(person.calibration, background.image, factor, imaging, person.colour_model,
                                scene=person.scene, record=record), access.consumed)

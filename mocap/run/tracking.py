@@ -17,15 +17,16 @@ from pathlib import Path
 from mocap._progress import compiling_announced
 from mocap.calibrate import Calibration
 from mocap.imaging.resample import working_factor
+from mocap.io import mediapipe_keypoints
 from mocap.io.frames import CameraSource, VideoSource
 from mocap.io.sequence import find_sequence
 from mocap.io.video import read_image
-from mocap.run.advice import RunFacts, what_to_try
+from mocap.run.advice import RunFacts, mostly_failed, what_to_try
 from mocap.run.loop import RunParams, track_frames
 from mocap.run.options import OwnVideoOptions, RunChoices
 from mocap.run.outputs import RunSummary
 from mocap.run.person import NewcomerFinder
-from mocap.run.setup import SetupRequest, find_setup
+from mocap.run.setup import SetupAccount, SetupRequest, find_setup
 
 __all__ = ["RunInput", "track"]
 
@@ -84,9 +85,10 @@ class RunInput:
             given = Calibration.from_json(self.calibration)
             factor = factor or working_factor(width, height)
             given = dataclasses.replace(given, camera=given.camera.working(width, height, factor))
-        return SetupRequest(factor, choices.background_mode,
-                            read_image(self.background) if self.background else None, options.background_frames,
-                            given, options.hfov_deg, options.height_m, progress=progress,
+        return SetupRequest(factor=factor, background_mode=choices.background_mode,
+                            background_image=read_image(self.background) if self.background else None,
+                            background_frames=options.background_frames, calibration=given,
+                            hfov_deg=options.hfov_deg, height_m=options.height_m, progress=progress,
                             keypoints=choices.keypoint_source)
 
 
@@ -98,7 +100,7 @@ def _check_files(background: str | None, calibration: str | None) -> None:
 
 
 def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *, progress: bool = True,
-          on_setup: Callable[[dict], None] | None = None) -> RunSummary:
+          on_setup: Callable[[SetupAccount], None] | None = None) -> RunSummary:
     """Track a video: set-up from the video (or as given), then the run.
 
     Parameters
@@ -113,9 +115,9 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
     progress : bool
         Progress bars.
     on_setup : callable, optional
-        Called with the set-up's account (``run.json`` ``settings.own_video``, plus
-        ``input_width``, ``input_height``, ``working_width``, ``working_height``) before the
-        first frame is tracked (the CLI prints it).
+        Called with the set-up's account (:class:`mocap.run.setup.SetupAccount`: ``run.json``
+        ``settings.own_video``, and the input and working sizes) before the first frame is
+        tracked (the CLI prints it).
 
     Returns
     -------
@@ -137,26 +139,31 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
         choices = RunChoices.of(options, opened.sequence_background)     # a bad keypoint file stops here
         with compiling_announced(progress, "the set-up's kernels"):
             found = find_setup(frames_in, opened.request(options, choices, progress))
-        choices.check_colour(found.setup.colour_model is not None, found.setup.record["calibration"]["from"],
-                             frames_in.live)
+        choices.check_colour(found.setup.colour_model is not None, found.setup.record.calibration_from, frames_in.live)
         if frames_in.live:
             frames_in.hold(found.consumed)
         setup = dataclasses.replace(found.setup, colour_from=choices.colour,
                                     background_file=Path(opened.background) if opened.background else None,
-                                    record={**found.setup.record, "keypoints": choices.keypoints_line})
+                                    record=dataclasses.replace(found.setup.record, keypoints=choices.keypoints_line))
         width, height = frames_in.width, frames_in.height
-        account = {**setup.record, "input_width": width, "input_height": height,
-                   "working_width": setup.calibration.camera.width, "working_height": setup.calibration.camera.height}
+        account = dataclasses.replace(setup.record, input_width=width, input_height=height,
+                                      working_width=setup.calibration.camera.width,
+                                      working_height=setup.calibration.camera.height)
         if on_setup is not None:
             on_setup(account)
         newcomer = NewcomerFinder.of(setup, width, height, hfov_deg=options.hfov_deg, height_m=options.height_m)
-        params = RunParams(options.tracker, opened.ground_truth, opened.fps, options.max_frames, options.overwrite,
-                           progress, options.overlay, options.allow_damaged, options.start, options.show, newcomer,
-                           choices.keypoint_source)
+        params = RunParams(config=options.tracker, ground_truth=opened.ground_truth, fps=opened.fps,
+                           max_frames=options.max_frames, overwrite=options.overwrite, progress=progress,
+                           write_overlay=options.overlay, allow_damaged=options.allow_damaged, start_frame=options.start,
+                           show=options.show, newcomer=newcomer, keypoints=choices.keypoint_source)
         summary = track_frames(frames_in, setup, out_dir, params)
     finally:
         if not frames_in.live:
             frames_in.close()       # the damage check's ffmpeg, when the run ended before it did
-    facts = RunFacts(summary.frames, summary.failures, choices.keypoint_cue, account["background"]["mode"],
-                     options.height_m is not None, account["calibration"]["from"])
+    used = choices.keypoint_cue
+    # whether the extra is installed matters only to advice on a run without keypoints (its import takes ~2 s)
+    extra = used is not None or (mostly_failed(summary.frames, summary.failures) and mediapipe_keypoints.available())
+    facts = RunFacts(frames=summary.frames, failures=summary.failures, keypoints=used, keypoints_extra=extra,
+                     background=account.background_mode, height_given=options.height_m is not None,
+                     calibration=account.calibration_from)
     return dataclasses.replace(summary, setup=account, advice=what_to_try(facts))

@@ -55,7 +55,7 @@ from mocap.track.registration import Registration, register
 LIFTER_ENERGY_CAP = 10.0
 
 
-@dataclass
+@dataclass(kw_only=True)
 class FrameResult:
     """What the tracker decided for one frame (one row of ``poses.csv``).
 
@@ -421,9 +421,11 @@ def _hyp_from_dict(d: dict) -> _Hypothesis:
 
 def _result(frame: _Frame, k: int) -> FrameResult:
     h = frame.hypotheses[k]
-    return FrameResult(frame.index, h.pose.copy(), h.joints.copy(), h.region_residual, h.edge_residual,
-                       h.edge_residual_after_region, h.failed, frame.empty, h.origin, frame.evaluations,
-                       h.region_iterations, h.edge_iterations, dict(frame.timings), k, h.unary)
+    return FrameResult(frame=frame.index, pose=h.pose.copy(), joints=h.joints.copy(),
+                       region_residual=h.region_residual, edge_residual=h.edge_residual,
+                       edge_residual_after_region=h.edge_residual_after_region, failed=h.failed, empty=frame.empty,
+                       origin=h.origin, evaluations=frame.evaluations, region_iterations=h.region_iterations,
+                       edge_iterations=h.edge_iterations, timings_ms=dict(frame.timings), hypothesis=k, score=h.unary)
 
 
 def proposal_sources(config: TrackerConfig) -> list[ProposalSource]:

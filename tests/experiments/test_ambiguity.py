@@ -180,3 +180,58 @@ def test_summary_pools_every_frame_of_every_sequence_and_seed():
     assert got["ms_per_frame"] == 3.0 and got["edge_residual_px"] == 1.5 and got["residual_failures"] == 3   # frame-weighted
     assert [p["seed"] for p in got["per_sequence"]] == [0, 29]
     json.dumps(got)                                                   # one JSON object
+
+
+def test_a_result_is_reused_only_with_the_code_it_was_measured_with(tmp_path, monkeypatch, capsys):
+    """The cache's key holds the code: the same configuration measured by other code is measured again."""
+    import experiments.ambiguity as ambiguity
+
+    row = dict(sequence="gestures-1", mpjpe_mm=80.0, failure_rate=0.0, frames=2, frame_mpjpe_mm=[70.0, 90.0],
+               tracking_ms_per_frame=1.0, cost_equivalent_failure_rate=0.0)
+    measured = []
+
+    def fake_measure(name, config, root, seed, two_way, without):
+        measured.append(name)
+        return {**row, "sequence": name}
+
+    monkeypatch.setattr(ambiguity, "measure", fake_measure)
+    argv = ["--sequences", "gestures-1", "--out", str(tmp_path), "--json"]
+    for code, expected in (("aaaa", 1), ("aaaa", 1), ("bbbb", 2), ("bbbb", 2), ("aaaa", 3)):
+        monkeypatch.setattr(ambiguity, "code_key", lambda code=code: code)
+        assert ambiguity.main(argv) == 0
+        assert len(measured) == expected, code
+        assert json.loads(capsys.readouterr().out.strip().splitlines()[-1])["median_mm"] == 80.0
+    stored = list((tmp_path / "units").glob("*.json"))
+    assert len(stored) == 1 and json.loads(stored[0].read_text())["code"] == "aaaa"
+    # a file from before code keys is measured again too
+    data = json.loads(stored[0].read_text())
+    del data["code"]
+    stored[0].write_text(json.dumps(data))
+    assert ambiguity.main(argv) == 0 and len(measured) == 4
+    assert "measured with other code" in capsys.readouterr().err
+
+
+def test_code_key_changes_with_any_source_or_model_and_ignores_caches(tmp_path):
+    from experiments.ambiguity import code_key
+
+    package = tmp_path / "pkg"
+    (package / "sub" / "__pycache__").mkdir(parents=True)
+    (package / "a.py").write_text("x = 1\n")
+    (package / "sub" / "model.json").write_text("{}")
+    module = tmp_path / "experiment.py"
+    module.write_text("y = 2\n")
+    key = code_key(package, (module,))
+    assert key == code_key(package, (module,))
+    (package / "sub" / "__pycache__" / "a.cpython-312.pyc").write_bytes(b"\0")
+    (package / "sub" / "kernel.nbi").write_bytes(b"\0")
+    assert code_key(package, (module,)) == key
+    seen = {key}
+    for path, text in ((package / "a.py", "x = 2\n"), (package / "sub" / "model.json", "{\"a\": 1}"),
+                       (module, "y = 3\n")):
+        path.write_text(text)
+        seen.add(code_key(package, (module,)))
+    (package / "sub" / "b.py").write_text("")          # a new, empty module
+    seen.add(code_key(package, (module,)))
+    (package / "a.py").rename(package / "c.py")         # the same bytes under another name
+    seen.add(code_key(package, (module,)))
+    assert len(seen) == 6
