@@ -377,8 +377,13 @@ def training_poses(train_dir: Path, trials=None, exclude_subject: str | None = N
 
 
 def train(poses: np.ndarray, *, seed: int = SEED, hidden=HIDDEN, steps: int = STEPS, batch: int = BATCH,
-          noise: KeypointNoise | None = None, progress: bool = True, log=None):
-    """Train a lifter network on ``poses`` (n, 23); returns the PyTorch module (eval mode)."""
+          noise: KeypointNoise | None = None, progress: bool = True, log=None, on_step=None, every: int = 0):
+    """Train a lifter network on ``poses`` (n, 23); returns the PyTorch module (eval mode).
+
+    ``on_step(step, net)``, when given with ``every`` > 0, is called after every ``every``-th step
+    (``step`` counted from 1); it must leave ``net`` and the random state alone (the network has no
+    dropout or normalisation, so evaluating it does not change training).
+    """
     torch = _torch()
     from tqdm import tqdm
 
@@ -402,6 +407,9 @@ def train(poses: np.ndarray, *, seed: int = SEED, hidden=HIDDEN, steps: int = ST
         opt.step()
         sched.step()
         running = float(best) if running is None else 0.98 * running + 0.02 * float(best)
+        if on_step is not None and every > 0 and (step + 1) % every == 0:
+            with torch.no_grad():
+                on_step(step + 1, net)
         if step % 100 == 0:
             bar.set_postfix(best_of_k_mm=f"{1e3 * running:.0f}")
             if log is not None:
