@@ -417,6 +417,19 @@ def train(poses: np.ndarray, *, seed: int = SEED, hidden=HIDDEN, steps: int = ST
     return net.eval()
 
 
+def command_line(prog: str, argv) -> str:
+    """The command as a record keeps it: absolute paths (this machine's) left out with the option
+    that takes them, so that the rest is what reproduces the file from the repository root with
+    the default folders."""
+    args = list(argv)
+    kept = []
+    for i, a in enumerate(args):
+        if a.startswith("/") or (a.startswith("--") and i + 1 < len(args) and args[i + 1].startswith("/")):
+            continue
+        kept.append(a)
+    return " ".join([prog, *kept])
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m experiments.fit_lifter", description=__doc__.split("\n\n")[0])
     p.add_argument("--train", type=Path, default=TRAIN_DIR, help="folder of CMU .asf/.amc trials")
@@ -463,8 +476,8 @@ def main(argv=None) -> int:
     net = train(poses, seed=args.seed, hidden=hidden, steps=steps, batch=batch, noise=noise,
                 progress=not args.quick)
     wall = time.perf_counter() - started
-    provenance = {"command": "python -m experiments.fit_lifter " + " ".join(
-                      a for a in (argv if argv is not None else sys.argv[1:]) if not a.startswith("/")),
+    provenance = {"command": command_line("python -m experiments.fit_lifter",
+                                          argv if argv is not None else sys.argv[1:]),
                   "seed": args.seed, "subjects": sorted({str(s) for s in subjects}), "poses": int(len(poses)),
                   "mirrored": True, "fps": 25.0, "hidden": list(hidden), "hypotheses": HYPOTHESES, "steps": steps,
                   "batch": batch, "torch": torch.__version__, "load_average_at_start": load_at_start, "threads": THREADS, "wall_s": round(wall, 1),

@@ -142,8 +142,9 @@ def main(argv=None) -> int:
         print(f"error: no training folder {args.train}", file=sys.stderr)
         return 2
     args.out.mkdir(parents=True, exist_ok=True)
-    command = "python -m experiments.lifter_learning_curve " + " ".join(
-        a for a in (argv if argv is not None else sys.argv[1:]) if not a.startswith("/"))
+    from experiments.fit_lifter import command_line
+
+    command = command_line("python -m experiments.lifter_learning_curve", argv if argv is not None else sys.argv[1:])
     for budget in budgets:
         try:
             run(args.train, args.out, budget, hold_out, args.every, args.seed, args.queries, tuple(hidden), command)
