@@ -14,7 +14,7 @@ for M in :data:`M_VALUES`. Three measures:
 * ``--mediapipe``: MediaPipe Pose's 2D landmarks (:class:`mocap.io.mediapipe_keypoints.MediaPipeKeypoints`,
   on the frames enlarged 4x as :mod:`experiments.peers` does; landmarks with visibility under 0.5
   missing; no neck) on the rendered benchmark of that seed (``make_benchmark``);
-* ``--loso``: each CMU training subject held out in turn: a lifter trained on the other five
+* ``--loso``: each CMU training subject held out in turn: a lifter trained on the others
   (:data:`LOSO_HIDDEN`, :data:`LOSO_STEPS`: a smaller budget than the shipped model's) and
   queried with projections of the held-out subject's poses (random heading, body and place
   before the benchmark's camera, 160x120, 60 degrees; oracle noise 2 px).
