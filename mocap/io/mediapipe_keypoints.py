@@ -54,6 +54,52 @@ MISSING_EXTRA = ("--keypoints mediapipe needs MediaPipe Pose, the optional extra
                  "pip install 'mocap[keypoints]' (or give a keypoint file: --keypoints FILE.csv)")
 
 
+#: Number of MediaPipe Pose landmarks.
+N_LANDMARKS = 33
+#: Least visibility of a world landmark taken as present by :func:`world_joints`.
+MIN_WORLD_VISIBILITY = 0.5
+
+
+def world_joints(world_landmarks, visibility, min_visibility: float = MIN_WORLD_VISIBILITY
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The model's joints from MediaPipe Pose's 3D world landmarks (``pose_world_landmarks``).
+
+    MediaPipe gives them in metres about the midpoint of the hips, on the image's axes (x right,
+    y down, z away from the camera), which are the camera's up to a translation: what
+    :func:`mocap.body.ik.fit_pose_to_joints` takes. Joints as :data:`MEDIAPIPE_LANDMARKS` (the
+    mean of their landmarks); ``neck`` is absent (no landmark), and so is a joint any of whose
+    landmarks is less visible than ``min_visibility`` or not finite.
+
+    Parameters
+    ----------
+    world_landmarks : array_like, shape (33, 3), metres
+    visibility : array_like, shape (33,), in [0, 1]
+    min_visibility : float
+
+    Returns
+    -------
+    joints : ndarray, shape (10, 3), float64, metres
+        :data:`~mocap.body.skeleton.JOINT_NAMES` order; NaN rows where absent.
+    present : ndarray of bool, shape (10,)
+    """
+    from mocap.body.skeleton import JOINT_NAMES
+
+    points = np.asarray(world_landmarks, dtype=np.float64)
+    seen = np.asarray(visibility, dtype=np.float64)
+    if points.shape != (N_LANDMARKS, 3) or seen.shape != (N_LANDMARKS,):
+        raise ValueError(f"world landmarks must have shape ({N_LANDMARKS}, 3) and visibility ({N_LANDMARKS},), "
+                         f"got {points.shape} and {seen.shape}")
+    usable = np.all(np.isfinite(points), axis=1) & (np.nan_to_num(seen, nan=0.0) >= min_visibility)
+    joints = np.full((len(JOINT_NAMES), 3), np.nan)
+    present = np.zeros(len(JOINT_NAMES), dtype=bool)
+    for name, indices in MEDIAPIPE_LANDMARKS.items():
+        if usable[list(indices)].all():
+            k = JOINT_NAMES.index(name)
+            joints[k] = points[list(indices)].mean(axis=0)
+            present[k] = True
+    return joints, present
+
+
 def available() -> bool:
     """Whether MediaPipe Pose (the optional extra ``keypoints``) imports here: what
     ``--keypoints auto`` asks (an import of about 2 s the first time)."""
