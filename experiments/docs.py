@@ -64,7 +64,7 @@ def _track(seq, calibration, out: Path, evaluations: int | None, frames: int | N
     calibration_file = out.parent / f"{out.name}.calibration.json"     # beside the run: its folder holds one run
     calibration.to_json(calibration_file)
     options = mocap.run.OwnVideoOptions(calibration=str(calibration_file), max_frames=frames, overlay=False,
-                                        tracker=config)
+                                        tracker=config, keypoints="none")
     summary = mocap.run.track(seq.root, out, options, progress=False)
     return dict(summary.metrics)
 

@@ -1,8 +1,9 @@
 """``python -m experiments.fit_lifter``: train the 2D->3D lifter (:mod:`mocap.track.lifter`) with PyTorch.
 
 Needs the optional extra ``fit`` (``torch==2.13.0``, the CPU build). Reads every trial of
-``../shared/data/mocap/train/`` (41 CMU trials of six subjects, retargeted at 25 frames per second
-by :func:`experiments.fit_pose_prior.load_training_poses`) and adds each pose's mirror image.
+``../shared/data/mocap/train/`` (200 CMU trials of nine subjects; ``--trials-from RECORD`` only the
+trials a record lists), retargeted at 25 frames per second by
+:func:`experiments.fit_pose_prior.load_training_poses`, and adds each pose's mirror image.
 Every training step draws a fresh batch of projections of those poses, all in PyTorch:
 
 * augmentation: half the poses take their left arm from another pose (the arms move
@@ -30,8 +31,9 @@ winner. Adam, cosine learning rate.
 
 Deterministic for a seed: ``torch.manual_seed``, deterministic algorithms, :data:`THREADS`
 threads. The synthetic benchmark's procedural motion and seeds are never used. Writes
-``mocap/track/lifter.npz`` (or ``--out``) and prints its checksum; ``--quick`` trains a tiny
-network on two trials in seconds (for tests).
+``mocap/track/lifter.npz`` (or ``--out``) and prints its checksum; the shipped file's record
+(:data:`RECORD`) lists the trials it was trained on. ``--quick`` trains a tiny network on two
+trials in seconds (for tests).
 """
 from __future__ import annotations
 
@@ -45,7 +47,8 @@ from pathlib import Path
 import numpy as np
 
 from experiments import EXPERIMENTS_DIR
-from experiments.fit_pose_prior import ATTRIBUTION, TRAIN_DIR, load_training_poses, mirror_poses
+from experiments.fit_pose_prior import (ATTRIBUTION, TRAIN_DIR, load_training_poses, mirror_poses, record_trials,
+                                         trial_files)
 from mocap.body.kinematics import Skeleton
 from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX
 from mocap.body.skeleton import JOINT_INDEX, JOINT_NAMES
@@ -95,8 +98,8 @@ GROSS_SIGMA = 0.6
 THREADS = 1
 #: The measured MediaPipe keypoint model (written by experiments.lifter_keypoint_noise).
 NOISE_FILE = EXPERIMENTS_DIR / "lifter_keypoint_noise.json"
-#: Trials of --quick.
-QUICK_TRIALS = 2
+#: Trials of --quick (file names; the first two of the folder when it held 41 trials).
+QUICK_TRIALS = ("cmu_02_05.amc", "cmu_02_06.amc")
 #: The shipped file, and the record of the training that wrote it (checksum, wall time, machine load).
 SHIPPED = EXPERIMENTS_DIR.parent / "mocap" / "track" / LIFTER_FILE
 RECORD = EXPERIMENTS_DIR / "fit_lifter.json"
@@ -360,21 +363,13 @@ def wta_loss(out, body, truth, bodies: Bodies, hypotheses: int):
     return (1.0 - RELAX) * best.mean() + RELAX * err.mean() + CONFIDENCE_WEIGHT * confidence, best.mean().detach()
 
 
-def training_poses(train_dir: Path, trials: int | None = None, exclude_subject: str | None = None):
-    """Retargeted training poses and their mirror images (float32, (n, 23)) and their subjects."""
-    if trials is not None:
-        import tempfile
+def training_poses(train_dir: Path, trials=None, exclude_subject: str | None = None):
+    """Retargeted training poses and their mirror images (float32, (n, 23)) and their subjects.
 
-        files = sorted(train_dir.glob("*.amc"))[:trials]
-        with tempfile.TemporaryDirectory() as tmp:
-            for f in files:
-                (Path(tmp) / f.name).symlink_to(f.resolve())
-                asf = f.parent / f"cmu_{f.stem.split('_')[1]}.asf"
-                if not (Path(tmp) / asf.name).exists():
-                    (Path(tmp) / asf.name).symlink_to(asf.resolve())
-            poses, subjects = load_training_poses(Path(tmp))
-    else:
-        poses, subjects = load_training_poses(train_dir)
+    ``trials``: file names to read (default every trial of ``train_dir``,
+    :func:`experiments.fit_pose_prior.trial_files`); ``exclude_subject`` drops that subject's poses.
+    """
+    poses, subjects = load_training_poses(train_dir, trials)
     if exclude_subject is not None:
         keep = subjects != exclude_subject
         poses, subjects = poses[keep], subjects[keep]
@@ -382,8 +377,13 @@ def training_poses(train_dir: Path, trials: int | None = None, exclude_subject: 
 
 
 def train(poses: np.ndarray, *, seed: int = SEED, hidden=HIDDEN, steps: int = STEPS, batch: int = BATCH,
-          noise: KeypointNoise | None = None, progress: bool = True, log=None):
-    """Train a lifter network on ``poses`` (n, 23); returns the PyTorch module (eval mode)."""
+          noise: KeypointNoise | None = None, progress: bool = True, log=None, on_step=None, every: int = 0):
+    """Train a lifter network on ``poses`` (n, 23); returns the PyTorch module (eval mode).
+
+    ``on_step(step, net)``, when given with ``every`` > 0, is called after every ``every``-th step
+    (``step`` counted from 1); it must leave ``net`` and the random state alone (the network has no
+    dropout or normalisation, so evaluating it does not change training).
+    """
     torch = _torch()
     from tqdm import tqdm
 
@@ -407,11 +407,27 @@ def train(poses: np.ndarray, *, seed: int = SEED, hidden=HIDDEN, steps: int = ST
         opt.step()
         sched.step()
         running = float(best) if running is None else 0.98 * running + 0.02 * float(best)
+        if on_step is not None and every > 0 and (step + 1) % every == 0:
+            with torch.no_grad():
+                on_step(step + 1, net)
         if step % 100 == 0:
             bar.set_postfix(best_of_k_mm=f"{1e3 * running:.0f}")
             if log is not None:
                 print(f"step {step} best-of-K {1e3 * running:.1f} mm", file=log, flush=True)
     return net.eval()
+
+
+def command_line(prog: str, argv) -> str:
+    """The command as a record keeps it: absolute paths (this machine's) left out with the option
+    that takes them, so that the rest is what reproduces the file from the repository root with
+    the default folders."""
+    args = list(argv)
+    kept = []
+    for i, a in enumerate(args):
+        if a.startswith("/") or (a.startswith("--") and i + 1 < len(args) and args[i + 1].startswith("/")):
+            continue
+        kept.append(a)
+    return " ".join([prog, *kept])
 
 
 def main(argv=None) -> int:
@@ -425,6 +441,9 @@ def main(argv=None) -> int:
     p.add_argument("--hidden", default=None,
                    help=f"hidden layer widths, comma-separated (default {','.join(map(str, HIDDEN))})")
     p.add_argument("--exclude-subject", default=None, help="leave this CMU subject out (e.g. 14)")
+    p.add_argument("--trials-from", type=Path, default=None, metavar="RECORD",
+                   help="train only on the trials this record lists (experiments/fit_lifter.json's 'trials', or a "
+                        "pose prior file's training.trials; default: every trial of --train)")
     args = p.parse_args(argv)
     if not args.train.is_dir():
         print(f"error: no training folder {args.train} (the CMU trials of ../shared/data/mocap/train)", file=sys.stderr)
@@ -438,27 +457,36 @@ def main(argv=None) -> int:
     if not hidden:
         print(f"error: --hidden takes comma-separated positive integers, got {args.hidden!r}", file=sys.stderr)
         return 2
+    try:
+        trials = record_trials(args.trials_from) if args.trials_from is not None else (
+            list(QUICK_TRIALS) if args.quick else None)
+        files = trial_files(args.train, trials)
+    except (OSError, ValueError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
     torch = _torch()
     started = time.perf_counter()
     import os
 
     load_at_start = [round(v, 2) for v in os.getloadavg()]
-    poses, subjects = training_poses(args.train, QUICK_TRIALS if args.quick else None, args.exclude_subject)
+    poses, subjects = training_poses(args.train, [f.name for f in files], args.exclude_subject)
     steps = args.steps or (QUICK_STEPS if args.quick else STEPS)
     batch = QUICK_BATCH if args.quick else BATCH
     noise = KeypointNoise.read()
     net = train(poses, seed=args.seed, hidden=hidden, steps=steps, batch=batch, noise=noise,
                 progress=not args.quick)
     wall = time.perf_counter() - started
-    provenance = {"command": "python -m experiments.fit_lifter " + " ".join(
-                      a for a in (argv if argv is not None else sys.argv[1:]) if not a.startswith("/")),
+    provenance = {"command": command_line("python -m experiments.fit_lifter",
+                                          argv if argv is not None else sys.argv[1:]),
                   "seed": args.seed, "subjects": sorted({str(s) for s in subjects}), "poses": int(len(poses)),
                   "mirrored": True, "fps": 25.0, "hidden": list(hidden), "hypotheses": HYPOTHESES, "steps": steps,
                   "batch": batch, "torch": torch.__version__, "load_average_at_start": load_at_start, "threads": THREADS, "wall_s": round(wall, 1),
                   "keypoint_noise": {"file": NOISE_FILE.name, "offset": noise.offset.round(4).tolist(),
                                      "sigma": noise.sigma.round(4).tolist(), "missing": noise.missing.round(4).tolist(),
                                      "gross": noise.gross.round(4).tolist(), "gross_sigma": GROSS_SIGMA},
-                  "fov_deg": list(FOV_DEG), "oracle_noise_max": ORACLE_NOISE_MAX, "drop_max": DROP_MAX}
+                  "fov_deg": list(FOV_DEG), "oracle_noise_max": ORACLE_NOISE_MAX, "drop_max": DROP_MAX,
+                  "trials": [f.name for f in files if args.exclude_subject is None
+                             or f.stem.split("_")[1] != args.exclude_subject]}
     lifter = Lifter(export_weights(net), attribution=ATTRIBUTION, provenance=provenance)
     checksum = lifter.save(args.out)
     if args.out.resolve() == SHIPPED.resolve():

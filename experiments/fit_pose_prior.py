@@ -1,15 +1,18 @@
 """``python -m experiments.fit_pose_prior``: fit the tracker's pose prior on CMU motion capture.
 
-Reads every trial of ``../shared/data/mocap/train/`` (41 CMU trials of six subjects, ASF/AMC),
-retargets it onto the 23-parameter model at 25 frames per second
+Reads every trial of ``../shared/data/mocap/train/`` (200 CMU trials of nine subjects, ASF/AMC;
+``--trials-from RECORD`` reads only the trials a prior file's ``training.trials`` lists, which is
+how the shipped prior, fitted on the 41 trials of six subjects the folder held until 2026-11-27,
+is reproduced), retargets it onto the 23-parameter model at 25 frames per second
 (:func:`mocap.synth.retarget.retarget`), adds each pose's left/right mirror image (people use
 either arm), and fits a Gaussian mixture over :data:`mocap.body.prior.PRIOR_PARAMETERS` with
 scikit-learn (full covariances, k-means start, fixed seed). The number of components is chosen
-on held-out subjects: each candidate is fitted on five subjects and scored on the sixth, in
-turn; the best mean held-out log-likelihood wins and is refitted on all six.
+on held-out subjects: each candidate is fitted on all subjects but one and scored on that one,
+in turn; the best mean held-out log-likelihood wins and is refitted on all of them.
 
 Writes ``mocap/body/pose_prior.json`` (a few tens of kB) with the attribution the data's README
-asks for and prints its checksum. The synthetic benchmark's motion is not used (no inverse
+asks for, the list of trials it was fitted on (``training.trials``, file names) and prints its
+checksum. The checksum covers the mixture's parameters only, not the training record. The synthetic benchmark's motion is not used (no inverse
 crime).
 """
 from __future__ import annotations
@@ -71,8 +74,47 @@ def mirror_poses(poses: np.ndarray) -> np.ndarray:
     return out
 
 
-def load_training_poses(train_dir: Path) -> tuple[np.ndarray, np.ndarray]:
-    """Retargeted poses of every trial and the subject of each pose.
+def trial_files(train_dir: Path, trials=None) -> list[Path]:
+    """The ``.amc`` trials of ``train_dir``, sorted by name: every one, or those named in ``trials``.
+
+    Parameters
+    ----------
+    train_dir : Path
+    trials : sequence of str, optional
+        File names (``cmu_02_05.amc``); each must be in ``train_dir``.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the folder has no trial, or a named trial is not there.
+    """
+    if trials is None:
+        files = sorted(train_dir.glob("*.amc"))
+        if not files:
+            raise FileNotFoundError(f"no .amc trials in {train_dir}")
+        return files
+    missing = [t for t in trials if not (train_dir / t).is_file()]
+    if missing or not trials:
+        raise FileNotFoundError(f"trials not in {train_dir}: {missing[:5]}" if missing else "no trials named")
+    return sorted(train_dir / t for t in trials)
+
+
+def record_trials(record: Path) -> list[str]:
+    """The trial file names a fitted model's record lists (``training.trials`` of a prior file, or
+    ``trials`` at the top level of a lifter's record). ValueError when it lists none."""
+    import json
+
+    data = json.loads(Path(record).read_text())
+    trials = data.get("training", {}).get("trials") if isinstance(data.get("training"), dict) else None
+    trials = trials if trials is not None else data.get("trials")
+    if not trials or not all(isinstance(t, str) and t.endswith(".amc") for t in trials):
+        raise ValueError(f"{record} lists no training trials (.amc file names)")
+    return list(trials)
+
+
+def load_training_poses(train_dir: Path, trials=None) -> tuple[np.ndarray, np.ndarray]:
+    """Retargeted poses of every trial (or of the named ones, :func:`trial_files`) and the subject
+    of each pose.
 
     Returns
     -------
@@ -83,9 +125,7 @@ def load_training_poses(train_dir: Path) -> tuple[np.ndarray, np.ndarray]:
 
     from mocap.synth.retarget import load_clip, retarget
 
-    files = sorted(train_dir.glob("*.amc"))
-    if not files:
-        raise FileNotFoundError(f"no .amc trials in {train_dir}")
+    files = trial_files(train_dir, trials)
     poses, subjects = [], []
     for path in tqdm(files, desc="retargeting", unit="trial"):
         q = retarget(load_clip(path))
@@ -109,6 +149,9 @@ def main(argv=None) -> int:
     p.add_argument("--components", default=",".join(map(str, COMPONENTS)),
                    help="comma-separated mixture sizes to choose from on held-out subjects (one size: "
                         "fitted without the choice)")
+    p.add_argument("--trials-from", type=Path, default=None, metavar="RECORD",
+                   help="fit only on the trials this prior file (or lifter record) lists, e.g. the shipped "
+                        "mocap/body/pose_prior.json to reproduce it (default: every trial of --train)")
     args = p.parse_args(argv)
     sizes = positive_integers(args.components)
     if not sizes:
@@ -118,10 +161,16 @@ def main(argv=None) -> int:
         print(f"error: no training folder {args.train} (the CMU trials of ../shared/data/mocap/train)",
               file=sys.stderr)
         return 2
+    try:
+        trials = record_trials(args.trials_from) if args.trials_from is not None else None
+        files = trial_files(args.train, trials)
+    except (OSError, ValueError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(1)            # one core: BLAS threads only fight each other on these sizes
-    poses, subjects = load_training_poses(args.train)
+    poses, subjects = load_training_poses(args.train, [f.name for f in files])
     poses = np.concatenate([poses, mirror_poses(poses)])
     subjects = np.concatenate([subjects, subjects])
     x = poses[:, PRIOR_INDEX]
@@ -136,7 +185,8 @@ def main(argv=None) -> int:
     write_json(args.out, prior.to_dict(
         training={"subjects": sorted({str(s) for s in np.unique(subjects)}), "poses": int(len(x)),
                   "fps": 25.0, "mirrored": True, "held_out_log_likelihood": scores, "components": best,
-                  "reg_covar": REG_COVAR, "seed": SEED}))
+                  "reg_covar": REG_COVAR, "seed": SEED,
+                  "trials": [f.name for f in files]}))
     print(f"wrote {args.out}: {best} components, sha256 {prior.checksum}")
     return 0
 

@@ -14,7 +14,7 @@ for M in :data:`M_VALUES`. Three measures:
 * ``--mediapipe``: MediaPipe Pose's 2D landmarks (:class:`mocap.io.mediapipe_keypoints.MediaPipeKeypoints`,
   on the frames enlarged 4x as :mod:`experiments.peers` does; landmarks with visibility under 0.5
   missing; no neck) on the rendered benchmark of that seed (``make_benchmark``);
-* ``--loso``: each CMU training subject held out in turn: a lifter trained on the other five
+* ``--loso``: each CMU training subject held out in turn: a lifter trained on the others
   (:data:`LOSO_HIDDEN`, :data:`LOSO_STEPS`: a smaller budget than the shipped model's) and
   queried with projections of the held-out subject's poses (random heading, body and place
   before the benchmark's camera, 160x120, 60 degrees; oracle noise 2 px).
@@ -30,6 +30,7 @@ import json
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -153,20 +154,63 @@ def mediapipe_measure(lifter, seed: int, work: Path) -> dict:
     return {"seed": seed, **_summary(rows)}
 
 
-def loso_measure(train_dir: Path, seed: int = 0, hidden=LOSO_HIDDEN, steps: int = LOSO_STEPS,
-                 queries: int = LOSO_QUERIES) -> dict:
-    """Leave-one-subject-out coverage (see the module docstring)."""
-    from experiments.fit_lifter import BATCH, KeypointNoise, export_weights, train, training_poses
+@dataclass(frozen=True)
+class HeldOutQueries:
+    """Projections of a held-out subject's poses (see the module docstring, ``--loso``).
+
+    Attributes
+    ----------
+    uv : ndarray, shape (n, 10, 2), pixels (oracle 2D + 2 px)
+    camera : Camera (160x120, the benchmark's)
+    models : list of BodyModel, one per query (8 random bodies in turn)
+    truth : ndarray, shape (n, 10, 3), metres, camera coordinates
+    """
+
+    uv: np.ndarray
+    camera: object
+    models: list
+    truth: np.ndarray
+
+
+def held_out_queries(held: np.ndarray, subject: str, seed: int = 0, queries: int = LOSO_QUERIES) -> HeldOutQueries:
+    """``queries`` of a held-out subject's poses ``held`` (n, 23), drawn evenly, each given a random
+    heading, place before the camera and body (random generator seeded by ``seed`` and the subject)."""
     from experiments.keypoints import oracle_keypoints
     from mocap.body.model import BodyModel
     from mocap.body.pose import PARAMETER_INDEX
     from mocap.render.camera import Camera
     from mocap.synth.actor import random_dimensions
+
+    held = np.asarray(held, dtype=np.float64)
+    camera = Camera.default(160, 120)
+    rng = np.random.default_rng([seed, 7, int(subject)])
+    pick = held[np.linspace(0, len(held) - 1, min(queries, len(held))).astype(int)].copy()
+    n = len(pick)
+    z = rng.uniform(1.3, 2.6, n)
+    pick[:, PARAMETER_INDEX["root_z"]] = z
+    pick[:, PARAMETER_INDEX["root_y"]] = z * rng.uniform(0.27, 0.39, n)
+    pick[:, PARAMETER_INDEX["root_x"]] = z * rng.uniform(-0.15, 0.15, n)
+    pick[:, PARAMETER_INDEX["chest_yaw"]] = rng.uniform(-np.pi, np.pi, n)
+    bodies = [BodyModel.build(random_dimensions(rng)) for _ in range(8)]
+    models = [bodies[i % len(bodies)] for i in range(n)]
+    truth = np.stack([m.joint_positions(q) for m, q in zip(models, pick)])
+    uv = np.stack([k.uv for k in oracle_keypoints(truth, camera, 2.0, seed)])
+    return HeldOutQueries(uv, camera, models, truth)
+
+
+def held_out_errors(lifter, q: HeldOutQueries) -> np.ndarray:
+    """:func:`hypothesis_errors` of ``lifter`` on :func:`held_out_queries`' projections, (n, K) mm."""
+    return hypothesis_errors(lifter, q.uv, np.ones(q.uv.shape[:2], bool), q.camera, q.models, q.truth)
+
+
+def loso_measure(train_dir: Path, seed: int = 0, hidden=LOSO_HIDDEN, steps: int = LOSO_STEPS,
+                 queries: int = LOSO_QUERIES) -> dict:
+    """Leave-one-subject-out coverage (see the module docstring)."""
+    from experiments.fit_lifter import BATCH, KeypointNoise, export_weights, train, training_poses
     from mocap.track.lifter import Lifter
 
     poses, subjects = training_poses(train_dir)
     noise = KeypointNoise.read()
-    camera = Camera.default(160, 120)
     rows, walls = {}, {}
     for subject in np.unique(subjects):
         started = time.perf_counter()
@@ -174,20 +218,7 @@ def loso_measure(train_dir: Path, seed: int = 0, hidden=LOSO_HIDDEN, steps: int 
                     progress=False)
         lifter = Lifter(export_weights(net))
         walls[str(subject)] = round(time.perf_counter() - started, 1)
-        held = poses[subjects == subject].astype(np.float64)
-        rng = np.random.default_rng([seed, 7, int(subject)])
-        pick = held[np.linspace(0, len(held) - 1, min(queries, len(held))).astype(int)].copy()
-        n = len(pick)
-        z = rng.uniform(1.3, 2.6, n)
-        pick[:, PARAMETER_INDEX["root_z"]] = z
-        pick[:, PARAMETER_INDEX["root_y"]] = z * rng.uniform(0.27, 0.39, n)
-        pick[:, PARAMETER_INDEX["root_x"]] = z * rng.uniform(-0.15, 0.15, n)
-        pick[:, PARAMETER_INDEX["chest_yaw"]] = rng.uniform(-np.pi, np.pi, n)
-        bodies = [BodyModel.build(random_dimensions(rng)) for _ in range(8)]
-        models = [bodies[i % len(bodies)] for i in range(n)]
-        truth = np.stack([m.joint_positions(q) for m, q in zip(models, pick)])
-        uv = np.stack([k.uv for k in oracle_keypoints(truth, camera, 2.0, seed)])
-        rows[str(subject)] = hypothesis_errors(lifter, uv, np.ones(uv.shape[:2], bool), camera, models, truth)
+        rows[str(subject)] = held_out_errors(lifter, held_out_queries(poses[subjects == subject], subject, seed, queries))
         print(f"held out {subject}: {coverage(rows[str(subject)])} ({walls[str(subject)]:.0f} s)", file=sys.stderr)
     summary = _summary(rows)
     return {"hidden": list(hidden), "steps": steps, "queries_per_subject": queries, "wall_s": walls,

@@ -88,7 +88,8 @@ def main(argv=None) -> int:
         try:
             options = mocap.run.OwnVideoOptions(background=str(seq / "background.png"),
                                                 calibration=str(seq / "calibration.json"), overwrite=True,
-                                                overlay=False, tracker=TrackerConfig(evaluations=args.iterations))
+                                                overlay=False, tracker=TrackerConfig(evaluations=args.iterations),
+                                                keypoints="none")
             summary = mocap.run.track(loop, out, options)
         finally:
             sampler.stop()

@@ -109,9 +109,9 @@ def run_mediapipe(frames, upscale: int = 1) -> dict:
     return {"uv": np.asarray(uv, float), "world": np.asarray(world, float), "ms": np.asarray(ms)}
 
 
-def _track(video: Path, out: Path, *, overlay: bool, keypoints: str | None = None) -> "PoseTable":  # noqa: F821
-    """``python -m mocap track VIDEO`` with no other option (``--no-overlay`` unless ``overlay``;
-    ``--keypoints`` when given), through the library entry point the CLI calls."""
+def _track(video: Path, out: Path, *, overlay: bool, keypoints: str = "none") -> "PoseTable":  # noqa: F821
+    """``python -m mocap track VIDEO --keypoints none`` with no other option (``--no-overlay``
+    unless ``overlay``; ``--keypoints`` when given), through the library entry point the CLI calls."""
     from mocap.io.pose_table import PoseTable
     import mocap.run
 

@@ -46,7 +46,7 @@ def main(argv=None) -> int:
     from mocap.track import TrackerConfig
 
     tracker = TrackerConfig() if args.iterations is None else TrackerConfig(evaluations=args.iterations)
-    options = OwnVideoOptions(overlay=False, overwrite=True, tracker=tracker)
+    options = OwnVideoOptions(overlay=False, overwrite=True, tracker=tracker, keypoints="none")
     with tempfile.TemporaryDirectory() as tmp:
         work = args.work or Path(tmp)
         clips = []
@@ -55,7 +55,7 @@ def main(argv=None) -> int:
             seed = i // len(SEQUENCE_NAMES)
             clips.append(generate_sequence(name, work / "clips" / f"{name}-{seed}", frames=args.frames, seed=seed,
                                            progress=False))
-        track_many(clips[:1], work / "warm-up", OwnVideoOptions(overlay=False, max_frames=2, tracker=tracker),
+        track_many(clips[:1], work / "warm-up", OwnVideoOptions(overlay=False, max_frames=2, tracker=tracker, keypoints="none"),
                    workers=0, progress=False)
         load_before = os.getloadavg()[0]
         seconds = {1: 0.0, 2: 0.0}

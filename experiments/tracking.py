@@ -49,9 +49,10 @@ CONFIGS = MappingProxyType({
     "no-jumps": {"jumps": False},
     "two-class": {},
     # given the oracle's 2D keypoints (ORACLE_KEYPOINTS): the default tracker (the learned lifter's
-    # proposals and its score, issue 29), and without the lifter's score (its proposals alone)
+    # proposals and its score, issue 29), and without the lifter (lifter_weight 0 switches it off:
+    # the keypoint term alone; issue 34)
     "oracle-keypoints": {},
-    "oracle-no-lifter-score": {"lifter_weight": 0.0},
+    "oracle-no-lifter": {"lifter_weight": 0.0},
     # the default tracker with the gradient step (issue 30; off by default: docs/research-log.md)
     "gradient": {"gradient_step": True},
 })
@@ -59,7 +60,7 @@ CONFIGS = MappingProxyType({
 #: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.
 TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
 #: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
-ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter-score")})
+ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter")})
 
 
 def config_of(name: str) -> TrackerConfig:

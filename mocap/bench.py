@@ -296,7 +296,7 @@ def video_rows(*, frames: int, cpus: set[int] | None = None) -> list[BenchRow]:
         source = VideoSource(video)
         calibration = Calibration.from_json(seq / "calibration.json")     # at the working size, 160x120
         options = OwnVideoOptions(background=str(background), calibration=str(seq / "calibration.json"),
-                                  overwrite=True)
+                                  overwrite=True, keypoints="none")
         run = lambda out, n: mocap.run.track(video, out, dataclasses.replace(options, max_frames=n), progress=False)
         run(tmp / "warm-up", 2)                     # compile and load every kernel first
         pinned = os.sched_getaffinity(0) if cpus is not None else None

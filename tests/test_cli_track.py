@@ -1,4 +1,5 @@
 """End to end through the CLI: a short synthetic sequence tracked, outputs checked, resumed."""
+import importlib.util
 import json
 import shutil
 
@@ -214,3 +215,37 @@ def test_keypoints_auto_with_the_extra_uses_mediapipe(sequence, tmp_path, capsys
     assert run["settings"]["keypoints"].startswith("mediapipe ") and run["settings"]["keypoints"].endswith(
         "(--keypoints auto)")
     assert run["keypoints_ms_per_frame"] > 0
+
+
+def test_an_old_run_folder_is_refused_with_why_and_what_to_do(sequence, tmp_path, capsys, monkeypatch):
+    """A folder tracked before ``settings.keypoints`` existed, and folders resumed after the
+    keypoints extra was installed (``auto`` was none) or removed (``auto`` was MediaPipe): one
+    line each, saying why and what to do; nothing in the folder changes."""
+    from mocap.io import mediapipe_keypoints
+
+    args = ["--iterations", "20", "--beam", "1", "--max-frames", "2", "--no-overlay"]
+
+    def refused(out, why: str) -> None:
+        before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+        capsys.readouterr()
+        assert main(["track", str(sequence), "--out", str(out), *args]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and why in err and "--overwrite" in err, err
+        assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
+
+    old = tmp_path / "old"
+    assert main(["track", str(sequence), "--out", str(old), *args, "--keypoints", "none"]) == 0
+    run = json.loads((old / "run.json").read_text())
+    del run["settings"]["keypoints"]                  # as written before settings.keypoints existed
+    (old / "run.json").write_text(json.dumps(run))
+    refused(old, "holds a run of an earlier mocap (its run.json has no settings.keypoints)")
+
+    bare = tmp_path / "bare"                          # --keypoints auto without the extra: none
+    assert main(["track", str(sequence), "--out", str(bare), *args]) == 0
+    monkeypatch.setattr(mediapipe_keypoints, "available", lambda: True)       # the extra installed since
+    refused(bare, "the optional extra 'keypoints' was installed or removed")
+    if importlib.util.find_spec("mediapipe") is not None:
+        extra = tmp_path / "extra"                    # --keypoints auto with the extra: MediaPipe
+        assert main(["track", str(sequence), "--out", str(extra), *args]) == 0
+        monkeypatch.setattr(mediapipe_keypoints, "available", lambda: False)  # the extra removed since
+        refused(extra, "the optional extra 'keypoints' was installed or removed")

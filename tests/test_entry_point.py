@@ -49,6 +49,30 @@ def test_cli_track_calls_the_library_with_its_options(recorder, tmp_path):
                                       no_background=True, tracker=TrackerConfig(evaluations=123), keypoints="auto")
 
 
+@pytest.mark.parametrize("command", [["track", "clip.mp4"], ["track-many", "clip.mp4", "--out", "o"],
+                                     ["calibrate", "clip.mp4"], ["demo"]])
+def test_a_command_line_s_defaults_are_the_options_defaults(command):
+    """One builder (``own_video_options``) turns every command's arguments into its options, and
+    a command line that sets nothing gives ``OwnVideoOptions()``: the same defaults (keypoints
+    ``auto`` in both). Each option it shares with the others is declared once."""
+    from mocap.cli import build_parser
+    from mocap.commands._common import own_video_options
+
+    assert own_video_options(build_parser().parse_args(command)) == OwnVideoOptions()
+    assert OwnVideoOptions().keypoints == "auto"
+
+
+def test_the_shared_options_are_declared_in_one_place():
+    """``--hfov``, ``--height``, ``--work-width``, ``--colour``, ``--start``, ``--allow-damaged``
+    and ``--keypoints`` are spelt in ``mocap/commands/_common.py`` alone."""
+    for path in sorted((ROOT / "mocap" / "commands").glob("*.py")):
+        if path.name in ("_common.py", "segment.py"):        # segment: its own options (SegmentOptions)
+            continue
+        text = path.read_text()
+        for option in ("--hfov", "--height", "--work-width", "--colour", "--start", "--keypoints"):
+            assert f'"{option}"' not in text, f"{path.name} declares {option}"
+
+
 def test_bench_video_stage_calls_the_library(recorder):
     from mocap.bench import video_rows
 
@@ -64,7 +88,7 @@ def test_peers_experiment_calls_the_library(recorder, tmp_path):
     with pytest.raises(_Called):
         _track(tmp_path / "clip.mp4", tmp_path / "run", overlay=False)
     (source, out, options), = recorder
-    assert options == OwnVideoOptions(overlay=False, overwrite=True)
+    assert options == OwnVideoOptions(overlay=False, overwrite=True, keypoints="none")
 
 
 def test_demo_calls_the_library_on_the_bundled_sequence(recorder, tmp_path):
@@ -74,7 +98,7 @@ def test_demo_calls_the_library_on_the_bundled_sequence(recorder, tmp_path):
         main(["demo", "--out", str(tmp_path / "demo"), "--iterations", "50", "--no-overlay"])
     (source, out, options), = recorder
     assert (Path(source) / "frames").is_dir() and out == tmp_path / "demo"
-    assert options == OwnVideoOptions(overlay=False, tracker=TrackerConfig(evaluations=50))
+    assert options == OwnVideoOptions(overlay=False, tracker=TrackerConfig(evaluations=50), keypoints="none")
 
 
 def test_track_many_workers_call_the_library(recorder, tmp_path):

@@ -249,3 +249,30 @@ def test_overlay_drawn_in_the_model_box_equals_the_whole_frame():
                      (np.zeros_like(labels), np.zeros_like(edges))):
         np.testing.assert_array_equal(draw_model(frame, lab, edg, 4, class_names=names),
                                       naive_draw_model(frame, lab, edg, 4, class_names=names))
+
+
+@pytest.mark.slow
+def test_colour_face_is_honoured_where_the_run_learns_the_colours_and_refused_elsewhere(tmp_path, capsys):
+    """``--colour face`` with a given calibration and background: the run learns the colours from
+    the detected face (at the input size, where the face is big enough to find; run.json says
+    so, and they are not the calibration's); with an automatic
+    calibration, which learns them inside its own fit, it is refused in one line before a frame
+    is tracked."""
+    from mocap.synth import generate_sequence
+
+    seq = generate_sequence("gestures-1", tmp_path / "seq", frames=3, seed=0, size=(320, 240), progress=False)
+    frames = tmp_path / "frames"
+    shutil.copytree(seq / "frames", frames)                  # no background, no calibration: automatic
+    args = ["--iterations", "30", "--no-overlay", "--keypoints", "none", "--max-frames", "2"]
+    capsys.readouterr()
+    assert main(["track", str(frames), "--out", str(tmp_path / "auto"), "--colour", "face", *args]) == 2
+    last = capsys.readouterr().err.strip().splitlines()[-1]          # after the set-up's face search bar
+    assert last.startswith("error: --colour face") and "automatic calibration" in last and "--calibration" in last
+    assert not (tmp_path / "auto" / "poses.csv").exists()
+    models = {}
+    for colour in ("face", "calibration"):
+        out = tmp_path / colour
+        assert main(["track", str(seq), "--out", str(out), "--colour", colour, "--work-width", "320", *args]) == 0
+        assert json.loads((out / "run.json").read_text())["settings"]["colour_model_from"] == colour
+        models[colour] = (out / "colour_model.json").read_text()
+    assert models["face"] != models["calibration"]

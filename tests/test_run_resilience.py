@@ -123,6 +123,41 @@ def test_resume_with_a_decoding_lag_is_bit_identical(sequence, tmp_path):
     np.testing.assert_array_equal(b.extra["hypothesis"], a.extra["hypothesis"])
 
 
+@pytest.mark.slow
+def test_resume_with_mediapipe_keypoints_is_bit_identical(sequence, tmp_path):
+    """MediaPipe runs in image mode (no state carried from frame to frame), so a run killed
+    anywhere resumes to the keypoints and the poses of an uninterrupted one, bit for bit:
+    resumes at frame 3 (after a checkpoint, after a half-written row) and at frame 6; the
+    keypoint journal ``keypoints.csv`` is the uninterrupted run's too."""
+    pytest.importorskip("mediapipe")
+    from mocap.io.keypoints import read_keypoints
+    from mocap.run.journal import KEYPOINTS_FILE
+
+    args = [*TRACK_ARGS[:-1], "mediapipe"]
+    whole = tmp_path / "whole"
+    assert main(["track", str(sequence), "--out", str(whole), *args]) == 0
+    out = tmp_path / "run"
+    cmd = lambda mode, n: [sys.executable, "-m", "tests.killpoints", mode, str(n), "--", "track", str(sequence),
+                           "--out", str(out), *args]
+    # checkpoints every 3 frames: killed after frames 0-2's; resumed at 3 and killed half-way
+    # through frame 4's row; resumed at 3 and killed after frames 3-5's; resumed at 6, killed after its row
+    for mode, n, rows in (("after-state", 1, 3), ("mid-row", 2, 4), ("after-state", 1, 6), ("after-row", 1, 7)):
+        proc = subprocess.run(cmd(mode, n), cwd=REPO_ROOT, capture_output=True, text=True, timeout=300)
+        assert proc.returncode == -9, proc.stderr
+        assert (out / "poses.csv").read_text().count("\n") - 1 == rows          # whole rows
+    assert main(["track", str(sequence), "--out", str(out), *args]) == 0
+    run = json.loads((out / "run.json").read_text())
+    assert run["resumed_from_frame"] == 6 and "image mode" in run["settings"]["keypoints"]
+    a, b = PoseTable.read(whole / "poses.csv"), PoseTable.read(out / "poses.csv")
+    np.testing.assert_array_equal(b.frames, np.arange(N_FRAMES))
+    np.testing.assert_array_equal(b.poses, a.poses)
+    np.testing.assert_array_equal(b.joints, a.joints)
+    for name in ("region_residual", "edge_residual", "failed", "evaluations", "time_s"):
+        np.testing.assert_array_equal(b.extra[name], a.extra[name])
+    assert (out / KEYPOINTS_FILE).read_bytes() == (whole / KEYPOINTS_FILE).read_bytes()
+    assert sorted(read_keypoints(whole / KEYPOINTS_FILE)) == list(range(N_FRAMES))     # the person found in each
+
+
 def test_a_held_output_folder_is_refused_at_once(sequence, tmp_path, capsys):
     out = tmp_path / "run"
     with FolderLock(out):
@@ -192,7 +227,8 @@ def test_a_damaged_video_stops_the_run_or_is_tracked_with_its_frames_marked(sequ
 def test_damage_the_check_finds_while_tracking_stops_the_run_and_leaves_no_results(sequence, tmp_path, capsys,
                                                                                    monkeypatch):
     """The damage check runs beside the run: held back here until 5 frames were read, its
-    verdict must still stop the run with the frame numbers and remove what the run wrote."""
+    verdict must still stop the run with the frame numbers, remove what the run wrote and be
+    all the run wrote to stderr (no progress bar before it, however late it comes)."""
     import imageio.v3 as iio
 
     from mocap.io.frames import VideoSource
@@ -217,8 +253,9 @@ def test_damage_the_check_finds_while_tracking_stops_the_run_and_leaves_no_resul
     out = tmp_path / "refused"
     assert main(["track", str(cut), "--out", str(out), "--background", str(sequence / "background.png"),
                  "--calibration", str(sequence / "calibration.json"), *TRACK_ARGS]) == 2
-    last = capsys.readouterr().err.strip().splitlines()[-1]         # after the progress bar, the one-line error
-    assert last.startswith("error: ") and "cut.mkv is damaged: 16 announced" in last and "--allow-damaged" in last
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert err.startswith("error: ") and "cut.mkv is damaged: 16 announced" in err and "--allow-damaged" in err
     assert asked and asked[0] >= 5                      # the verdict came while frames were tracked
     assert not (out / "poses.csv").exists() and not (out / "run.json").exists() and not (out / STATE_FILE).exists()
 

@@ -167,11 +167,20 @@ def test_a_damaged_input_fails_alone_with_its_reason(clips, single_runs, tmp_pat
 
 
 @pytest.mark.slow
-def test_a_killed_worker_s_video_resumes_elsewhere_and_every_video_is_its_single_run(clips, single_runs, tmp_path):
+@pytest.mark.parametrize("keypoints", ["none", "mediapipe"])
+def test_a_killed_worker_s_video_resumes_elsewhere_and_every_video_is_its_single_run(clips, single_runs, keypoints,
+                                                                                    tmp_path):
     """A scheduler and two workers on 127.0.0.1; worker b, at its first checkpoint (after frame
     :data:`tests.killpoints.CHECKPOINT_EVERY` of a video), announces itself and waits
-    (:func:`tests.killpoints.install`), and is killed there by SIGKILL."""
+    (:func:`tests.killpoints.install`), and is killed there by SIGKILL. Without keypoints and
+    with MediaPipe's (the resumed video's keypoints and poses are its single run's too)."""
     pytest.importorskip("distributed")
+    args = [*TRACK_ARGS[:-1], keypoints]
+    if keypoints != "none":
+        pytest.importorskip("mediapipe")
+        single_runs = {clip.name: tmp_path / "single" / clip.name for clip in clips}
+        for clip in clips:
+            assert main(["track", str(clip), "--out", str(single_runs[clip.name]), *args]) == 0
     out, paused, pause_at = tmp_path / "out", tmp_path / "paused", 1
     assert CHECKPOINT_EVERY < N_FRAMES                  # the first checkpoint is in the middle of a video
     workers = {"worker-a": {}, "worker-b": {"prelude": f"from tests.killpoints import install; install('pause', "
@@ -180,7 +189,7 @@ def test_a_killed_worker_s_video_resumes_elsewhere_and_every_video_is_its_single
     inputs = [os.path.relpath(clip, tmp_path) for clip in clips]
     with local_cluster(tmp_path, workers) as (address, processes):
         many = subprocess.Popen([sys.executable, "-m", "mocap", "track-many", *inputs, "--out", "out",
-                                 "--scheduler", address, "--no-progress", *TRACK_ARGS],
+                                 "--scheduler", address, "--no-progress", *args],
                                 cwd=tmp_path, env=cluster_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                 text=True)
         processes["track-many"] = many
@@ -195,6 +204,9 @@ def test_a_killed_worker_s_video_resumes_elsewhere_and_every_video_is_its_single
     assert sorted(resumed) == [0, 0, CHECKPOINT_EVERY]  # the killed worker's video went on from its checkpoint
     for clip in clips:
         assert_same_track(out / clip.name, single_runs[clip.name])
+        if keypoints != "none":
+            assert (out / clip.name / "keypoints.csv").read_bytes() == \
+                (single_runs[clip.name] / "keypoints.csv").read_bytes()
     assert [r["status"] for r in assert_summary_matches_runs(out, inputs)] == ["finished"] * 3
 
 

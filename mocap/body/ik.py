@@ -1,4 +1,5 @@
-"""Inverse kinematics of one arm: the arm angles that put the hand at a 3D point.
+"""Inverse kinematics: one arm's angles that put the hand at a 3D point (:func:`reach_arm`), and a
+whole pose whose joints lie on given 3D points (:func:`fit_pose_to_joints`).
 
 Stateless, like :mod:`mocap.body.kinematics`: the pose and the model data go in, a new pose
 comes out. The tracker's hand re-acquisition (:mod:`mocap.track`) uses it to turn a hand seen
@@ -10,6 +11,8 @@ are), with a weak pull towards the starting angles that picks, among the many ar
 reaching the point, one close to where the arm was.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -162,4 +165,126 @@ def reach_arm(pose, skeleton: Skeleton, side: str, target, *, regularization: fl
     return best
 
 
-__all__ = ["REACH_PARAMETERS", "reach_arm"]
+#: Scale of a joint's miss in :func:`fit_pose_to_joints` (metres): a 1 cm miss weighs as much as
+#: ``1 / sqrt(regularization)`` radians of change from the start.
+FIT_SCALE_M = 0.01
+#: Default weight of the pull towards the starting angles in :func:`fit_pose_to_joints` (per radian
+#: squared, in units of ``FIT_SCALE_M`` squared): it only decides what the joints leave free (the
+#: forearm's twist with the wrist straight, the head's turn about its own joint) and moves a fitted
+#: joint by well under a millimetre.
+FIT_REGULARIZATION = 1e-4
+#: Fewest joints :func:`fit_pose_to_joints` takes: fewer do not fix the torso's orientation.
+FIT_MIN_JOINTS = 4
+#: Headings (the torso's yaw, degrees) each fit starts from in turn, besides the start's own: the
+#: solver, bounded by the limits, can stall in the mirror of a turned torso.
+FIT_START_YAWS_DEG = (0.0, 90.0, 180.0, -90.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class JointFit:
+    """A pose fitted onto 3D joints (:func:`fit_pose_to_joints`).
+
+    Attributes
+    ----------
+    pose : ndarray, shape (23,), float64
+        Metres and radians, the angles inside the joint limits, the torso's yaw in (-pi, pi]; the
+        root translation puts the fitted joints' centroid on the targets' (in the targets' frame,
+        which need not be the camera's: the root's limits are not applied).
+    rms_m : float
+        Root-mean-square distance of the present joints from their targets (metres).
+    present : ndarray of bool, shape (10,)
+        The joints that took part (:data:`~mocap.body.skeleton.JOINT_NAMES` order).
+    """
+
+    pose: np.ndarray
+    rms_m: float
+    present: np.ndarray
+
+
+def fit_pose_to_joints(targets, present, skeleton: Skeleton, *, start=None,
+                       regularization: float = FIT_REGULARIZATION, limits: np.ndarray = JOINT_LIMITS) -> JointFit:
+    """The pose, inside the joint limits, whose joints come closest to 3D targets up to a translation.
+
+    Minimises the squared distances of the present joints from their targets, both taken about
+    their own centroids (the targets' origin is free: MediaPipe's world landmarks are about the
+    hips, not in the camera), plus a weak pull of every angle towards ``start``'s, by bounded
+    least squares (scipy's trust-region reflective) from ``start`` and from
+    :data:`FIT_START_YAWS_DEG`; the best fit wins. Then the root is translated so that the
+    centroids coincide.
+
+    Parameters
+    ----------
+    targets : array_like, shape (10, 3), metres
+        A point per joint (:data:`~mocap.body.skeleton.JOINT_NAMES` order), camera axes (x right,
+        y down, z away from the camera); rows of absent joints may hold anything, NaN included.
+    present : array_like of bool, shape (10,)
+        The joints to fit; a row with a non-finite coordinate counts as absent too.
+    skeleton : Skeleton
+        The calibrated actor's kinematic constants (``model.skeleton``).
+    start : array_like, shape (23,), optional
+        Starting pose and what the angles are pulled towards (default: the neutral pose).
+    regularization : float
+        Weight of that pull (see :data:`FIT_REGULARIZATION`); 0 leaves what the joints do not fix
+        to the solver's path.
+    limits : ndarray, shape (23, 2)
+        Joint limits (radians).
+
+    Returns
+    -------
+    JointFit
+
+    Raises
+    ------
+    ValueError
+        With fewer than :data:`FIT_MIN_JOINTS` present joints, or malformed input.
+    """
+    from scipy.optimize import least_squares
+
+    from mocap.body.pose import neutral_pose
+
+    t = np.asarray(targets, dtype=np.float64)
+    if t.shape != (len(JOINT_NAMES), 3):
+        raise ValueError(f"targets must have shape ({len(JOINT_NAMES)}, 3), got {t.shape}")
+    mask = np.asarray(present, dtype=bool)
+    if mask.shape != (len(JOINT_NAMES),):
+        raise ValueError(f"present must have shape ({len(JOINT_NAMES)},), got {mask.shape}")
+    mask = mask & np.all(np.isfinite(t), axis=1)
+    if mask.sum() < FIT_MIN_JOINTS:
+        raise ValueError(f"fitting a pose needs at least {FIT_MIN_JOINTS} joints, got {int(mask.sum())}")
+    if regularization < 0 or not np.isfinite(regularization):
+        raise ValueError(f"regularization must be finite and non-negative, got {regularization!r}")
+    q0 = check_pose(neutral_pose() if start is None else start, name="start")
+    angles = np.arange(3, len(q0))
+    lower, upper = limits[angles, 0].astype(np.float64), limits[angles, 1].astype(np.float64)
+    target = t[mask] - t[mask].mean(axis=0)
+    pull = np.sqrt(regularization)
+    anchor = np.clip(q0[angles], lower, upper)
+
+    def pose_of(x):
+        q = q0.copy()
+        q[angles] = x
+        return q
+
+    def residual(x):
+        j = joint_positions(pose_of(x), skeleton)[mask]
+        return np.concatenate([((j - j.mean(axis=0)) - target).ravel() / FIT_SCALE_M, pull * (x - anchor)])
+
+    yaw = PARAMETER_INDEX["chest_yaw"]
+    best = None
+    for heading in (None, *np.radians(FIT_START_YAWS_DEG)):
+        x0 = anchor.copy()
+        if heading is not None:
+            x0[yaw - 3] = np.clip(heading, lower[yaw - 3], upper[yaw - 3])
+        fit = least_squares(residual, x0, bounds=(lower, upper), method="trf", x_scale=1.0, xtol=1e-10,
+                            ftol=1e-10, gtol=1e-10, max_nfev=200)
+        if best is None or fit.cost < best.cost:
+            best = fit
+    q = pose_of(best.x)
+    q[yaw] = float(np.angle(np.exp(1j * q[yaw])))            # the same heading in (-pi, pi]
+    j = joint_positions(q, skeleton)
+    q[:3] += t[mask].mean(axis=0) - j[mask].mean(axis=0)
+    miss = joint_positions(q, skeleton)[mask] - t[mask]
+    return JointFit(pose=q, rms_m=float(np.sqrt(np.mean(np.sum(miss ** 2, axis=1)))), present=mask)
+
+
+__all__ = ["FIT_MIN_JOINTS", "JointFit", "REACH_PARAMETERS", "fit_pose_to_joints", "reach_arm"]

@@ -1,9 +1,46 @@
-"""Argument helpers shared by the tracking commands."""
+"""Argument helpers shared by the tracking commands, and the one builder of their
+:class:`mocap.run.OwnVideoOptions` (:func:`own_video_options`): each option is declared once
+here, with the default of the field it sets."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
+
+#: The :class:`mocap.run.OwnVideoOptions` field each command-line option sets (its argparse
+#: ``dest``); ``overlay`` is ``not no_overlay``, ``tracker`` :func:`tracker_config`.
+FIELD_OPTIONS = {"background": "background", "background_frames": "background_frames",
+                 "no_background": "no_background", "calibration": "calibration", "hfov_deg": "hfov",
+                 "height_m": "height", "work_width": "work_width", "colour": "colour",
+                 "ground_truth": "ground_truth", "start": "start", "max_frames": "max_frames",
+                 "allow_damaged": "allow_damaged", "show": "show", "overwrite": "overwrite",
+                 "keypoints": "keypoints"}
+
+
+def default(field: str):
+    """The default of a :class:`mocap.run.OwnVideoOptions` field: the command line's too."""
+    from mocap.run import OwnVideoOptions
+
+    return next(f.default for f in dataclasses.fields(OwnVideoOptions) if f.name == field)
+
+
+def own_video_options(args: argparse.Namespace):
+    """The :class:`mocap.run.OwnVideoOptions` a command line describes: the fields whose
+    options the command declares (:data:`FIELD_OPTIONS`, ``--no-overlay``, the tracker's), the
+    others at their defaults (the same as the options'). Paths become strings."""
+    from mocap.run import OwnVideoOptions
+
+    fields = {}
+    for name, dest in FIELD_OPTIONS.items():
+        if hasattr(args, dest):
+            value = getattr(args, dest)
+            fields[name] = str(value) if isinstance(value, Path) else value
+    if hasattr(args, "no_overlay"):
+        fields["overlay"] = not args.no_overlay
+    if hasattr(args, "iterations"):
+        fields["tracker"] = tracker_config(args)
+    return OwnVideoOptions(**fields)
 
 
 def add_tracker_options(p: argparse.ArgumentParser) -> None:
@@ -97,12 +134,36 @@ def add_background_options(p: argparse.ArgumentParser) -> None:
 
 
 def add_keypoints_option(p: argparse.ArgumentParser, what: str) -> None:
-    """``--keypoints auto|mediapipe|none|FILE`` (default ``auto``: MediaPipe Pose where the optional
-    extra ``keypoints`` imports, none otherwise); ``what`` says what they are for."""
-    p.add_argument("--keypoints", default="auto", metavar="auto|mediapipe|none|FILE",
+    """``--keypoints auto|mediapipe|none|FILE`` (default ``auto``, the options': MediaPipe Pose
+    where the optional extra ``keypoints`` imports, none otherwise); ``what`` says what they are for."""
+    p.add_argument("--keypoints", default=default("keypoints"), metavar="auto|mediapipe|none|FILE",
                    help=f"2D keypoints {what}: 'auto' (default: MediaPipe Pose where the optional extra "
                         "'keypoints' is installed, none otherwise), 'mediapipe', 'none', or a CSV "
                         "frame,joint,u,v,confidence in input pixels (docs/design.md section 4)")
+
+
+def add_camera_options(p: argparse.ArgumentParser, height_help: str) -> None:
+    """``--hfov DEG`` and ``--height M`` (what an automatic calibration assumes)."""
+    p.add_argument("--hfov", type=float, default=default("hfov_deg"), metavar="DEG",
+                   help=f"camera horizontal field of view without a calibration (default {default('hfov_deg'):g}, "
+                        "a webcam)")
+    p.add_argument("--height", type=float, default=default("height_m"), metavar="M", help=height_help)
+
+
+def add_run_options(p: argparse.ArgumentParser, start_help: str, damaged_help: str) -> None:
+    """``--work-width PX``, ``--colour calibration|face``, ``--start N``, ``--allow-damaged``."""
+    from mocap.imaging.resample import DEFAULT_WORK_WIDTH
+    from mocap.run.options import COLOUR_SOURCES
+
+    p.add_argument("--work-width", type=int, default=default("work_width"), metavar="PX",
+                   help=f"working width: frames are reduced by the integer factor that brings them nearest to it "
+                        f"(default: the tracker chooses, near {DEFAULT_WORK_WIDTH} or less for a person close to "
+                        "the camera; see docs/own-video.md)")
+    p.add_argument("--colour", choices=COLOUR_SOURCES, default=default("colour"),
+                   help="learn colours inside the calibrated model (default) or from the detected face (needs "
+                        "--calibration and a background)")
+    p.add_argument("--start", type=int, default=default("start"), metavar="N", help=start_help)
+    p.add_argument("--allow-damaged", action="store_true", help=damaged_help)
 
 
 def keypoints_line(name) -> str:

@@ -14,12 +14,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mocap.commands._common import add_background_options, add_keypoints_option, keypoints_line
+from mocap.commands._common import add_background_options, add_camera_options, add_keypoints_option, own_video_options
 
 
 def add_parser(subparsers) -> None:
-    from mocap.render.camera import DEFAULT_HFOV_DEG
-
     p = subparsers.add_parser("calibrate", help="fit body dimensions and initial pose to a frame",
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("video", type=Path, help="video file, image folder or sequence folder")
@@ -28,10 +26,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--frame", type=int, default=None,
                    help="frame to calibrate on against --background (default 0); without a background image the "
                         "first usable frame is found")
-    p.add_argument("--hfov", type=float, default=DEFAULT_HFOV_DEG,
-                   help=f"camera horizontal field of view, degrees (default {DEFAULT_HFOV_DEG:g}, a webcam)")
-    p.add_argument("--height", type=float, default=None, metavar="M",
-                   help="the person's height in metres: fixes the absolute scale")
+    add_camera_options(p, "the person's height in metres: fixes the absolute scale")
     add_keypoints_option(p, "of the calibration frame")
     p.add_argument("--allow-damaged", action="store_true",
                    help="calibrate on a video whose frames do not all decode instead of stopping")
@@ -42,16 +37,16 @@ def run(args: argparse.Namespace) -> int:
     from mocap.calibrate import Calibration, auto_calibrate
     from mocap.io.video import read_image
     from mocap.render import Camera
-    from mocap.run.options import OwnVideoOptions, keypoint_source
+    from mocap.run.options import RunChoices
     from mocap.run.setup import SetupRequest, find_setup
     from mocap.run.tracking import RunInput
 
-    keypoints = keypoint_source(None if args.keypoints is None else str(args.keypoints))
-    print(keypoints_line(args.keypoints))
-    # the background as track chooses it (given, the sequence folder's own, frames, none or auto)
-    chosen = OwnVideoOptions(background=args.background, background_frames=args.background_frames,
-                             no_background=args.no_background, hfov_deg=args.hfov, height_m=args.height)
+    # the background and the keypoints as track chooses them (given, the sequence folder's own, frames, none or auto)
+    chosen = own_video_options(args)
     opened = RunInput.open(args.video, chosen)
+    choices = RunChoices.of(chosen, opened.sequence_background)
+    keypoints = choices.keypoint_source
+    print(f"keypoints: {choices.keypoints_line}")
     source, background = opened.frames, opened.background
     source.damaged_frames(args.allow_damaged)
     if background is not None and args.height is None:
@@ -66,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         if args.frame is not None:
             raise ValueError("--frame needs --background IMG (without one the first usable frame is found)")
-        request = SetupRequest(background_mode=chosen.background_mode(opened.sequence_background),
+        request = SetupRequest(background_mode=choices.background_mode,
                                background_image=read_image(background) if background is not None else None,
                                background_frames=args.background_frames, hfov_deg=args.hfov, height_m=args.height,
                                keypoints=keypoints)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mocap.commands._common import add_tracker_options, print_summary, tracker_config
+from mocap.commands._common import add_tracker_options, own_video_options, print_summary
 
 
 def add_parser(subparsers) -> None:
@@ -19,6 +19,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import dataclasses
+
     import mocap.run
     from mocap.calibrate import Calibration, auto_calibrate
     from mocap.io.sequence import find_sequence
@@ -35,8 +37,8 @@ def run(args: argparse.Namespace) -> int:
         calibration = str(args.out / "calibration.json")
         found.to_json(calibration)
     print(f"tracking {root} ({'automatic' if args.auto_calibrate else 'true'} calibration)")
-    options = mocap.run.OwnVideoOptions(calibration=calibration, max_frames=args.max_frames, overwrite=args.overwrite,
-                                        overlay=not args.no_overlay, tracker=tracker_config(args))
+    # the paper's setting: no keypoints, so that the demo's figures are the same on every install
+    options = dataclasses.replace(own_video_options(args), calibration=calibration, keypoints="none")
     summary = mocap.run.track(root, args.out, options)
     print_summary(summary)
     return 0

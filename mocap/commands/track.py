@@ -18,14 +18,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mocap.commands._common import add_tracker_options, print_summary, tracker_config
-from mocap.commands._common import add_background_options, add_keypoints_option
+from mocap.commands._common import (add_background_options, add_camera_options, add_keypoints_option, add_run_options,
+                                    add_tracker_options, own_video_options, print_summary)
 
 
 def add_parser(subparsers) -> None:
-    from mocap.imaging.resample import DEFAULT_WORK_WIDTH
-    from mocap.render.camera import DEFAULT_HFOV_DEG
-
     p = subparsers.add_parser("track", help="track a video with a calibrated body model", description=__doc__,
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("video", type=Path, nargs="?", help="video file, image folder or sequence folder")
@@ -36,39 +33,15 @@ def add_parser(subparsers) -> None:
                           "video file streamed as a live camera (a rehearsal)")
     add_background_options(p)
     p.add_argument("--calibration", type=Path, default=None, help="calibration.json (python -m mocap calibrate)")
-    p.add_argument("--hfov", type=float, default=DEFAULT_HFOV_DEG, metavar="DEG",
-                   help=f"camera horizontal field of view without a calibration (default {DEFAULT_HFOV_DEG:g}, a webcam)")
-    p.add_argument("--height", type=float, default=None, metavar="M",
-                   help="the person's height in metres: fixes the absolute scale (else default adult proportions)")
-    p.add_argument("--work-width", type=int, default=None, metavar="PX",
-                   help=f"working width: frames are reduced by the integer factor that brings them nearest to it "
-                        f"(default: the tracker chooses, near {DEFAULT_WORK_WIDTH} or less for a person close to "
-                        "the camera; see docs/own-video.md)")
+    add_camera_options(p, "the person's height in metres: fixes the absolute scale (else default adult proportions)")
     p.add_argument("--show", action="store_true", help="show the overlay live in a window (needs a display)")
     add_keypoints_option(p, "as a further cue")
     p.add_argument("--out", type=Path, default=Path("mocap-track"), help="output folder (default ./mocap-track)")
-    p.add_argument("--colour", choices=("calibration", "face"), default="calibration",
-                   help="learn colours inside the calibrated model (default) or from the detected face")
     p.add_argument("--ground-truth", type=Path, default=None, help="ground_truth.csv for accuracy metrics")
-    p.add_argument("--start", type=int, default=0, metavar="N",
-                   help="first frame to track (default 0); the calibration's initial pose is the pose there")
-    p.add_argument("--allow-damaged", action="store_true",
-                   help="track a video whose frames do not all decode (they are listed in run.json) instead of stopping")
+    add_run_options(p, "first frame to track (default 0); the calibration's initial pose is the pose there",
+                    "track a video whose frames do not all decode (they are listed in run.json) instead of stopping")
     add_tracker_options(p)
     p.set_defaults(run=run)
-
-
-def options(args: argparse.Namespace):
-    """The :class:`mocap.run.OwnVideoOptions` the command line describes."""
-    from mocap.run import OwnVideoOptions
-
-    path = lambda p: None if p is None else str(p)
-    return OwnVideoOptions(
-        background=path(args.background), background_frames=args.background_frames,
-        no_background=args.no_background, calibration=path(args.calibration), hfov_deg=args.hfov,
-        height_m=args.height, work_width=args.work_width, colour=args.colour, ground_truth=path(args.ground_truth),
-        start=args.start, max_frames=args.max_frames, allow_damaged=args.allow_damaged, overlay=not args.no_overlay,
-        show=args.show, overwrite=args.overwrite, keypoints=path(args.keypoints), tracker=tracker_config(args))
 
 
 def print_setup(account) -> None:
@@ -94,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
     live = args.camera is not None or args.camera_device is not None
     if (args.video is None) == (not live):
         raise ValueError("give a VIDEO or --camera N (not both)")
-    chosen = options(args)
+    chosen = own_video_options(args)
     if live:
         if args.background_frames is not None:
             raise ValueError("--background-frames needs a video file")

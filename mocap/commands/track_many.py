@@ -15,11 +15,11 @@ import argparse
 import sys
 from pathlib import Path
 
-from mocap.commands._common import add_keypoints_option, add_tracker_options, keypoints_line, tracker_config
+from mocap.commands._common import (add_camera_options, add_keypoints_option, add_run_options, add_tracker_options,
+                                    keypoints_line, own_video_options)
 
 
 def add_parser(subparsers) -> None:
-    from mocap.render.camera import DEFAULT_HFOV_DEG
     from mocap.run.many import HUNG_AFTER_S
 
     p = subparsers.add_parser("track-many", help="track many videos at once, locally or on a Dask cluster",
@@ -40,16 +40,9 @@ def add_parser(subparsers) -> None:
                         "default)")
     p.add_argument("--no-background", action="store_true",
                    help="no empty view: the foreground is what the colour classes explain")
-    p.add_argument("--hfov", type=float, default=DEFAULT_HFOV_DEG, metavar="DEG",
-                   help=f"camera horizontal field of view without a calibration (default {DEFAULT_HFOV_DEG:g})")
-    p.add_argument("--height", type=float, default=None, metavar="M",
-                   help="the person's height in metres (the same person in every input)")
-    p.add_argument("--work-width", type=int, default=None, metavar="PX", help="working width (see track --help)")
-    p.add_argument("--colour", choices=("calibration", "face"), default="calibration",
-                   help="learn colours inside the calibrated model (default) or from the detected face")
-    p.add_argument("--start", type=int, default=0, metavar="N", help="first frame to track in every input (default 0)")
-    p.add_argument("--allow-damaged", action="store_true",
-                   help="track the frames that decode of a damaged video instead of failing it")
+    add_camera_options(p, "the person's height in metres (the same person in every input)")
+    add_run_options(p, "first frame to track in every input (default 0)",
+                    "track the frames that decode of a damaged video instead of failing it")
     add_keypoints_option(p, "as a further cue (a file: the same for every input)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_tracker_options(p)
@@ -57,14 +50,9 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from mocap.run import OwnVideoOptions
     from mocap.run.many import HUNG_AFTER_S, track_many
 
-    options = OwnVideoOptions(no_background=args.no_background, hfov_deg=args.hfov, height_m=args.height,
-                              work_width=args.work_width, colour=args.colour, start=args.start,
-                              max_frames=args.max_frames, allow_damaged=args.allow_damaged,
-                              overlay=not args.no_overlay, overwrite=args.overwrite, tracker=tracker_config(args),
-                              keypoints=None if args.keypoints is None else str(args.keypoints))
+    options = own_video_options(args)
     print(keypoints_line(args.keypoints))
     summary = track_many(args.inputs, args.out, options, workers=args.workers, scheduler=args.scheduler,
                          progress=not args.no_progress,

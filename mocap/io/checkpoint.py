@@ -19,7 +19,7 @@ import numpy as np
 
 from mocap.io.files import write_bytes_atomic
 
-__all__ = ["Checkpoint", "write_checkpoint", "read_checkpoint", "truncate_journal"]
+__all__ = ["Checkpoint", "cut_journal", "read_checkpoint", "synced_length", "truncate_journal", "write_checkpoint"]
 
 #: Prefix of the bookkeeping arrays in the checkpoint file (the state's names must not use it).
 _META = "checkpoint__"
@@ -47,20 +47,27 @@ class Checkpoint:
 def write_checkpoint(path: str | Path, state: dict[str, np.ndarray], next_index: int, journal: str | Path) -> None:
     """Save ``state`` with the current length of ``journal`` (0 if it does not exist), atomically,
     after syncing the journal to disk (so the checkpoint never describes rows a power cut loses)."""
-    import os
-
-    journal = Path(journal)
-    size = 0
-    if journal.exists():
-        with journal.open("rb") as fh:
-            os.fsync(fh.fileno())
-            size = os.fstat(fh.fileno()).st_size
+    size = synced_length(journal)
     if any(k.startswith(_META) for k in state):
         raise ValueError(f"state names must not start with {_META!r}")
     buf = io.BytesIO()
     np.savez(buf, **{f"{_META}next_index": np.int64(next_index), f"{_META}journal_bytes": np.int64(size)},
              **{k: np.asarray(v) for k, v in state.items()})
     write_bytes_atomic(path, buf.getvalue())
+
+
+def synced_length(journal: str | Path) -> int:
+    """The length in bytes of ``journal`` (0 if it does not exist) once it is on disk (synced):
+    what a checkpoint records of a journal (:func:`write_checkpoint`; a second journal's length
+    can go in its state, cut back with :func:`cut_journal`)."""
+    import os
+
+    journal = Path(journal)
+    if not journal.exists():
+        return 0
+    with journal.open("rb") as fh:
+        os.fsync(fh.fileno())
+        return os.fstat(fh.fileno()).st_size
 
 
 def read_checkpoint(path: str | Path) -> Checkpoint | None:
@@ -93,8 +100,19 @@ def truncate_journal(journal: str | Path, checkpoint: Checkpoint | None) -> None
     ValueError
         If the journal is shorter than the checkpoint says (it was edited or replaced).
     """
+    cut_journal(journal, 0 if checkpoint is None else checkpoint.journal_bytes)
+
+
+def cut_journal(journal: str | Path, size: int) -> None:
+    """Cut ``journal`` back to ``size`` bytes (remove it for 0): :func:`truncate_journal` for
+    a length kept elsewhere (:func:`synced_length`).
+
+    Raises
+    ------
+    ValueError
+        If the journal is shorter than ``size`` (it was edited or replaced).
+    """
     journal = Path(journal)
-    size = 0 if checkpoint is None else checkpoint.journal_bytes
     actual = journal.stat().st_size if journal.exists() else 0
     if actual < size:
         raise ValueError(f"{journal} is shorter ({actual} bytes) than its saved state says ({size} bytes): "

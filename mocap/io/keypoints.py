@@ -241,14 +241,43 @@ def write_keypoints(path: str | Path, frames: Mapping[int, Keypoints]) -> None:
     frames : mapping of int to Keypoints
         Input pixels; values are written with 17 significant digits (they read back exactly).
     """
+    write_text_atomic(path, _text(frames, header=True))
+
+
+def append_keypoints(path: str | Path, frame: int, keypoints: Keypoints) -> None:
+    """Append one frame's keypoints to a keypoint file used as a journal (the header first if the
+    file is new or empty; no row for a frame without a present joint), flushed to the operating
+    system, not synced (the caller syncs it with its checkpoint, as :mod:`mocap.run.journal` does).
+
+    A process killed while appending leaves at most a partial last line, which the journal's
+    checkpoint cuts off on resume (:func:`mocap.io.checkpoint.cut_journal`).
+
+    Parameters
+    ----------
+    path : str or Path
+    frame : int
+        0-based frame index.
+    keypoints : Keypoints
+        Input pixels (written as :func:`write_keypoints` writes them: they read back exactly).
+    """
+    path = Path(path)
+    new = not path.exists() or path.stat().st_size == 0
+    with path.open("a", newline="") as fh:
+        fh.write(_text({frame: keypoints}, header=new))
+        fh.flush()
+
+
+def _text(frames: Mapping[int, Keypoints], header: bool) -> str:
+    """The keypoint file's lines of ``frames`` (present joints only, 17 significant digits)."""
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(KEYPOINT_COLUMNS)
+    if header:
+        writer.writerow(KEYPOINT_COLUMNS)
     for frame in sorted(frames):
         for name, (u, v, c) in frames[frame].as_mapping().items():
             writer.writerow([int(frame), name, repr(u), repr(v), repr(c)])
-    write_text_atomic(path, buf.getvalue())
+    return buf.getvalue()
 
 
-__all__ = ["KEYPOINT_COLUMNS", "KeypointFile", "KeypointSource", "Keypoints", "parse_keypoints", "read_keypoints",
-           "write_keypoints"]
+__all__ = ["KEYPOINT_COLUMNS", "KeypointFile", "KeypointSource", "Keypoints", "append_keypoints", "parse_keypoints",
+           "read_keypoints", "write_keypoints"]

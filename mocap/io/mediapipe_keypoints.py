@@ -1,10 +1,18 @@
 """2D keypoints from MediaPipe Pose (the optional extra ``keypoints``).
 
 MediaPipe Pose's legacy solution (``mediapipe.solutions.pose``, BlazePose GHUM 3D, Apache 2.0)
-in video mode with model complexity 1, whose landmark model ``pose_landmark_full.tflite`` the
+in image mode (``static_image_mode``) with model complexity 1, whose landmark model ``pose_landmark_full.tflite`` the
 pinned wheel (``mediapipe==0.10.14``) bundles: nothing is downloaded at run time. It runs on the
 input-resolution RGB frame; landmarks come back normalised to the frame, so ``u = x * width``
 and ``v = y * height`` in input pixels, the confidence is the landmark's ``visibility``.
+
+Image mode finds the person afresh in every frame: a frame's keypoints depend on that frame
+alone, so a run resumed at any frame (or re-run on another worker) gets the keypoints of an
+uninterrupted run, bit for bit. Video mode tracks the person from frame to frame and smooths
+the landmarks: its state cannot be rebuilt at a resume point short of replaying every earlier
+frame (docs/research-log.md, issue 35: image mode's detector costs 1.4 times video mode's and
+its joints are nearer the truth on a synthetic clip). ``image_mode=False`` gives video mode for
+comparisons (:mod:`experiments.keypoint_resume`).
 
 Joints (:data:`mocap.body.skeleton.JOINT_NAMES`) from landmarks (the person's left and right, as
 MediaPipe's): ``head`` the midpoint of the ears (the centre of the head), shoulders, elbows and
@@ -46,6 +54,52 @@ MISSING_EXTRA = ("--keypoints mediapipe needs MediaPipe Pose, the optional extra
                  "pip install 'mocap[keypoints]' (or give a keypoint file: --keypoints FILE.csv)")
 
 
+#: Number of MediaPipe Pose landmarks.
+N_LANDMARKS = 33
+#: Least visibility of a world landmark taken as present by :func:`world_joints`.
+MIN_WORLD_VISIBILITY = 0.5
+
+
+def world_joints(world_landmarks, visibility, min_visibility: float = MIN_WORLD_VISIBILITY
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The model's joints from MediaPipe Pose's 3D world landmarks (``pose_world_landmarks``).
+
+    MediaPipe gives them in metres about the midpoint of the hips, on the image's axes (x right,
+    y down, z away from the camera), which are the camera's up to a translation: what
+    :func:`mocap.body.ik.fit_pose_to_joints` takes. Joints as :data:`MEDIAPIPE_LANDMARKS` (the
+    mean of their landmarks); ``neck`` is absent (no landmark), and so is a joint any of whose
+    landmarks is less visible than ``min_visibility`` or not finite.
+
+    Parameters
+    ----------
+    world_landmarks : array_like, shape (33, 3), metres
+    visibility : array_like, shape (33,), in [0, 1]
+    min_visibility : float
+
+    Returns
+    -------
+    joints : ndarray, shape (10, 3), float64, metres
+        :data:`~mocap.body.skeleton.JOINT_NAMES` order; NaN rows where absent.
+    present : ndarray of bool, shape (10,)
+    """
+    from mocap.body.skeleton import JOINT_NAMES
+
+    points = np.asarray(world_landmarks, dtype=np.float64)
+    seen = np.asarray(visibility, dtype=np.float64)
+    if points.shape != (N_LANDMARKS, 3) or seen.shape != (N_LANDMARKS,):
+        raise ValueError(f"world landmarks must have shape ({N_LANDMARKS}, 3) and visibility ({N_LANDMARKS},), "
+                         f"got {points.shape} and {seen.shape}")
+    usable = np.all(np.isfinite(points), axis=1) & (np.nan_to_num(seen, nan=0.0) >= min_visibility)
+    joints = np.full((len(JOINT_NAMES), 3), np.nan)
+    present = np.zeros(len(JOINT_NAMES), dtype=bool)
+    for name, indices in MEDIAPIPE_LANDMARKS.items():
+        if usable[list(indices)].all():
+            k = JOINT_NAMES.index(name)
+            joints[k] = points[list(indices)].mean(axis=0)
+            present[k] = True
+    return joints, present
+
+
 def available() -> bool:
     """Whether MediaPipe Pose (the optional extra ``keypoints``) imports here: what
     ``--keypoints auto`` asks (an import of about 2 s the first time)."""
@@ -59,8 +113,14 @@ def available() -> bool:
 class MediaPipeKeypoints:
     """A :class:`~mocap.io.keypoints.KeypointSource` running MediaPipe Pose on each frame.
 
-    Video mode: frames must come in order (MediaPipe tracks the person between them). Use as a
-    context manager, or call :meth:`close`.
+    Image mode by default: every frame on its own (see the module); with ``image_mode=False``,
+    video mode, where frames must come in order (MediaPipe tracks the person between them). Use
+    as a context manager, or call :meth:`close`.
+
+    Parameters
+    ----------
+    image_mode : bool
+        Image mode (the run's: exact resumes), else video mode.
 
     Attributes
     ----------
@@ -73,7 +133,7 @@ class MediaPipeKeypoints:
         When the extra is not installed (:data:`MISSING_EXTRA`).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, *, image_mode: bool = True) -> None:
         try:
             from mediapipe.python.solutions import pose as mp_pose
         except ImportError:
@@ -85,10 +145,11 @@ class MediaPipeKeypoints:
                                 category=UserWarning, module=r"google\.protobuf\.symbol_database")
 
         with _native_noise_dropped():       # the graph opens its calculators on threads of its own: waited for
-            self._pose = mp_pose.Pose(static_image_mode=False, model_complexity=1)
+            self._pose = mp_pose.Pose(static_image_mode=image_mode, model_complexity=1)
             self._pose._graph.wait_until_idle()
         self.milliseconds: list[float] = []
-        self.description = f"mediapipe {__version__} pose, model complexity 1"
+        mode = "image" if image_mode else "video"
+        self.description = f"mediapipe {__version__} pose, model complexity 1, {mode} mode"
 
     def keypoints(self, frame_index: int, image: np.ndarray | None) -> Keypoints:
         """Keypoints of one frame.
@@ -96,7 +157,7 @@ class MediaPipeKeypoints:
         Parameters
         ----------
         frame_index : int
-            Unused (MediaPipe's video mode relies on the frames' order).
+            Unused (video mode relies on the frames' order).
         image : ndarray, shape (H, W, 3), uint8
             The input-resolution RGB frame.
 

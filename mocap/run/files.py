@@ -1,7 +1,8 @@
 """The names of the files a run writes (docs/design.md section 4): one table, read by every
 module that writes or reads them (and by the tests).
 
-A track run's folder (:func:`mocap.run.track`): :data:`POSES_CSV` (the journal),
+A track run's folder (:func:`mocap.run.track`): :data:`POSES_CSV` (the journal), with keypoints
+:data:`KEYPOINTS_CSV` (their journal),
 :data:`POSES_BVH`, :data:`OVERLAY_MP4`, :data:`RUN_JSON`, :data:`COLOUR_MODEL_JSON`,
 :data:`RESIDUALS_PNG`, the checkpoint :data:`STATE_FILE` (kept: a finished run's last state)
 and the lock :data:`LOCK_FILE`, and while it runs :data:`OVERLAY_TMP`. A ``segment`` folder: :data:`SEGMENT_JSON` (and the colour model). The top
@@ -11,11 +12,14 @@ from __future__ import annotations
 
 from mocap.io.lock import LOCK_FILE
 
-__all__ = ["COLOUR_MODEL_JSON", "LOCK_FILE", "OVERLAY_MP4", "OVERLAY_TMP", "POSES_BVH", "POSES_CSV", "RESIDUALS_PNG", "RUN_JSON",
+__all__ = ["COLOUR_MODEL_JSON", "KEYPOINTS_CSV", "LOCK_FILE", "OVERLAY_MP4", "OVERLAY_TMP", "POSES_BVH", "POSES_CSV", "RESIDUALS_PNG", "RUN_JSON",
            "RUN_OUTPUTS", "SEGMENT_JSON", "STATE_FILE", "SUMMARY_CSV", "SUMMARY_PNG", "TRACK_MANY_JSON"]
 
 #: Pose, 3D and 2D joints and per-frame columns of every tracked frame, appended as frames are decided.
 POSES_CSV = "poses.csv"
+#: The 2D keypoints the tracker was given (a keypoint file, input pixels), appended as frames are
+#: pushed, in a run with keypoints.
+KEYPOINTS_CSV = "keypoints.csv"
 #: The poses as BVH motion (degrees), written at the end.
 POSES_BVH = "poses.bvh"
 #: The video with the registered model drawn on it.
@@ -28,7 +32,7 @@ RUN_JSON = "run.json"
 COLOUR_MODEL_JSON = "colour_model.json"
 #: Both residuals per frame with their failure thresholds.
 RESIDUALS_PNG = "residuals.png"
-#: The checkpoint: the tracker's exact state and the journal length it belongs to.
+#: The checkpoint: the tracker's exact state and the journals' lengths it belongs to.
 STATE_FILE = ".tracker_state.npz"
 #: ``python -m mocap segment``'s settings.
 SEGMENT_JSON = "segment.json"

@@ -1,10 +1,12 @@
-"""The run's journal and checkpoint: ``poses.csv`` rows appended as frames are decided, and
-every :data:`CHECKPOINT_EVERY` frames the tracker's exact state with the journal length it
-belongs to (:mod:`mocap.io.checkpoint`), for resumes bit for bit the same.
+"""The run's journal and checkpoint: ``poses.csv`` rows appended as frames are decided,
+``keypoints.csv`` rows (the 2D keypoints the tracker was given, a keypoint file of
+:mod:`mocap.io.keypoints`) as frames are pushed, and every :data:`CHECKPOINT_EVERY` frames the
+tracker's exact state with the lengths of both journals it belongs to (:mod:`mocap.io.checkpoint`),
+for resumes bit for bit the same.
 
-What a crash leaves behind: the journal's rows (the last maybe half written) and the last
-checkpoint (written atomically after the rows it covers are synced); a resumed run cuts the
-journal back to the checkpoint's length and goes on from its state (:func:`previous_run`).
+What a crash leaves behind: the journals' rows (the last of each maybe half written) and the
+last checkpoint (written atomically after the rows it covers are synced); a resumed run cuts the
+journals back to the checkpoint's lengths and goes on from its state (:func:`previous_run`).
 """
 from __future__ import annotations
 
@@ -16,19 +18,27 @@ import numpy as np
 
 from mocap.calibrate import Calibration
 from mocap.imaging import ColourModel
-from mocap.io.checkpoint import Checkpoint, read_checkpoint, truncate_journal, write_checkpoint
+from mocap.io.checkpoint import (Checkpoint, cut_journal, read_checkpoint, synced_length, truncate_journal,
+                                  write_checkpoint)
+from mocap.io.keypoints import Keypoints, append_keypoints
 from mocap.io.pose_table import PoseTable
 from mocap.run import files
 
-__all__ = ["CHECKPOINT_EVERY", "STATE_FILE", "Journal", "People", "previous_run"]
+__all__ = ["CHECKPOINT_EVERY", "KEYPOINTS_FILE", "STATE_FILE", "Journal", "People", "other_settings",
+           "previous_run"]
 
 #: Frames between two checkpoints (and after the last frame of a file): a resumed run redoes at
 #: most this many frames (the journal is cut back to the checkpoint), bit for bit the same.
 CHECKPOINT_EVERY = 25
 #: Checkpoint (:mod:`mocap.io.checkpoint`): the tracker's exact state after the last pushed
-#: frame and the length of ``poses.csv`` that goes with it, for bit-identical resumes
-#: (:data:`mocap.run.files.STATE_FILE`).
+#: frame and the lengths of ``poses.csv`` and ``keypoints.csv`` that go with it, for bit-identical
+#: resumes (:data:`mocap.run.files.STATE_FILE`).
 STATE_FILE = files.STATE_FILE
+#: The keypoint journal: every pushed frame's keypoints (input pixels), when the run has keypoints
+#: (:data:`mocap.run.files.KEYPOINTS_CSV`).
+KEYPOINTS_FILE = files.KEYPOINTS_CSV
+#: Checkpoint entry holding the keypoint journal's length in bytes.
+KEYPOINTS_BYTES = "run_keypoints_bytes"
 #: Checkpoint entry holding the people's bookkeeping (:class:`People`, JSON text).
 PEOPLE = "run_people"
 #: Checkpoint entry holding ``(frame, dark)`` of the frames the tracker still holds back.
@@ -111,7 +121,7 @@ class People:
 
 @dataclass
 class Journal:
-    """``poses.csv`` and its checkpoint in an output folder.
+    """``poses.csv``, ``keypoints.csv`` and their checkpoint in an output folder.
 
     Attributes
     ----------
@@ -119,25 +129,33 @@ class Journal:
         ``poses.csv``.
     state_path : Path
         The checkpoint (:data:`STATE_FILE`).
+    keypoints_path : Path
+        ``keypoints.csv`` (:data:`KEYPOINTS_FILE`).
     """
 
     path: Path
     state_path: Path
+    keypoints_path: Path
 
     @classmethod
     def in_folder(cls, out_dir: Path) -> "Journal":
-        return cls(out_dir / files.POSES_CSV, out_dir / STATE_FILE)
+        return cls(out_dir / files.POSES_CSV, out_dir / STATE_FILE, out_dir / KEYPOINTS_FILE)
 
     def append(self, row: PoseTable) -> None:
         """A decided frame's row (synced with the next checkpoint)."""
         row.append_to(self.path, sync=False)
 
+    def append_keypoints(self, index: int, keypoints: Keypoints) -> None:
+        """A pushed frame's keypoints, input pixels (synced with the next checkpoint)."""
+        append_keypoints(self.keypoints_path, index, keypoints)
+
     def checkpoint(self, tracker_state: dict, dark: dict[int, bool], people: People, next_index: int) -> None:
         """The tracker's state, the held-back frames' dark flags and the people, with the journal
         length they belong to; frames before ``next_index`` are done."""
         pending = np.array(sorted(dark.items()), np.int64).reshape(-1, 2)
-        write_checkpoint(self.state_path, {**tracker_state, PENDING_DARK: pending, PEOPLE: people.to_array()},
-                         next_index, self.path)
+        keypoint_bytes = np.int64(synced_length(self.keypoints_path))
+        write_checkpoint(self.state_path, {**tracker_state, PENDING_DARK: pending, PEOPLE: people.to_array(),
+                                           KEYPOINTS_BYTES: keypoint_bytes}, next_index, self.path)
 
 
 @dataclass
@@ -155,6 +173,7 @@ class Resumed:
         state = dict(checkpoint.state)
         pending = state.pop(PENDING_DARK, np.zeros((0, 2), np.int64))
         people = state.pop(PEOPLE, None)
+        state.pop(KEYPOINTS_BYTES, None)
         return cls(checkpoint, state, {int(f): bool(v) for f, v in pending},
                    None if people is None else People.from_array(people))
 
@@ -165,19 +184,45 @@ def previous_run(journal: Journal, run_json: Path, settings: dict, overwrite: bo
     Raises
     ------
     ValueError
-        The folder holds a run with other settings (or no ``run.json``).
+        The folder holds a run with other settings (or no ``run.json``): one line saying which
+        (:func:`other_settings`).
     """
     if overwrite or not (journal.path.exists() or journal.state_path.exists()):
-        journal.path.unlink(missing_ok=True)
-        journal.state_path.unlink(missing_ok=True)
+        for path in (journal.path, journal.state_path, journal.keypoints_path):
+            path.unlink(missing_ok=True)
         return None
     try:
         previous = json.loads(run_json.read_text()) if run_json.exists() else {}
     except json.JSONDecodeError:
         previous = {}
-    if previous.get("settings") != json.loads(json.dumps(settings)):
-        raise ValueError(f"{journal.path.parent} holds a run with other settings (or no run.json); "
-                         "use --overwrite or another --out")
+    wanted = json.loads(json.dumps(settings))
+    if previous.get("settings") != wanted:
+        raise ValueError(other_settings(journal.path.parent, previous.get("settings"), wanted))
     checkpoint = read_checkpoint(journal.path.parent / STATE_FILE)
     truncate_journal(journal.path, checkpoint)   # rows after the checkpoint (and a partial line) are redone
+    keypoint_bytes = None if checkpoint is None else checkpoint.state.get(KEYPOINTS_BYTES)
+    if checkpoint is not None and keypoint_bytes is None and settings.get("keypoints") != "none":
+        raise ValueError(f"{journal.path.parent} holds a run of an earlier mocap (its checkpoint has no keypoint "
+                         "journal), which cannot be resumed exactly: start afresh with --overwrite or use another "
+                         "--out")
+    cut_journal(journal.keypoints_path, 0 if keypoint_bytes is None else int(keypoint_bytes))
     return checkpoint
+
+
+def other_settings(folder: Path, held: dict | None, wanted: dict) -> str:
+    """Why ``folder``'s run (``run.json`` ``settings``: ``held``) is not resumed with ``wanted``,
+    and what to do, in one line: no ``run.json``; a run of an earlier mocap (no
+    ``settings.keypoints``); other keypoints (``--keypoints`` changed, or the optional extra
+    ``keypoints`` installed or removed under ``auto``); else the settings that differ."""
+    what = "start afresh with --overwrite or use another --out"
+    if not isinstance(held, dict):
+        return f"{folder} holds a run without a readable run.json: {what}"
+    if "keypoints" not in held:
+        return (f"{folder} holds a run of an earlier mocap (its run.json has no settings.keypoints), which cannot be "
+                f"resumed exactly: {what}")
+    if held["keypoints"] != wanted.get("keypoints"):
+        return (f"{folder} holds a run tracked with keypoints from {held['keypoints']!r}, this run's would come from "
+                f"{wanted.get('keypoints')!r} (--keypoints changed, or the optional extra 'keypoints' was installed or "
+                f"removed since): resume it with the keypoints it had, or {what}")
+    differ = sorted(key for key in held.keys() | wanted.keys() if held.get(key) != wanted.get(key))
+    return f"{folder} holds a run with other settings ({', '.join(differ)}): {what}"

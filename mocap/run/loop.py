@@ -11,7 +11,9 @@ run — even killed at any instant — resumes with the same command from the la
 gives bit for bit the poses of an uninterrupted run (the settings must be the same; they are
 kept in ``run.json``). One run at a time may write to an output folder (:mod:`mocap.io.lock`).
 A file's damage check decodes it alongside the run (:class:`DamageCheck`); people changing
-start new segments (:class:`mocap.run.journal.People`).
+start new segments (:class:`mocap.run.journal.People`). The progress bar is drawn from the
+check's verdict on (:meth:`RunLoop.advance`): a refused video's run writes its one-line refusal
+to stderr and nothing else, however fast the frames come.
 """
 from __future__ import annotations
 
@@ -149,6 +151,8 @@ class ReadFrame:
         At the overlay's size (None without an overlay).
     keypoints : Keypoints or None
         In working pixels.
+    detected : Keypoints or None
+        The same in input pixels, as the source gave them (for ``keypoints.csv``).
     """
 
     index: int
@@ -160,6 +164,7 @@ class ReadFrame:
     full: np.ndarray | None
     picture: np.ndarray | None
     keypoints: Keypoints | None
+    detected: Keypoints | None
 
 
 @dataclass(frozen=True, eq=False)
@@ -228,10 +233,9 @@ class FrameReader:
                                          scene=colours.scene)
                 read = ReadFrame(index, when, bool(small.mean() < DARK_MEAN), small, colours.segment, prepared,
                                  frame if self.full else None,
-                                 None if self.overlay is None else self.overlay.frame(frame), None)
+                                 None if self.overlay is None else self.overlay.frame(frame), None, None)
                 if pipeline is None:
-                    yield read if self.keypoints is None else \
-                        replace(read, keypoints=self.keypoints.keypoints(index, frame).scaled(*self.to_working))
+                    yield read if self.keypoints is None else self._detected(read, self.keypoints.keypoints(index, frame))
                 else:
                     waiting.append(read)
             while waiting:
@@ -246,8 +250,12 @@ class FrameReader:
         return time.perf_counter() - self.clock if self.frames_in.live else self.frames_in.time_s(index)
 
     def _with_keypoints(self, read: ReadFrame, pipeline: KeypointPipeline) -> ReadFrame:
-        """``read`` with its keypoints from the pipeline, in working pixels."""
-        return replace(read, keypoints=pipeline.take(read.index).scaled(*self.to_working))
+        """``read`` with its keypoints from the pipeline."""
+        return self._detected(read, pipeline.take(read.index))
+
+    def _detected(self, read: ReadFrame, detected: Keypoints) -> ReadFrame:
+        """``read`` with the keypoints the source gave (input pixels) and the same in working pixels."""
+        return replace(read, keypoints=detected.scaled(*self.to_working), detected=detected)
 
 
 class DamageCheck:
@@ -362,7 +370,8 @@ class RunLoop:
         self.clock: float | None = None            # live: the reader's clock (frame times count from it)
         self.colour_frame: int | None = None
         self.overlay: OverlayWriter | None = None
-        self.bar = None
+        self.bar: ProgressBar | None = None
+        self.tracked = 0                           # frames tracked in this session
 
     @classmethod
     def open(cls, frames_in, setup: RunSetup, out_dir: Path, params: RunParams) -> "RunLoop":
@@ -404,7 +413,8 @@ class RunLoop:
         """The tracker: fresh (``run.json`` says running) or restored from ``checkpoint``."""
         if checkpoint is None:
             self.damage.made.extend([self.journal.path, self.run_json, self.journal.state_path,
-                                     self.out_dir / files.COLOUR_MODEL_JSON, self.out_dir / files.OVERLAY_MP4])
+                                     self.journal.keypoints_path, self.out_dir / files.COLOUR_MODEL_JSON,
+                                     self.out_dir / files.OVERLAY_MP4])
             self.tracker = Tracker(self.person.model, self.camera, self.config, self.person.calibration.initial_pose)
             write_text_atomic(self.run_json, json.dumps({"status": "running", "settings": self.settings}, indent=2))
             return
@@ -454,7 +464,8 @@ class RunLoop:
             if self.frames_in.live and self.clock is not None:
                 self.latency_ms.append(1e3 * (time.perf_counter() - self.clock - when))
                 shown["latency"] = f"{self.latency_ms[-1]:.0f}ms"
-            self.bar.set_postfix(**shown)
+            if self.bar is not None:
+                self.bar.set_postfix(**shown)
 
     def checkpoint(self, next_index: int) -> None:
         self.journal.checkpoint(self.tracker.state(), self.dark, self.people, next_index)
@@ -487,12 +498,27 @@ class RunLoop:
             if found is not None:                           # someone new: a segment of their own
                 self.switch_person(index, found, reader)
                 prepared = reader.prepare(frame.small)
+        if frame.detected is not None:
+            self.journal.append_keypoints(index, frame.detected)
         self.emit(self.tracker.push(index, prepared, frame.keypoints))
         self.people.saw(index, prepared.is_empty)
         self.damage.take(wait=False)
         if (index + 1) % journalling.CHECKPOINT_EVERY == 0 or index + 1 == self.span.stop:
             self.checkpoint(index + 1)
-        self.bar.update(1)
+        self.advance(1)
+
+    def advance(self, frames: int) -> None:
+        """``frames`` more tracked. The bar is drawn once the damage check's verdict is in (at
+        once for an image folder or a camera): before it, the run may still be refused, and a
+        refusal must be the only thing it writes to stderr."""
+        self.tracked += frames
+        if self.bar is not None:
+            self.bar.update(frames)
+        elif self.damage.damaged is not None:
+            span = self.span
+            self.bar = ProgressBar(total=None if span.expected is None else span.expected - span.first,
+                                   initial=span.start - span.first + self.tracked, desc="tracking", unit="frame",
+                                   disable=not self.params.progress)
 
     def run(self) -> None:
         """Track the session's frames (Ctrl-C ends a live run and keeps what was tracked)."""
@@ -503,9 +529,7 @@ class RunLoop:
                              keypoints=self.params.keypoints, full=self.params.newcomer is not None,
                              overlay=geometry if self.overlay is not None else None,
                              detect_ahead=self.params.detect_ahead)
-        self.bar = ProgressBar(total=None if span.expected is None else span.expected - span.first,
-                               initial=span.start - span.first, desc="tracking", unit="frame",
-                               disable=not self.params.progress)
+        self.advance(0)
         self.started, self.clock = time.perf_counter(), reader.clock
         interrupted, last = False, None
         try:    # (live: one frame waits at most, a newer one is taken instead of a queue of old ones)
@@ -522,6 +546,7 @@ class RunLoop:
             # a run that stops early (--max-frames) writes its rows before the verdict, which
             # can take the check's decoding of the whole clip; a damaged video still removes them
             self.damage.take(wait=True)
+            self.advance(0)
         except ValueError:
             self.damage.take(wait=True)   # a damaged video's reader may fail first: the damage is the reason
             raise
@@ -531,7 +556,8 @@ class RunLoop:
             interrupted = True          # Ctrl-C ends a live run: what was tracked is kept
             self.emit(self.tracker.finish())
         finally:
-            self.bar.close()
+            if self.bar is not None:
+                self.bar.close()
             if self.overlay is not None:
                 self.overlay.close()
         if interrupted:

@@ -208,13 +208,13 @@ def _one_line(exc: BaseException) -> str:
 
 
 def _clear_run(out_dir: Path) -> None:
-    """Remove a video's run (journal, checkpoint, run.json) under its lock, to start it afresh."""
+    """Remove a video's run (journals, checkpoint, run.json) under its lock, to start it afresh."""
     from mocap.io.lock import FolderLock
 
     if not out_dir.is_dir():
         return
     with FolderLock(out_dir):
-        for name in (files.POSES_CSV, files.STATE_FILE, files.RUN_JSON):
+        for name in (files.POSES_CSV, files.KEYPOINTS_CSV, files.STATE_FILE, files.RUN_JSON):
             (out_dir / name).unlink(missing_ok=True)
 
 

@@ -1,20 +1,25 @@
-"""What a person may set for a run, as one JSON-backed record, and the choices every command
-takes from it the same way (the background's mode, the keypoint source).
+"""What a person may set for a run, as one JSON-backed record, and what it means, decided once.
 
 :class:`OwnVideoOptions` is what ``python -m mocap track`` (and ``track-many``, ``calibrate``,
-``segment``, ``demo``) turn their command lines into; :func:`mocap.run.track` takes it.
+``demo``: one builder, ``mocap.commands._common.own_video_options``) turn their command lines
+into, with the command line's defaults; :func:`mocap.run.track` takes it and resolves it once
+into :class:`RunChoices` (which keypoints run and why, where the colours come from, the
+background's mode), which the set-up, the loop, the outputs, the closing hint and ``run.json``
+read.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from mocap.io.keypoints import KeypointSource
+
 from mocap.config import JsonConfig
 from mocap.render.camera import DEFAULT_HFOV_DEG
 from mocap.track import TrackerConfig
 
-__all__ = ["BACKGROUND_MODES", "COLOUR_SOURCES", "KEYPOINT_CHOICES", "OwnVideoOptions", "background_mode",
-           "keypoint_source", "resolve_keypoints"]
+__all__ = ["BACKGROUND_MODES", "COLOUR_SOURCES", "KEYPOINT_CHOICES", "OwnVideoOptions", "RunChoices",
+           "background_mode", "keypoint_source", "resolve_keypoints"]
 
 #: How the background is found: ``auto`` (estimate, use if the person moves enough), ``image``
 #: (a file), ``frames`` (median of frames A:B), ``none`` (colour-only foreground).
@@ -74,10 +79,10 @@ class OwnVideoOptions(JsonConfig):
     overwrite : bool
         Start afresh instead of resuming a run in the output folder.
     keypoints : str or None
-        2D keypoints: ``"mediapipe"`` (MediaPipe Pose, the optional extra ``keypoints``), a
-        keypoint file (:mod:`mocap.io.keypoints`), ``"auto"`` (MediaPipe when the extra imports,
-        none otherwise: the command line's default, :func:`resolve_keypoints`) or None /
-        ``"none"``; the tracker adds them as a cue (``tracker.keypoint_weight``).
+        2D keypoints: ``"auto"`` (the default, as on the command line: MediaPipe when the extra
+        imports, none otherwise, :func:`resolve_keypoints`), ``"mediapipe"`` (MediaPipe Pose,
+        the optional extra ``keypoints``), a keypoint file (:mod:`mocap.io.keypoints`) or
+        ``"none"`` (or None); the tracker adds them as a cue (``tracker.keypoint_weight``).
     tracker : TrackerConfig
     """
 
@@ -96,7 +101,7 @@ class OwnVideoOptions(JsonConfig):
     overlay: bool = True
     show: bool = False
     overwrite: bool = False
-    keypoints: str | None = None
+    keypoints: str | None = "auto"
     tracker: TrackerConfig = field(default_factory=TrackerConfig)
 
     def __post_init__(self) -> None:
@@ -134,6 +139,64 @@ class OwnVideoOptions(JsonConfig):
                                self.background_frames is not None, self.no_background)
 
 
+@dataclass(frozen=True, eq=False, kw_only=True)
+class RunChoices:
+    """What a run's :class:`OwnVideoOptions` mean on this installation and input, decided once
+    (:meth:`of`) by :func:`mocap.run.track`.
+
+    Attributes
+    ----------
+    keypoints : str
+        What runs: ``"mediapipe"``, a keypoint file's path or ``"none"``.
+    keypoints_line : str
+        Which, and why for ``auto`` (:func:`resolve_keypoints`): what the command prints and
+        ``run.json`` ``settings.own_video.keypoints``.
+    keypoint_source : KeypointSource or None
+        The source itself (None for ``"none"``), made once.
+    colour : {"calibration", "face"}
+        Where the colour classes are learnt (:data:`COLOUR_SOURCES`); ``face`` only where the
+        run learns them itself (:meth:`check_colour`).
+    background_mode : {"auto", "image", "frames", "none"}
+        :data:`BACKGROUND_MODES`.
+    """
+
+    keypoints: str
+    keypoints_line: str
+    keypoint_source: KeypointSource | None
+    colour: str
+    background_mode: str
+
+    @classmethod
+    def of(cls, options: OwnVideoOptions, sequence_background: bool = False) -> "RunChoices":
+        """The choices of ``options`` (``sequence_background``: a sequence folder's own
+        ``background.png`` is used unless the options say otherwise). Raises as
+        :func:`keypoint_source` does."""
+        resolved, line = resolve_keypoints(options.keypoints)
+        return cls(keypoints="none" if resolved is None else resolved, keypoints_line=line,
+                   keypoint_source=_source(resolved, options.keypoints == "auto"), colour=options.colour,
+                   background_mode=options.background_mode(sequence_background))
+
+    @property
+    def keypoint_cue(self) -> str | None:
+        """``keypoints``, None for ``"none"`` (:class:`mocap.run.advice.RunFacts`)."""
+        return None if self.keypoints == "none" else self.keypoints
+
+    def check_colour(self, learnt: bool, calibration: str, live: bool) -> None:
+        """ValueError (one line) for ``colour="face"`` where the set-up has already learnt the
+        colours (``learnt``): an automatic ``calibration`` learns them inside its own fit; a
+        given one with a colour-only foreground or a ``live`` camera, inside the model."""
+        if self.colour != "face" or not learnt:
+            return
+        if calibration == "automatic":
+            why = "the automatic calibration learns the colours inside its own fit: give --calibration JSON"
+        elif live:
+            why = "a live camera's colours are learnt inside the calibrated model on its first frame"
+        else:
+            why = "a colour-only foreground learns the colours inside the calibrated model: give a background"
+        raise ValueError(f"--colour face learns the colours from a detected face, which this run cannot: {why}, "
+                         "or leave --colour at calibration")
+
+
 def resolve_keypoints(name: str | None) -> tuple[str | None, str]:
     """What ``--keypoints NAME`` means on this installation.
 
@@ -165,13 +228,18 @@ def keypoint_source(name: str | None):
     MediaPipe Pose for ``"mediapipe"`` (ValueError in one line without the extra) and for
     ``"auto"`` where the extra imports (:func:`resolve_keypoints`), else a keypoint file
     (FileNotFoundError, ValueError naming the line of a malformed one)."""
-    resolved, _ = resolve_keypoints(name)
+    return _source(resolve_keypoints(name)[0], name == "auto")
+
+
+def _source(resolved: str | None, auto: bool):
+    """The keypoint source of a resolved name (:func:`resolve_keypoints`); ``auto``: chosen by
+    ``--keypoints auto`` (said in its description)."""
     if resolved is None:
         return None
     if resolved == "mediapipe":
         from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
         source = MediaPipeKeypoints()
-        if name == "auto":
+        if auto:
             source.description += " (--keypoints auto)"
         return source
     from mocap.io.keypoints import KeypointFile

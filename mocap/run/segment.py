@@ -127,6 +127,17 @@ def _keypoints_setting(name: str | None, path) -> str | None:
     return resolved if resolved in (None, "mediapipe") else path(resolved)
 
 
+def _other_settings(out: Path, held: dict, wanted: dict) -> str:
+    """Why ``out``'s segmentation (``segment.json``: ``held``) is not resumed with ``wanted``, in one line."""
+    what = "choose another --out (or delete the folder)"
+    if held.get("keypoints") != wanted.get("keypoints"):
+        return (f"{out} holds a segmentation made with keypoints {held.get('keypoints')!r}, this one's would be "
+                f"{wanted.get('keypoints')!r} (--keypoints changed, or the optional extra 'keypoints' was installed "
+                f"or removed since): give the keypoints it had, or {what}")
+    differ = sorted(key for key in held.keys() | wanted.keys() if held.get(key) != wanted.get(key))
+    return f"{out} holds a segmentation with other settings ({', '.join(differ)}); {what}"
+
+
 def _working_box(box: Box | None, factor: int) -> Box | None:
     """An input-pixel box ``(row, col, height, width)`` at the working resolution (None stays None)."""
     if box is None:
@@ -193,9 +204,9 @@ class _Segmenter:
         settings = _settings(self.video, options, self.stop, factor)
         settings_file = out / files.SEGMENT_JSON
         if settings_file.is_file():
-            if read_json(settings_file) != json.loads(json.dumps(settings)):
-                raise ValueError(f"{out} holds a segmentation with other settings; choose another --out "
-                                 "(or delete the folder)")
+            held, wanted = read_json(settings_file), json.loads(json.dumps(settings))
+            if held != wanted:
+                raise ValueError(_other_settings(out, held, wanted))
         for sub in ("labels", "edges", "distance"):
             (out / sub).mkdir(parents=True, exist_ok=True)
         write_json(settings_file, settings)

@@ -2,7 +2,9 @@
 folder or a live camera) into a run's files, from :class:`~mocap.run.options.OwnVideoOptions`.
 
 It opens the source (:class:`RunInput`: a sequence folder's own background, calibration,
-ground truth and frame rate are used when the options give none), decides the set-up once
+ground truth and frame rate are used when the options give none), resolves the options once
+(:class:`mocap.run.options.RunChoices`: which keypoints run and why, the colours' source, the
+background's mode: what the rest reads), decides the set-up once
 (:func:`mocap.run.setup.find_setup`) and runs the loop (:func:`mocap.run.loop.track_frames`).
 """
 from __future__ import annotations
@@ -21,7 +23,7 @@ from mocap.io.sequence import find_sequence
 from mocap.io.video import read_image
 from mocap.run.advice import RunFacts, mostly_failed, what_to_try
 from mocap.run.loop import RunParams, track_frames
-from mocap.run.options import OwnVideoOptions, keypoint_source, resolve_keypoints
+from mocap.run.options import OwnVideoOptions, RunChoices
 from mocap.run.outputs import RunSummary
 from mocap.run.person import NewcomerFinder
 from mocap.run.setup import SetupAccount, SetupRequest, find_setup
@@ -73,8 +75,9 @@ class RunInput:
         return cls(frames, background, own_background is not None, calibration,
                    options.ground_truth or seq.ground_truth, fps)
 
-    def request(self, options: OwnVideoOptions, progress: bool, keypoints) -> SetupRequest:
-        """What the set-up is told: the options, the calibration rescaled to the working size."""
+    def request(self, options: OwnVideoOptions, choices: RunChoices, progress: bool) -> SetupRequest:
+        """What the set-up is told: the options as ``choices`` resolved them, the calibration
+        rescaled to the working size."""
         width, height = self.frames.width, self.frames.height
         factor = None if options.work_width is None else working_factor(width, height, options.work_width)
         given = None
@@ -82,11 +85,11 @@ class RunInput:
             given = Calibration.from_json(self.calibration)
             factor = factor or working_factor(width, height)
             given = dataclasses.replace(given, camera=given.camera.working(width, height, factor))
-        return SetupRequest(factor=factor, background_mode=options.background_mode(self.sequence_background),
+        return SetupRequest(factor=factor, background_mode=choices.background_mode,
                             background_image=read_image(self.background) if self.background else None,
                             background_frames=options.background_frames, calibration=given,
                             hfov_deg=options.hfov_deg, height_m=options.height_m, progress=progress,
-                            keypoints=keypoints)
+                            keypoints=choices.keypoint_source)
 
 
 def _check_files(background: str | None, calibration: str | None) -> None:
@@ -125,21 +128,23 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
     Raises
     ------
     ValueError, FileNotFoundError
-        Bad options, missing files, a damaged video, no usable frame (one sentence each).
+        Bad options (``colour="face"`` where the set-up learns the colours itself:
+        :meth:`~mocap.run.options.RunChoices.check_colour`), missing files, a damaged video, no
+        usable frame (one sentence each).
     """
     options = OwnVideoOptions() if options is None else options
-    keypoints = keypoint_source(options.keypoints)          # a bad keypoint file stops the run first
-    keypoints_used = resolve_keypoints(options.keypoints)[1]
     opened = RunInput.open(source, options)
     frames_in = opened.frames
     try:
+        choices = RunChoices.of(options, opened.sequence_background)     # a bad keypoint file stops here
         with compiling_announced(progress, "the set-up's kernels"):
-            found = find_setup(frames_in, opened.request(options, progress, keypoints))
+            found = find_setup(frames_in, opened.request(options, choices, progress))
+        choices.check_colour(found.setup.colour_model is not None, found.setup.record.calibration_from, frames_in.live)
         if frames_in.live:
             frames_in.hold(found.consumed)
-        setup = dataclasses.replace(found.setup, colour_from=options.colour,
+        setup = dataclasses.replace(found.setup, colour_from=choices.colour,
                                     background_file=Path(opened.background) if opened.background else None,
-                                    record=dataclasses.replace(found.setup.record, keypoints=keypoints_used))
+                                    record=dataclasses.replace(found.setup.record, keypoints=choices.keypoints_line))
         width, height = frames_in.width, frames_in.height
         account = dataclasses.replace(setup.record, input_width=width, input_height=height,
                                       working_width=setup.calibration.camera.width,
@@ -150,12 +155,12 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
         params = RunParams(config=options.tracker, ground_truth=opened.ground_truth, fps=opened.fps,
                            max_frames=options.max_frames, overwrite=options.overwrite, progress=progress,
                            write_overlay=options.overlay, allow_damaged=options.allow_damaged, start_frame=options.start,
-                           show=options.show, newcomer=newcomer, keypoints=keypoints)
+                           show=options.show, newcomer=newcomer, keypoints=choices.keypoint_source)
         summary = track_frames(frames_in, setup, out_dir, params)
     finally:
         if not frames_in.live:
             frames_in.close()       # the damage check's ffmpeg, when the run ended before it did
-    used = resolve_keypoints(options.keypoints)[0]
+    used = choices.keypoint_cue
     # whether the extra is installed matters only to advice on a run without keypoints (its import takes ~2 s)
     extra = used is not None or (mostly_failed(summary.frames, summary.failures) and mediapipe_keypoints.available())
     facts = RunFacts(frames=summary.frames, failures=summary.failures, keypoints=used, keypoints_extra=extra,

@@ -116,15 +116,15 @@ class TrackerConfig(JsonConfig):
         distance D_k (:class:`mocap.cost.KeypointCost`). The registration steps add D_k at the
         same rate relative to their own cost: the region step minimises
         ``F + keypoint_weight / REGION_WEIGHT * D_k``, the edge step
-        ``D_c + keypoint_weight / EDGE_WEIGHT * D_k`` (:data:`REGION_WEIGHT`, :data:`EDGE_WEIGHT`); and a keypoint
-        source joins the proposal stage (the learned lifter's hypotheses,
-        :class:`mocap.track.proposals.LifterSource`). Without keypoints it changes nothing.
+        ``D_c + keypoint_weight / EDGE_WEIGHT * D_k`` (:data:`REGION_WEIGHT`, :data:`EDGE_WEIGHT`). Without
+        keypoints it changes nothing; 0: the keypoints are not a term (the lifter may still read them).
     lifter_weight : float
-        With keypoints: score per nat of the learned lifter's negative log-density at a candidate's
-        joints (about the neck, :meth:`mocap.track.lifter.Lifter.log_density`), counted from the
-        density at the lifter's most probable hypothesis and capped
-        (:data:`mocap.track.tracker.LIFTER_ENERGY_CAP`); every candidate of a frame, tracked or
-        proposed, pays it. 0.5 was the best of 0 / 0.2 / 0.5 / 1.5 on seed 0; on the unseen seed 23
+        With keypoints, switches the learned lifter on (> 0; 0: off): its hypotheses of the frame's
+        keypoints join the proposal stage (:class:`mocap.track.proposals.LifterSource`), and the score
+        adds ``lifter_weight`` per nat of its negative log-density at a candidate's joints (about the
+        neck, :meth:`mocap.track.lifter.Lifter.log_density`), counted from the density at the
+        lifter's most probable hypothesis and capped (:data:`mocap.track.proposals.LIFTER_ENERGY_CAP`);
+        every candidate of a frame, tracked or proposed, pays it. 0.5 was the best of 0 / 0.2 / 0.5 / 1.5 on seed 0; on the unseen seed 23
         with oracle keypoints it took the tracker from 78 to 71 mm median and from 19.9 % to 16.5 %
         of frames over 100 mm (the lifter's proposals alone; docs/research-log.md, issue 29).
     prior_weight : float
@@ -203,10 +203,9 @@ class TrackerConfig(JsonConfig):
 
     @property
     def uses_lifter(self) -> bool:
-        """Whether frames with keypoints are lifted (``keypoint_weight`` > 0: the lifter's hypotheses
-        are then the proposal stage's keypoint source, and its score term counts when
-        ``lifter_weight`` > 0)."""
-        return self.keypoint_weight > 0
+        """Whether frames with keypoints are lifted (``lifter_weight`` > 0): the lifter's hypotheses
+        are then the proposal stage's keypoint source and its density a term of the score."""
+        return self.lifter_weight > 0
 
     def keypoint_step_weights(self) -> tuple[float, float]:
         """Weight of the keypoint distance in the region step (units of F per pixel) and in the

@@ -27,14 +27,20 @@ import numpy as np
 from mocap.body.ik import reach_arm
 from mocap.body.jumps import SIDES, arm_jumps, ray_sphere_depths, torso_flip
 from mocap.body.model import BodyModel
-from mocap.body.pose import PARAMETER_INDEX, PARAMETER_NAMES, clamp_to_limits
+from mocap.body.pose import PARAMETER_NAMES, clamp_to_limits
 from mocap.body.skeleton import JOINT_INDEX
 from mocap.imaging.blobs import label_blobs
 from mocap.labels import class_label
 from mocap.render.camera import Camera
-from mocap.render.rasterize import render_labels
 from mocap.track.config import MIN_SKIN_BLOB_PIXELS, TrackerConfig
+from mocap.track.lifter import MIN_VISIBLE, LiftedHypotheses, Lifter, relative_joints
 
+
+#: Most nats the lifter term charges a candidate (before ``lifter_weight``): about the energy of
+#: joints 18 cm on average from the nearest hypothesis (:data:`~mocap.track.lifter.DENSITY_SIGMA_M`). The
+#: lifter misses some frames (its best of ten is within 10 cm on about nine in ten); there the
+#: image's evidence must decide.
+LIFTER_ENERGY_CAP = 10.0
 
 #: Hand distances from the shoulder tried when an arm is posed to reach an image point, as
 #: fractions of the arm's straight reach (shoulder to hand centre).
@@ -57,30 +63,19 @@ class Proposal:
     origin: str
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ProposalContext:
     """What a proposal source may use besides the frame's observation.
 
     Attributes
     ----------
-    model : BodyModel
-        The calibrated actor.
-    camera : Camera
-        The working camera (the observation's size).
-    leader : ndarray, shape (23,), float64
-        The leading hypothesis's pose registered on this frame (metres, radians).
-    keypoints : object or None
-        The frame's 2D keypoints in working-camera pixels, when a detector gave them.
     lifted : LiftedHypotheses or None
-        The learned lifter's hypotheses for those keypoints (:meth:`mocap.track.lifter.Lifter.lift`),
-        when the tracker lifts them.
+        The learned lifter's hypotheses of the frame's 2D keypoints (:meth:`LifterSource.lift`),
+        lifted once per frame for the proposal stage and the score alike; None on frames without
+        keypoints or when the configuration does not lift.
     """
 
-    model: BodyModel
-    camera: Camera
-    leader: np.ndarray
-    keypoints: object | None = None
-    lifted: object | None = None
+    lifted: LiftedHypotheses | None = None
 
 
 class ProposalSource(Protocol):
@@ -92,50 +87,6 @@ class ProposalSource(Protocol):
     def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
         """Poses for this frame (possibly none), from ``prepared``
         (:class:`mocap.imaging.PreparedFrame`) and ``context``."""
-
-
-def place_by_silhouette(pose: np.ndarray, foreground: np.ndarray, model: BodyModel, camera: Camera, *,
-                        rounds: int = 2) -> np.ndarray:
-    """Move a pose's root sideways so that its silhouette's centroid lands on the foreground's.
-
-    The root keeps its depth; its x and y are shifted in the camera plane at that depth by the
-    pixel offset between the centroids of the observed foreground and of the rendered model
-    (repeated ``rounds`` times: perspective makes one shift inexact).
-
-    Parameters
-    ----------
-    pose : ndarray, shape (23,)
-        Metres and radians; its ``root_z`` must be in front of the camera.
-    foreground : ndarray of bool, shape (H, W)
-        The observed foreground (``PreparedFrame.foreground``), the camera's size.
-    model : BodyModel
-    camera : Camera
-    rounds : int
-        Shifts made (each one render).
-
-    Returns
-    -------
-    ndarray, shape (23,), float64
-        The pose with ``root_x`` and ``root_y`` moved (unchanged when either silhouette is empty),
-        clamped to the joint limits.
-    """
-    q = np.array(pose, dtype=np.float64)
-    rows, cols = np.nonzero(foreground)
-    if len(rows) == 0:
-        return clamp_to_limits(q)
-    target = np.array([cols.mean(), rows.mean()])
-    depth = q[PARAMETER_INDEX["root_z"]]
-    if not depth > 0:
-        raise ValueError(f"root_z must be in front of the camera to place a pose, got {depth!r} m")
-    f = np.array([camera.fx, camera.fy])
-    for _ in range(rounds):
-        model_rows, model_cols = np.nonzero(render_labels(q, model, camera))
-        if len(model_rows) == 0:
-            break
-        shift = (target - np.array([model_cols.mean(), model_rows.mean()])) * depth / f
-        q[PARAMETER_INDEX["root_x"]] += shift[0]
-        q[PARAMETER_INDEX["root_y"]] += shift[1]
-    return clamp_to_limits(q)
 
 
 def arm_reach_m(pose: np.ndarray, model: BodyModel, side: str) -> float:
@@ -272,18 +223,68 @@ def jump_proposals(pose: np.ndarray, model: BodyModel) -> list[tuple[str, np.nda
     return out
 
 
-@dataclass(frozen=True)
 class LifterSource:
     """Whole-body proposals from 2D keypoints: the learned lifter's K hypotheses of the frame.
 
-    The tracker lifts the frame's keypoints once (:meth:`mocap.track.lifter.Lifter.lift`, the
-    calibrated body's forward kinematics, each hypothesis's root placed by the translation whose
-    projection best fits the keypoints: its depth from the body's size and the keypoints' scale)
-    and hands them over in :attr:`ProposalContext.lifted`; this source proposes every one of
-    them, most probable first. None without keypoints.
+    The source owns the lifting: :meth:`lift` turns a frame's keypoints into the lifter's
+    hypotheses (:meth:`mocap.track.lifter.Lifter.lift`: the calibrated body's forward
+    kinematics, each hypothesis's root placed by the translation whose projection best fits the
+    keypoints, its depth from the body's size and the keypoints' scale). The tracker lifts each
+    frame once and hands the result to :meth:`propose` (in :attr:`ProposalContext.lifted`) and to
+    its score (:meth:`energy`). :meth:`propose` proposes every hypothesis, most probable first;
+    none without keypoints.
+
+    Parameters
+    ----------
+    lifter : Lifter, optional
+        The network (default: the shipped one, :meth:`Lifter.load`, loaded at the first frame
+        that is lifted; so a tracker that never sees keypoints never reads the file).
     """
 
     origin: str = "lifter"
+
+    def __init__(self, lifter: Lifter | None = None) -> None:
+        self._lifter = lifter
+
+    @property
+    def lifter(self) -> Lifter:
+        """The network (the shipped one is loaded here at first use)."""
+        if self._lifter is None:
+            self._lifter = Lifter.load()
+        return self._lifter
+
+    def lift(self, keypoints, camera: Camera, model: BodyModel) -> LiftedHypotheses | None:
+        """The lifter's hypotheses of a frame's keypoints.
+
+        Parameters
+        ----------
+        keypoints : Keypoints or None
+            The frame's 2D keypoints in ``camera``'s pixels (:class:`mocap.io.keypoints.Keypoints`;
+            a joint is present where its confidence is positive).
+        camera : Camera
+        model : BodyModel
+            The calibrated actor.
+
+        Returns
+        -------
+        LiftedHypotheses or None
+            None without keypoints or with fewer than :data:`~mocap.track.lifter.MIN_VISIBLE`
+            joints present.
+        """
+        if keypoints is None:
+            return None
+        present = np.asarray(keypoints.confidence) > 0
+        if present.sum() < MIN_VISIBLE:
+            return None
+        uv = np.where(present[:, None], keypoints.uv, 0.0)
+        return self.lifter.lift(uv, present, camera, model)
+
+    def energy(self, lifted: LiftedHypotheses, joints: np.ndarray) -> float:
+        """The lifter term of the score before its weight (nats): the lifter's log-density at its
+        most probable hypothesis minus that at ``joints`` (10, 3; camera coordinates, metres), at
+        most :data:`LIFTER_ENERGY_CAP` (far from every hypothesis the lifter has no say)."""
+        top = self.lifter.log_density(lifted, lifted.joints[0])
+        return min(top - self.lifter.log_density(lifted, relative_joints(joints)), LIFTER_ENERGY_CAP)
 
     def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
         if context.lifted is None:

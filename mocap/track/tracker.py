@@ -44,16 +44,10 @@ from mocap.render.camera import Camera
 from mocap.track.config import (EDGE_WEIGHT, JUMPS_REFINED, MERGE_DISTANCE_M, MOTION_CAP, MOTION_SIGMA_M,
                                 RECOVERY_STEP_SCALE, REGION_WEIGHT, TrackerConfig)
 from mocap.track.decode import backtrack, viterbi_step
-from mocap.track.lifter import MIN_VISIBLE, Lifter, relative_joints
-from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, jump_proposals,
-                                   reach_proposals, unexplained_hands)
+from mocap.track.lifter import LiftedHypotheses, Lifter
+from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, jump_proposals, reach_proposals,
+                                   unexplained_hands)
 from mocap.track.registration import Registration, register
-
-#: Most nats the lifter term charges a candidate (before ``lifter_weight``): about the energy of
-#: joints 18 cm on average from the nearest hypothesis (:data:`~mocap.track.lifter.DENSITY_SIGMA_M`). The lifter misses some frames (its best of
-#: ten is within 10 cm on about nine in ten); there the image's evidence must decide.
-LIFTER_ENERGY_CAP = 10.0
-
 
 @dataclass(kw_only=True)
 class FrameResult:
@@ -129,8 +123,10 @@ class Tracker:
         The proposal stage's sources (default: :func:`proposal_sources` of ``config``);
         experiments add others (an oracle) this way.
     lifter : Lifter, optional
-        The 2D->3D lifter of frames with keypoints (default: the shipped one,
-        :meth:`Lifter.load`, loaded at the first frame with keypoints when ``config.uses_lifter``).
+        The 2D->3D lifter of frames with keypoints when ``config.uses_lifter`` (``lifter_weight``
+        > 0); default: the shipped one, loaded at the first frame with keypoints. The tracker's
+        :class:`LifterSource` (:attr:`lifting`) owns it: lifts each such frame once, for the
+        proposal stage and the score.
     """
 
     def __init__(self, model: BodyModel, camera: Camera, config: TrackerConfig, initial_pose,
@@ -140,8 +136,10 @@ class Tracker:
             model = model.with_resolution(config.mesh_resolution)
         self.model, self.camera, self.config = model, camera, config
         self.prior = prior if prior is not None else (default_prior() if config.prior_weight > 0 else None)
-        self.lifter = lifter                  # the shipped one is loaded at the first frame with keypoints
-        self.sources: tuple[ProposalSource, ...] = tuple(proposal_sources(config) if sources is None else sources)
+        #: The lifting (None when ``config`` does not use the lifter); also the default keypoint source.
+        self.lifting: LifterSource | None = LifterSource(lifter) if config.uses_lifter else None
+        self.sources: tuple[ProposalSource, ...] = tuple(proposal_sources(config, self.lifting) if sources is None
+                                                         else sources)
         self.candidates: list[tuple[str, np.ndarray]] = []
         q = clamp_to_limits(check_pose(initial_pose, name="initial pose"))
         start = _Hypothesis(q, model.joint_positions(q), math.nan, math.nan, math.nan, False, "initial",
@@ -225,7 +223,7 @@ class Tracker:
         # every registration of the frame, with the keypoint distance when keypoints are given
         keypoint_cost = self.keypoint_cost(keypoints)
         fit = functools.partial(register, region_cost, edge_cost, config=cfg, keypoint_cost=keypoint_cost)
-        lifted = self.lift(keypoints)
+        lifted = self.lifting.lift(keypoints, self.camera, self.model) if self.lifting is not None else None
         candidates: list[tuple[Registration, str]] = []
         evaluations = 0
         t1 = time.perf_counter()
@@ -252,7 +250,7 @@ class Tracker:
             evaluations += self._jump(region_cost, fit, leader, candidates)
         t3 = time.perf_counter()
         if self.sources and cfg.proposals_refined > 0:
-            context = ProposalContext(self.model, self.camera, leader.pose, keypoints, lifted)
+            context = ProposalContext(lifted=lifted)
             rough = functools.partial(self._rough_unary, region_cost, edge_cost, keypoint_cost, lifted)
             for source in self.sources:
                 evaluations += self._propose(source, prepared, context, rough, fit, candidates)
@@ -268,29 +266,8 @@ class Tracker:
         return _Frame(index, False, [hypotheses[k] for k in keep], kept_cost - kept_cost[0], back[keep], evaluations,
                       timings)
 
-    def lift(self, keypoints):
-        """The lifter's hypotheses (:class:`~mocap.track.lifter.LiftedHypotheses`) of a frame's
-        keypoints (working pixels); None when the configuration does not lift (no keypoint term) or
-        with fewer than :data:`~mocap.track.lifter.MIN_VISIBLE` joints present."""
-        if keypoints is None or not self.config.uses_lifter:
-            return None
-        present = np.asarray(keypoints.confidence) > 0
-        if present.sum() < MIN_VISIBLE:
-            return None
-        uv = np.where(present[:, None], keypoints.uv, 0.0)
-        if self.lifter is None:
-            self.lifter = Lifter.load()
-        return self.lifter.lift(uv, present, self.camera, self.model)
-
-    def lifter_energy(self, lifted, joints: np.ndarray) -> float:
-        """The lifter term of the score before its weight (nats): the lifter's log-density at its
-        most probable hypothesis minus that at ``joints`` (10, 3; camera coordinates, metres),
-        at most :data:`LIFTER_ENERGY_CAP` (far from every hypothesis the lifter has no say)."""
-        top = self.lifter.log_density(lifted, lifted.joints[0])
-        return min(top - self.lifter.log_density(lifted, relative_joints(joints)), LIFTER_ENERGY_CAP)
-
     def _unary(self, region: float, edge: float, keypoint: float, pose: np.ndarray, joints: np.ndarray,
-               lifted) -> float:
+               lifted: LiftedHypotheses | None) -> float:
         """The unary score of a candidate from its residuals (see the module)."""
         cfg = self.config
         unary = REGION_WEIGHT * region + EDGE_WEIGHT * edge
@@ -299,16 +276,17 @@ class Tracker:
         if self.prior is not None and cfg.prior_weight > 0:
             unary += cfg.prior_weight * self.prior.energy(pose)
         if lifted is not None and cfg.lifter_weight > 0:
-            unary += cfg.lifter_weight * self.lifter_energy(lifted, joints)
+            unary += cfg.lifter_weight * self.lifting.energy(lifted, joints)
         return float(unary)
 
-    def _rough_unary(self, region_cost, edge_cost, keypoint_cost, lifted, pose: np.ndarray) -> float:
+    def _rough_unary(self, region_cost, edge_cost, keypoint_cost, lifted: LiftedHypotheses | None,
+                     pose: np.ndarray) -> float:
         """The unary score of an unrefined pose (one evaluation of each cost): what ranks proposals."""
         return self._unary(region_cost.evaluate_unchecked(pose), edge_cost(pose),
                            math.nan if keypoint_cost is None else keypoint_cost(pose), pose,
                            self.model.joint_positions(pose), lifted)
 
-    def _hypothesis(self, reg: Registration, origin: str, lifted=None) -> _Hypothesis:
+    def _hypothesis(self, reg: Registration, origin: str, lifted: LiftedHypotheses | None = None) -> _Hypothesis:
         joints = self.model.joint_positions(reg.pose)
         unary = self._unary(reg.region_residual, reg.edge_residual, reg.keypoint_residual, reg.pose, joints, lifted)
         return _Hypothesis(reg.pose, joints, reg.region_residual, reg.edge_residual,
@@ -428,12 +406,15 @@ def _result(frame: _Frame, k: int) -> FrameResult:
                        edge_iterations=h.edge_iterations, timings_ms=dict(frame.timings), hypothesis=k, score=h.unary)
 
 
-def proposal_sources(config: TrackerConfig) -> list[ProposalSource]:
-    """The proposal stage's sources that ``config`` switches on: with ``keypoint_weight`` > 0 the
-    learned lifter's hypotheses of the frame's keypoints (:class:`LifterSource`; it proposes
-    nothing on frames without keypoints). It replaced the arms' one-at-a-time inverse kinematics
-    on the keypoints (issue 29: docs/research-log.md)."""
-    return [LifterSource()] if config.keypoint_weight > 0 else []
+def proposal_sources(config: TrackerConfig, lifting: LifterSource | None = None) -> list[ProposalSource]:
+    """The proposal stage's sources that ``config`` switches on: with ``lifter_weight`` > 0 the
+    learned lifter's hypotheses of the frame's keypoints (``lifting``, or a new
+    :class:`LifterSource` with the shipped lifter; it proposes nothing on frames without
+    keypoints). It replaced the arms' one-at-a-time inverse kinematics on the keypoints (issue 29:
+    docs/research-log.md)."""
+    if not config.uses_lifter:
+        return []
+    return [lifting if lifting is not None else LifterSource()]
 
 
 def track_prepared(prepared_frames, tracker: Tracker, *, first_index: int = 0, progress: bool = False,

@@ -73,15 +73,39 @@ def test_damaged_or_foreign_prior_files_are_refused(tmp_path):
 @pytest.mark.slow
 @pytest.mark.shared_data
 def test_fit_script_reproduces_the_shipped_prior(shared_data, tmp_path):
-    """Refit at the shipped size on the CMU training trials: the same mixture comes out."""
+    """Refit at the shipped size on the trials the shipped prior's record lists (the 41 trials of six
+    subjects the training folder held when it was fitted): the same mixture comes out, and the
+    refit's record lists the same trials and poses."""
+    from importlib import resources
+
     from experiments.fit_pose_prior import main
 
     shipped = default_prior()
+    record = resources.files("mocap.body").joinpath("pose_prior.json")
+    training = json.loads(record.read_text())["training"]
+    assert len(training["trials"]) == 41 and sorted({t.split("_")[1] for t in training["trials"]}) == training["subjects"]
     out = tmp_path / "prior.json"
     assert main(["--train", str(shared_data / "mocap" / "train"), "--out", str(out),
-                 "--components", str(shipped.n_components)]) == 0
+                 "--components", str(shipped.n_components), "--trials-from", str(record)]) == 0
+    refit_training = json.loads(out.read_text())["training"]
+    assert refit_training["trials"] == training["trials"] and refit_training["poses"] == training["poses"]
     refit = PosePrior.from_json(out)
     np.testing.assert_allclose(refit.weights, shipped.weights, atol=1e-6)
     np.testing.assert_allclose(refit.means, shipped.means, atol=1e-6)
     np.testing.assert_allclose(refit.precisions_cholesky, shipped.precisions_cholesky, rtol=1e-5, atol=1e-4)
     assert json.loads(out.read_text())["sha256"] == refit.checksum
+
+
+@pytest.mark.shared_data
+def test_fit_script_refuses_a_record_without_trials_or_with_absent_ones(shared_data, tmp_path, capsys):
+    from experiments.fit_pose_prior import main
+
+    train = str(shared_data / "mocap" / "train")
+    bare = tmp_path / "bare.json"
+    bare.write_text(json.dumps({"training": {"subjects": ["02"]}}))
+    absent = tmp_path / "absent.json"
+    absent.write_text(json.dumps({"training": {"trials": ["cmu_99_01.amc"]}}))
+    for record, message in ((bare, "lists no training trials"), (absent, "trials not in")):
+        assert main(["--train", train, "--out", str(tmp_path / "p.json"), "--trials-from", str(record)]) == 2
+        assert message in capsys.readouterr().err
+    assert not (tmp_path / "p.json").exists()

@@ -133,3 +133,21 @@ def test_colours_are_learned_on_the_first_frame_that_shows_the_person(clip, caps
     assert main(["segment", str(frames), "--background", str(root / "background.png"), "--out", str(root / "o"),
                  *_boxes(scene)]) == 0
     assert "colours learned on frame 1, the first that shows the person" in capsys.readouterr().out
+
+
+def test_a_segmentation_resumed_after_the_keypoints_extra_came_is_refused_with_why(clip, capsys, monkeypatch):
+    """``--keypoints auto`` gave none (no extra); with the extra installed since, it would give
+    MediaPipe: the folder's segment.json says otherwise, and the one-line refusal says why."""
+    pytest.importorskip("mediapipe")
+    from mocap.io import mediapipe_keypoints
+
+    root, scene = clip
+    args = ["segment", str(root / "frames"), "--background", str(root / "background.png"), *_boxes(scene),
+            "--out", str(root / "out")]
+    assert main(args) == 0
+    capsys.readouterr()
+    monkeypatch.setattr(mediapipe_keypoints, "available", lambda: True)
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "made with keypoints None, this one's would be 'mediapipe'" in err
+    assert "the optional extra 'keypoints' was installed or removed" in err and "another --out" in err

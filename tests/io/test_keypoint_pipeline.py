@@ -99,15 +99,18 @@ def _outputs(folder):
     keep = [i for i, name in enumerate(header) if not name.startswith(TIMING_COLUMNS)]
     rows = [[line.split(",")[i] for i in keep] for line in lines]
     run = json.loads((folder / "run.json").read_text())
-    return rows, run["settings"], (folder / "poses.bvh").read_bytes(), run.get("metrics", {}).get("mpjpe_mm")
+    journal = folder / "keypoints.csv"
+    return (rows, run["settings"], (folder / "poses.bvh").read_bytes(), run.get("metrics", {}).get("mpjpe_mm"),
+            journal.read_bytes() if journal.is_file() else None)
 
 
 def test_a_run_with_the_detector_ahead_writes_what_a_sequential_run_writes(sequence, tmp_path, monkeypatch):
-    """poses.csv (timing columns aside), run.json's settings and metrics and poses.bvh are the
-    same byte for byte whether the detector runs ahead on its own thread or frame by frame on the
+    """poses.csv (timing columns aside), run.json's settings and metrics, poses.bvh and the
+    keypoints' journal are the same byte for byte whether the detector runs ahead on its own thread or frame by frame on the
     reader thread; the detector sees the same frames in the same order."""
     import functools
 
+    import mocap.run.options
     import mocap.run.tracking
     from mocap.run import OwnVideoOptions, track
     from mocap.run.loop import RunParams
@@ -117,7 +120,7 @@ def test_a_run_with_the_detector_ahead_writes_what_a_sequential_run_writes(seque
     for ahead in (0, 3):
         detectors[ahead] = detector = ImageDetector()
         monkeypatch.setattr(mocap.run.tracking, "RunParams", functools.partial(RunParams, detect_ahead=ahead))
-        monkeypatch.setattr(mocap.run.tracking, "keypoint_source", lambda given, d=detector: d)
+        monkeypatch.setattr(mocap.run.options, "_source", lambda resolved, auto, d=detector: d)
         options = OwnVideoOptions(tracker=TrackerConfig(evaluations=60, hypothesis_evaluations=20,
                                                         jump_evaluations=10, proposal_evaluations=10),
                                   overlay=False, keypoints="auto")

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from mocap.body.skeleton import JOINT_NAMES
-from mocap.io.keypoints import KeypointFile, Keypoints, parse_keypoints, read_keypoints, write_keypoints
+from mocap.io.keypoints import (KeypointFile, Keypoints, append_keypoints, parse_keypoints, read_keypoints,
+                                write_keypoints)
 
 
 def random_keypoints(rng, absent=()):
@@ -26,6 +27,20 @@ def test_a_keypoint_file_round_trips_exactly(tmp_path):
         np.testing.assert_array_equal(back[f].confidence, k.confidence)
         np.testing.assert_array_equal(back[f].uv, k.uv)          # NaN where absent, equal as arrays
     assert "neck" not in back[3].as_mapping()
+
+
+def test_a_keypoint_journal_appended_frame_by_frame_is_the_file_written_at_once(tmp_path):
+    """``keypoints.csv`` of a run (appended as frames are pushed) is byte for byte the keypoint
+    file of the same frames; a frame without a present joint adds no row."""
+    rng = np.random.default_rng(1)
+    frames = {0: random_keypoints(rng), 1: Keypoints.empty(), 2: random_keypoints(rng, absent=("head",))}
+    for f, k in frames.items():
+        append_keypoints(tmp_path / "journal.csv", f, k)
+    write_keypoints(tmp_path / "whole.csv", frames)
+    assert (tmp_path / "journal.csv").read_bytes() == (tmp_path / "whole.csv").read_bytes()
+    assert sorted(read_keypoints(tmp_path / "journal.csv")) == [0, 2]
+    append_keypoints(tmp_path / "empty.csv", 5, Keypoints.empty())         # the header alone: a keypoint file
+    assert read_keypoints(tmp_path / "empty.csv") == {}
 
 
 def test_missing_and_nan_joints_are_absent_and_change_nothing_else():

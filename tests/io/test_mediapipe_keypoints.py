@@ -44,7 +44,7 @@ def test_mediapipe_finds_the_visible_joints_of_a_real_clip(shared_data, mediapip
         warnings.simplefilter("always")             # every warning shown, as `python -W always` would
         with MediaPipeKeypoints() as source:
             for i, frame in enumerate(iter_frames(shared_data / "video" / "intel_asl_no.mkv")):
-                k = source.keypoints(i, frame)          # video mode: the frames before it, in order
+                k = source.keypoints(i, frame)
                 if i == 30:
                     break
     # nothing of MediaPipe's own reaches the terminal: no Python warning (protobuf's deprecation),

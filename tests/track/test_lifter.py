@@ -81,6 +81,38 @@ def test_numpy_forward_equals_the_torch_model_on_random_inputs(random_net):
     np.testing.assert_allclose(lifter.forward(x), expect, atol=FORWARD_ATOL)
 
 
+def test_numpy_decode_equals_the_torch_decode():
+    """:meth:`Lifter.decode` (NumPy, float64) against the training's :func:`decode_poses` (PyTorch):
+    the same angles inside the limits, and the softmax of the same confidence logits."""
+    lifter = Lifter(fit.export_weights(fit.make_net(fit.QUICK_HIDDEN)))
+    out = np.random.default_rng(4).normal(0.0, 3.0, (5, lifter.n_hypotheses * 22))
+    logits, poses = fit.decode_poses(torch.tensor(out), lifter.n_hypotheses)
+    for i in range(len(out)):
+        q, p = lifter.decode(out[i])
+        np.testing.assert_allclose(q, poses[i].numpy(), atol=1e-12)
+        np.testing.assert_allclose(p, torch.softmax(logits[i], dim=0).numpy(), atol=1e-12)
+
+
+def test_the_shipped_lifters_numpy_forward_equals_its_torch_twin():
+    """The shipped weights in the network its record names (``hidden``): NumPy and PyTorch give
+    the same outputs on the features of random poses' projections, some joints missing."""
+    lifter = Lifter.load()
+    net = fit.make_net(tuple(lifter.provenance["hidden"]), lifter.n_hypotheses).eval()
+    fit.load_weights(net, lifter.weights)
+    rng = np.random.default_rng(5)
+    camera, model = Camera.default(160, 120), BodyModel.build()
+    rows = []
+    for q in _random_poses(rng, 8):
+        visible = rng.random(len(JOINT_NAMES)) < 0.8
+        visible[:MIN_VISIBLE] = True
+        rows.append(lifter_features(camera.project(model.joint_positions(q)), visible, camera))
+    x = np.array(rows, dtype=np.float32)
+    with torch.no_grad():
+        expect = net(torch.from_numpy(x)).numpy()
+    got = lifter.forward(x)
+    np.testing.assert_allclose(got, expect, atol=FORWARD_ATOL * max(1.0, float(np.abs(expect).max())))
+
+
 def test_the_stored_weights_are_the_models(random_net, tmp_path):
     """Saved (float16) and loaded, the NumPy pass equals a PyTorch model given the same weights."""
     path = tmp_path / "l.npz"

@@ -4,6 +4,7 @@ import pytest
 from scipy import ndimage
 
 from mocap.body import BodyDimensions, BodyModel, PARAMETER_INDEX as P, neutral_pose
+from mocap.body.skeleton import JOINT_INDEX
 from mocap.body.jumps import arm_jumps, turned_mirror
 from mocap.imaging import PreparedFrame
 from mocap.io.keypoints import Keypoints
@@ -57,23 +58,49 @@ def tracked_errors(config, start, truth, lifter, n=6, sources=None):
 def test_the_lifter_source_proposes_the_lifted_hypotheses(lifter):
     truth = reaching_pose()
     _, (keypoints, *_) = still_clip(truth, 1)
-    tracker = Tracker(MODEL, CAMERA, TrackerConfig(), truth, lifter=lifter)
-    lifted = tracker.lift(keypoints)
-    proposals = LifterSource().propose(None, ProposalContext(MODEL, CAMERA, truth, keypoints, lifted))
+    source = LifterSource(lifter)
+    lifted = source.lift(keypoints, CAMERA, MODEL)
+    np.testing.assert_array_equal(lifted.poses, lifter.lift(keypoints.uv, np.ones(10, bool), CAMERA, MODEL).poses)
+    proposals = source.propose(None, ProposalContext(lifted=lifted))
     assert len(proposals) == lifter.n_hypotheses and {p.origin for p in proposals} == {"lifter"}
     np.testing.assert_array_equal([p.pose for p in proposals], lifted.poses)
-    assert LifterSource().propose(None, ProposalContext(MODEL, CAMERA, truth, None, None)) == []
-    few = Keypoints(np.where(np.arange(10)[:, None] < 2, keypoints.uv, np.nan), np.ones(10))
-    assert tracker.lift(few) is None and tracker.lift(None) is None           # fewer than MIN_VISIBLE joints
+    assert source.propose(None, ProposalContext()) == []
+    few = Keypoints(np.where(np.arange(10)[:, None] < 2, keypoints.uv, np.nan), np.where(np.arange(10) < 2, 1.0, 0.0))
+    assert source.lift(few, CAMERA, MODEL) is None and source.lift(None, CAMERA, MODEL) is None  # < MIN_VISIBLE
+    # a joint with confidence 0 is absent: its pixels, whatever they hold, change nothing
+    hidden = np.ones(10)
+    hidden[JOINT_INDEX["l_hand"]] = 0.0
+    moved = keypoints.uv.copy()
+    moved[JOINT_INDEX["l_hand"]] += 40.0
+    np.testing.assert_array_equal(source.lift(Keypoints(moved, hidden), CAMERA, MODEL).poses,
+                                  source.lift(Keypoints(keypoints.uv, hidden), CAMERA, MODEL).poses)
+
+
+def test_the_lifter_switches_on_with_its_own_weight(lifter):
+    """``lifter_weight`` > 0 lifts, proposes and scores, whatever ``keypoint_weight``; 0 switches
+    the lifter off (no lifting, no source) and keeps the keypoint term."""
+    truth = reaching_pose()
+    frames, keypoints = still_clip(truth, 1)
+    for keypoint_weight in (2.0, 0.0):
+        on = Tracker(MODEL, CAMERA, TrackerConfig(keypoint_weight=keypoint_weight, lifter_weight=0.5), truth,
+                     lifter=lifter)
+        assert on.lifting is not None and on.sources == (on.lifting,) and on.lifting.lifter is lifter
+        on.push(0, frames[0], keypoints[0])
+        assert "lifter" in {origin for origin, _ in on.candidates}
+    off = Tracker(MODEL, CAMERA, TrackerConfig(keypoint_weight=2.0, lifter_weight=0.0), truth, lifter=lifter)
+    assert off.lifting is None and off.sources == ()
+    off.push(0, frames[0], keypoints[0])
+    assert "lifter" not in {origin for origin, _ in off.candidates}
+    assert off.keypoint_cost(keypoints[0]) is not None
 
 
 def test_the_lifter_term_is_zero_at_its_best_guess_grows_away_from_it_and_is_capped(lifter):
     truth = reaching_pose()
     _, (keypoints, *_) = still_clip(truth, 1)
-    tracker = Tracker(MODEL, CAMERA, TrackerConfig(), truth, lifter=lifter)
-    lifted = tracker.lift(keypoints)
+    source = LifterSource(lifter)
+    lifted = source.lift(keypoints, CAMERA, MODEL)
     best = MODEL.joint_positions(lifted.poses[0])
-    assert tracker.lifter_energy(lifted, best) == pytest.approx(0.0, abs=1e-9)
+    assert source.energy(lifted, best) == pytest.approx(0.0, abs=1e-9)
     # against scipy: the log of the probability-weighted mixture of isotropic normals
     # (DENSITY_SIGMA_M) about each hypothesis's joints relative to the neck, the neck left out
     from scipy.special import logsumexp
@@ -85,14 +112,14 @@ def test_the_lifter_term_is_zero_at_its_best_guess_grows_away_from_it_and_is_cap
     others = [i for i, name in enumerate(JOINT_NAMES) if name != "neck"]
     mixture = lambda rel: logsumexp([np.log(p) + norm.logpdf(rel[others], h[others], DENSITY_SIGMA_M).sum()
                                      for p, h in zip(lifted.probabilities, lifted.joints)])
-    from mocap.track.tracker import LIFTER_ENERGY_CAP
+    from mocap.track.proposals import LIFTER_ENERGY_CAP
 
     expected = {}
     for up_m in (0.01, 0.3):                               # arms and hands moved up: near, and far
         moved = best.copy()
         moved[2:] += np.array([0.0, -up_m, 0.0])
         expected[up_m] = mixture(lifted.joints[0]) - mixture(relative_joints(moved[None])[0])
-        assert tracker.lifter_energy(lifted, moved) == pytest.approx(min(expected[up_m], LIFTER_ENERGY_CAP),
+        assert source.energy(lifted, moved) == pytest.approx(min(expected[up_m], LIFTER_ENERGY_CAP),
                                                                      rel=1e-9)
     assert 0.0 < expected[0.01] < LIFTER_ENERGY_CAP < expected[0.3]      # both branches were seen
 
@@ -117,9 +144,10 @@ def test_started_wrong_the_lifter_brings_the_tracker_back(lifter, wrong, weight)
     about_neck = lambda q: MODEL.joint_positions(q) - MODEL.joint_positions(q)[1]
     assert np.linalg.norm(about_neck(start) - about_neck(truth), axis=1).mean() > 2 * BACK_M
     with_lifter = tracked_errors(TrackerConfig(lag=0, lifter_weight=weight), start, truth, lifter)
-    # without the lifter: no proposal stage and no lifter term (keypoints, jumps and the beam kept)
+    # without the lifter (lifter_weight 0): no proposal stage and no lifter term (keypoints, jumps and
+    # the beam kept)
     without = None if wrong == "facing away" else tracked_errors(TrackerConfig(lag=0, lifter_weight=0.0), start,
-                                                                 truth, lifter, sources=())
+                                                                 truth, lifter)
     assert with_lifter[2:].max() < BACK_M
     if without is not None:
         assert without.min() > BACK_M
