@@ -105,7 +105,8 @@ def summarise(rows: list[dict]) -> dict:
                                                           weights=[r["frames"] for r in rows])),
             **{key: float(np.average([math.nan if r.get(key) is None else r[key] for r in rows],
                                      weights=[r["frames"] for r in rows]))
-               for key in ("proposal_oracle_failure_rate", "proposal_catches_rate", "others_miss_rate")},
+               for key in ("proposal_oracle_failure_rate", "proposal_catches_rate", "others_miss_rate",
+                           "root_relative_failure_rate", "lifter_oracle_failure_rate", "branch_miss_rate")},
             "ms_per_frame": float(np.average([r["tracking_ms_per_frame"] + r["prepare_ms_per_frame"] for r in rows],
                                              weights=[r["frames"] for r in rows])),
             "evaluations_per_frame": float(np.average([r.get("evaluations_per_frame", math.nan) for r in rows],
@@ -115,14 +116,17 @@ def summarise(rows: list[dict]) -> dict:
 def table(summaries: dict[str, dict]) -> str:
     """Markdown table of :func:`summarise` results by configuration name."""
     head = ("configuration", "median MPJPE mm", "median root-rel. mm", "median PA-MPJPE mm",
-            f"frames > {DEFAULT_FAILURE_MM:g} mm", "worst sequence mm", "beam oracle > 100 mm",
-            "proposal oracle > 100 mm", "caught by a proposal alone", "failing, costs <= truth's", "ms / frame (fps)")
+            f"frames > {DEFAULT_FAILURE_MM:g} mm", f"root-rel. > {DEFAULT_FAILURE_MM:g} mm", "worst sequence mm", "beam oracle > 100 mm",
+            "proposal oracle > 100 mm", "caught by a proposal alone", "lifter's best of K > 100 mm root-rel.",
+            "branch missed (root-rel.)", "failing, costs <= truth's", "ms / frame (fps)")
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for name, s in summaries.items():
         lines.append(f"| {name} | {s['median_mpjpe_mm']:.0f} | {s['median_root_relative_mm']:.0f} | "
-                     f"{s['median_pa_mpjpe_mm']:.0f} | {100 * s['failure_rate']:.1f} % | {s['worst_mpjpe_mm']:.0f} | "
+                     f"{s['median_pa_mpjpe_mm']:.0f} | {100 * s['failure_rate']:.1f} % | "
+                     f"{_percent(s['root_relative_failure_rate'])} | {s['worst_mpjpe_mm']:.0f} | "
                      f"{100 * s['beam_oracle_failure_rate']:.1f} % | {_percent(s['proposal_oracle_failure_rate'])} | "
-                     f"{_percent(s['proposal_catches_rate'])} | {100 * s['cost_equivalent_both_rate']:.1f} % | "
+                     f"{_percent(s['proposal_catches_rate'])} | {_percent(s['lifter_oracle_failure_rate'])} | "
+                     f"{_percent(s['branch_miss_rate'])} | {100 * s['cost_equivalent_both_rate']:.1f} % | "
                      f"{s['ms_per_frame']:.1f} "
                      f"({1e3 / s['ms_per_frame']:.0f}) |")
     return "\n".join(lines)

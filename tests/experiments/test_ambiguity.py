@@ -1,5 +1,6 @@
 import json
 import numpy as np
+import pytest
 from experiments.ambiguity import ARM_JOINTS, flip_oracle, reflect_in_depth, table
 
 
@@ -180,3 +181,16 @@ def test_summary_pools_every_frame_of_every_sequence_and_seed():
     assert got["ms_per_frame"] == 3.0 and got["edge_residual_px"] == 1.5 and got["residual_failures"] == 3   # frame-weighted
     assert [p["seed"] for p in got["per_sequence"]] == [0, 29]
     json.dumps(got)                                                   # one JSON object
+
+
+def test_choice_rates_count_frames_missed_while_a_lifter_hypothesis_was_within():
+    from experiments.ambiguity import choice_rates
+
+    tracked = np.array([50.0, 150.0, 150.0, 120.0, 80.0])
+    lifter = np.array([40.0, 60.0, 130.0, np.inf, 200.0])
+    failing, lifter_missing, missed = choice_rates(tracked, lifter)
+    assert failing == pytest.approx(3 / 5)          # frames 1, 2, 3
+    assert lifter_missing == pytest.approx(3 / 5)   # frames 2, 3 (none), 4
+    assert missed == pytest.approx(1 / 5)           # frame 1 only
+    with pytest.raises(ValueError):
+        choice_rates(tracked, lifter[:4])

@@ -1,0 +1,418 @@
+"""``python -m experiments.fit_score``: the tracker's score weights fitted on recorded candidates.
+
+The tracker scores every candidate of a frame (the beam's hypotheses extended, recovery,
+re-acquisition, jumps and the lifter's refined proposals) by a weighted sum of terms
+(:class:`mocap.track.tracker.ScoredCandidate`): F, the edge distance, the keypoint distance, the
+pose prior's and the lifter's energies, and the motion term from the previous frame. The weights
+were chosen by hand. This script fits them on data, in two steps:
+
+``record``
+    Tracks benchmark sequences (:func:`experiments.ambiguity.benchmark_sequence`: full length,
+    160x120, true calibration) with the oracle's 2D keypoints (projected truth plus
+    ``--sigma-px`` of noise, :func:`experiments.keypoints.oracle_keypoints`) and a tracker
+    configuration (default: the defaults), and writes every frame's candidates with each term's
+    value (before the weights; the motion term from the previous frame's best-path hypothesis)
+    and their error against the truth: MPJPE about the neck and in the camera, millimetres. One
+    ``.npz`` per (sequence, seed) under ``--out`` (default ``experiments/results/fit_score``,
+    git-ignored), written atomically (a crash leaves the finished sequences; a second run skips
+    them).
+``fit``
+    Reads the records and fits the weights offline by a conditional logit: within each frame
+    the candidates' probabilities are the softmax of minus their scores (linear in the weights,
+    each weight non-negative), and the loss is the cross-entropy against soft targets that favour
+    the candidates nearest the truth about the neck (``exp(-(error - best) / temperature)``),
+    plus a small ridge on the weights (:func:`fit_weights`; convex, L-BFGS-B, deterministic).
+    The seed draws the frames held out (``--holdout``), on which the fitted and the default
+    weights' choices are compared (:func:`choose`). The weights are given in the tracker's units
+    (F's weight kept at :data:`~mocap.track.config.REGION_WEIGHT`) and written as a
+    :class:`~mocap.track.TrackerConfig` JSON (``fitted.json``) that ``experiments.tracking``
+    reads (``--config-file``).
+
+The fit chooses per frame with the motion from the previous frame's best-path hypothesis; the
+tracker decodes paths (``lag`` frames later), and the refinements change with the keypoint
+weight. So the fitted weights are confirmed by full tracking runs on a seed never used.
+"""
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import math
+import sys
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from experiments import RESULTS_DIR
+
+#: The terms of the score, in the order of the feature columns (:class:`ScoredCandidate`'s names).
+TERMS: tuple[str, ...] = ("region", "edge", "keypoint", "prior", "lifter", "motion")
+#: The :class:`~mocap.track.TrackerConfig` field of each term's weight (``region``: the constant unit).
+WEIGHT_FIELDS = {"edge": "edge_weight", "keypoint": "keypoint_weight", "prior": "prior_weight",
+                 "lifter": "lifter_weight", "motion": "motion_weight"}
+#: Candidates whose errors about the neck all lie within this (mm) of each other leave nothing to choose:
+#: such frames are left out of the fit.
+MIN_SPREAD_MM = 5.0
+#: Soft target's temperature (mm): a candidate this much worse than the frame's best gets 1/e of its weight.
+TEMPERATURE_MM = 10.0
+#: Ridge on the standardised weights (per frame of the fit).
+RIDGE = 1e-3
+
+
+@dataclass(frozen=True, kw_only=True)
+class Candidates:
+    """Recorded candidates, every frame's rows together.
+
+    Attributes
+    ----------
+    frame : ndarray of int64, shape (n,)
+        A frame's id, unique over the records read together (rows of one frame are adjacent).
+    features : ndarray of float64, shape (n, len(TERMS))
+        Each term's value before its weight (NaN: the term did not apply).
+    error_mm : ndarray of float64, shape (n,)
+        MPJPE about the neck against the truth, millimetres.
+    camera_error_mm : ndarray of float64, shape (n,)
+        MPJPE in the camera (root included), millimetres.
+    origin : ndarray of str, shape (n,)
+    """
+
+    frame: np.ndarray
+    features: np.ndarray
+    error_mm: np.ndarray
+    camera_error_mm: np.ndarray
+    origin: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.frame)
+
+    def subset(self, rows: np.ndarray) -> "Candidates":
+        """The rows ``rows`` (boolean mask or indices)."""
+        return Candidates(frame=self.frame[rows], features=self.features[rows], error_mm=self.error_mm[rows],
+                          camera_error_mm=self.camera_error_mm[rows], origin=self.origin[rows])
+
+
+@dataclass(frozen=True, kw_only=True)
+class Choice:
+    """What a weight vector chooses per frame (:func:`choose`).
+
+    Attributes
+    ----------
+    frames : int
+    mean_error_mm, mean_camera_error_mm : float
+        Mean error of the chosen candidates about the neck and in the camera.
+    failure_rate : float
+        Share of frames whose chosen candidate is over 100 mm about the neck.
+    miss_rate : float
+        Share of frames whose chosen candidate is over 100 mm about the neck while one of the
+        frame's candidates is within.
+    best_failure_rate : float
+        Share of frames without a candidate within 100 mm about the neck (the oracle's).
+    """
+
+    frames: int
+    mean_error_mm: float
+    mean_camera_error_mm: float
+    failure_rate: float
+    miss_rate: float
+    best_failure_rate: float
+
+
+def default_weights() -> np.ndarray:
+    """The shipped weights, :data:`TERMS` order, shape (6,)."""
+    from mocap.track import TrackerConfig
+    from mocap.track.config import REGION_WEIGHT
+
+    c = TrackerConfig()
+    return np.array([REGION_WEIGHT] + [getattr(c, WEIGHT_FIELDS[t]) for t in TERMS[1:]], dtype=np.float64)
+
+
+def _groups(frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Start of each run of equal ``frame`` values and the run of each row."""
+    starts = np.flatnonzero(np.r_[True, frame[1:] != frame[:-1]])
+    return starts, np.cumsum(np.r_[False, frame[1:] != frame[:-1]])
+
+
+def _group_min(values: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    return np.minimum.reduceat(values, starts)
+
+
+def _filled(features: np.ndarray) -> np.ndarray:
+    """NaN terms as 0 (a term that does not apply adds nothing, as in the tracker)."""
+    return np.where(np.isnan(features), 0.0, features)
+
+
+def choose(candidates: Candidates, weights, threshold_mm: float = 100.0) -> Choice:
+    """The candidate of lowest score ``features @ weights`` per frame (ties: the first), measured.
+
+    Parameters
+    ----------
+    candidates : Candidates
+    weights : array_like, shape (len(TERMS),)
+    """
+    w = np.asarray(weights, dtype=np.float64)
+    if w.shape != (len(TERMS),):
+        raise ValueError(f"weights must have shape ({len(TERMS)},), got {w.shape}")
+    if len(candidates) == 0:
+        raise ValueError("no candidates to choose from")
+    starts, group = _groups(candidates.frame)
+    score = _filled(candidates.features) @ w
+    order = np.lexsort((np.arange(len(score)), score, group))      # by frame, then score, then row
+    first = order[np.r_[True, group[order][1:] != group[order][:-1]]]
+    err, cam = candidates.error_mm[first], candidates.camera_error_mm[first]
+    best = _group_min(candidates.error_mm, starts)
+    return Choice(frames=len(starts), mean_error_mm=float(err.mean()), mean_camera_error_mm=float(cam.mean()),
+                  failure_rate=float(np.mean(err > threshold_mm)),
+                  miss_rate=float(np.mean((err > threshold_mm) & (best <= threshold_mm))),
+                  best_failure_rate=float(np.mean(best > threshold_mm)))
+
+
+def informative(candidates: Candidates, min_spread_mm: float = MIN_SPREAD_MM) -> Candidates:
+    """The frames with at least two candidates whose errors about the neck differ by ``min_spread_mm``."""
+    starts, group = _groups(candidates.frame)
+    spread = np.maximum.reduceat(candidates.error_mm, starts) - _group_min(candidates.error_mm, starts)
+    return candidates.subset(spread[group] >= min_spread_mm)
+
+
+def fit_weights(candidates: Candidates, *, temperature_mm: float = TEMPERATURE_MM, ridge: float = RIDGE,
+                fixed: dict[int, float] | None = None) -> np.ndarray:
+    """Fit the score's weights by a conditional logit over each frame's candidates.
+
+    Minimises, over non-negative weights ``w``, the mean over frames of the cross-entropy
+    ``-sum_c q_c log p_c`` with ``p = softmax(-features @ w)`` over the frame's candidates and soft
+    targets ``q ∝ exp(-(error - best error) / temperature_mm)``, plus ``ridge`` times the squared
+    norm of the weights in units of each feature's within-frame spread. Convex; solved by
+    L-BFGS-B from the zero vector, so the result depends on the data only.
+
+    Parameters
+    ----------
+    candidates : Candidates
+        Frames with one candidate add nothing (use :func:`informative` first to drop frames
+        that leave nothing to choose).
+    temperature_mm : float
+    ridge : float
+    fixed : dict of int to float, optional
+        Weights held at a value (column index to weight), e.g. a term that never varies.
+
+    Returns
+    -------
+    ndarray, shape (len(TERMS),), float64
+        The weights in the features' units (the score's overall scale is its sharpness: see
+        :func:`in_tracker_units`).
+    """
+    from scipy.optimize import minimize
+
+    if not (math.isfinite(temperature_mm) and temperature_mm > 0):
+        raise ValueError(f"temperature_mm must be positive, got {temperature_mm!r}")
+    if len(candidates) == 0:
+        raise ValueError("no candidates to fit on")
+    x = _filled(candidates.features)
+    starts, group = _groups(candidates.frame)
+    n_frames = len(starts)
+    centred = x - (np.add.reduceat(x, starts) / np.diff(np.r_[starts, len(x)])[:, None])[group]
+    scale = np.sqrt(np.mean(centred ** 2, axis=0))
+    scale = np.where(scale > 0, scale, 1.0)
+    z = x / scale
+    gap = candidates.error_mm - _group_min(candidates.error_mm, starts)[group]
+    q = np.exp(-gap / temperature_mm)
+    q /= np.add.reduceat(q, starts)[group]
+    fixed = dict(fixed or {})
+    free = np.array([j not in fixed for j in range(x.shape[1])])
+    base = np.zeros(x.shape[1])
+    for j, v in fixed.items():
+        base[j] = v * scale[j]
+
+    def loss(v):
+        u = base.copy()
+        u[free] = v
+        s = -(z @ u)
+        top = np.maximum.reduceat(s, starts)
+        e = np.exp(s - top[group])
+        total = np.add.reduceat(e, starts)
+        p = e / total[group]
+        log_z = top + np.log(total)
+        value = float(np.sum(q * (log_z[group] - s)) / n_frames + ridge * np.sum(u[free] ** 2))
+        grad = (z.T @ (q - p)) / n_frames          # d/du of sum q (log Z - s), s = -z u
+        return value, grad[free] + 2.0 * ridge * u[free]
+
+    result = minimize(loss, np.zeros(int(free.sum())), jac=True, method="L-BFGS-B",
+                      bounds=[(0.0, None)] * int(free.sum()), options={"maxiter": 2000, "gtol": 1e-10})
+    u = base.copy()
+    u[free] = result.x
+    return u / scale
+
+
+def in_tracker_units(weights) -> np.ndarray:
+    """Weights rescaled so that F's is :data:`~mocap.track.config.REGION_WEIGHT` (the tracker's unit)."""
+    from mocap.track.config import REGION_WEIGHT
+
+    w = np.asarray(weights, dtype=np.float64)
+    if not w[0] > 0:
+        raise ValueError("F's weight was fitted to 0: the score has no unit in the tracker")
+    return w * (REGION_WEIGHT / w[0])
+
+
+def tracker_config(weights, base=None):
+    """The :class:`~mocap.track.TrackerConfig` with these weights (in the tracker's units) in its score."""
+    from mocap.track import TrackerConfig
+
+    w = in_tracker_units(weights)
+    return replace(base if base is not None else TrackerConfig(),
+                   **{WEIGHT_FIELDS[t]: float(w[j]) for j, t in enumerate(TERMS) if t in WEIGHT_FIELDS})
+
+
+# -- recording ---------------------------------------------------------------------------------
+def record_path(out: Path, sequence: str, seed: int) -> Path:
+    return out / "records" / f"{sequence}-s{seed}.npz"
+
+
+def record_sequence(sequence: str, seed: int, out: Path, config, sigma_px: float, data_root: Path,
+                    max_frames: int | None = None) -> Path:
+    """Track one sequence with oracle keypoints and write its candidates (see the module); ``max_frames``:
+    only its first frames."""
+    from experiments.ambiguity import benchmark_sequence
+    from experiments.keypoints import oracle_keypoints
+    from mocap.io.files import write_bytes_atomic
+    from mocap.metrics import mpjpe, root_relative_mpjpe
+    from mocap.track import Tracker
+
+    loaded, prepared = benchmark_sequence(sequence, data_root, seed)
+    prepared = prepared[:max_frames]
+    camera = loaded.calibration.camera
+    truth = loaded.ground_truth.joints
+    keypoints = oracle_keypoints(truth[: len(prepared)], camera, sigma_px, seed)
+    tracker = Tracker(loaded.model, camera, config, loaded.calibration.initial_pose)
+    rows: dict[str, list] = {k: [] for k in ("frame", "features", "error_mm", "camera_error_mm", "origin")}
+    lifter_best, results = [], []
+    for i, frame in enumerate(prepared):
+        results += tracker.push(i, frame, keypoints[i])
+        scored = tracker.scored
+        if scored:
+            joints = np.array([c.joints for c in scored])
+            t = np.repeat(truth[i:i + 1], len(scored), axis=0)
+            rows["frame"] += [i] * len(scored)
+            rows["features"] += [[c.region, c.edge, c.keypoint, c.prior, c.lifter, c.motion[0]] for c in scored]
+            rows["error_mm"] += list(root_relative_mpjpe(joints, t, per_frame=True))
+            rows["camera_error_mm"] += list(mpjpe(joints, t, per_frame=True))
+            rows["origin"] += [c.origin for c in scored]
+        lifted = tracker.lifted
+        lifter_best.append(math.inf if lifted is None else float(np.min(root_relative_mpjpe(
+            lifted.joints, np.repeat(truth[i:i + 1], len(lifted), axis=0), per_frame=True))))
+    results += tracker.finish()
+    tracked = np.array([r.joints for r in results])
+    buffer = io.BytesIO()
+    np.savez_compressed(buffer, frame=np.array(rows["frame"], dtype=np.int64),
+                        features=np.array(rows["features"], dtype=np.float64).reshape(-1, len(TERMS)),
+                        error_mm=np.array(rows["error_mm"]), camera_error_mm=np.array(rows["camera_error_mm"]),
+                        origin=np.array(rows["origin"], dtype=str), lifter_best_mm=np.array(lifter_best),
+                        tracked_error_mm=root_relative_mpjpe(tracked, truth[: len(tracked)], per_frame=True),
+                        tracked_camera_error_mm=mpjpe(tracked, truth[: len(tracked)], per_frame=True),
+                        config=np.array(json.dumps(config.to_dict(), sort_keys=True)), sigma_px=np.array(sigma_px))
+    path = record_path(out, sequence, seed)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_bytes_atomic(path, buffer.getvalue())
+    return path
+
+
+def load_records(paths: list[Path]) -> Candidates:
+    """Read records (:func:`record_sequence`) into one :class:`Candidates`, frame ids made unique."""
+    parts, offset = [], 0
+    for path in paths:
+        with np.load(path) as f:
+            frame = f["frame"] + offset
+            parts.append(Candidates(frame=frame, features=f["features"], error_mm=f["error_mm"],
+                                    camera_error_mm=f["camera_error_mm"], origin=f["origin"]))
+            offset = int(frame.max()) + 1 if len(frame) else offset
+    if not parts:
+        raise ValueError("no records given")
+    return Candidates(**{k: np.concatenate([getattr(p, k) for p in parts])
+                         for k in ("frame", "features", "error_mm", "camera_error_mm", "origin")})
+
+
+def _frames_held_out(candidates: Candidates, share: float, seed: int) -> np.ndarray:
+    """Row mask of a random ``share`` of the frames (drawn with ``seed``)."""
+    ids = np.unique(candidates.frame)
+    rng = np.random.default_rng(seed)
+    held = rng.choice(ids, size=int(round(share * len(ids))), replace=False)
+    return np.isin(candidates.frame, held)
+
+
+def _choice_line(name: str, c: Choice) -> str:
+    return (f"| {name} | {c.frames} | {c.mean_error_mm:.1f} | {c.mean_camera_error_mm:.1f} | "
+            f"{100 * c.failure_rate:.1f} % | {100 * c.miss_rate:.1f} % | {100 * c.best_failure_rate:.1f} % |")
+
+
+def main(argv=None) -> int:
+    from mocap.synth import SEQUENCE_NAMES
+
+    p = argparse.ArgumentParser(prog="python -m experiments.fit_score", description=__doc__.split("\n\n")[0])
+    sub = p.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("record", help="track sequences with oracle keypoints and record every frame's candidates")
+    r.add_argument("--seeds", default="0,1")
+    r.add_argument("--sequences", default=",".join(SEQUENCE_NAMES))
+    r.add_argument("--sigma-px", type=float, default=2.0, help="the oracle keypoints' noise (pixels)")
+    r.add_argument("--config-file", type=Path, help="TrackerConfig JSON to record with (default: the defaults)")
+    r.add_argument("--max-frames", type=int, help="only the first frames of each sequence (a smoke test)")
+    r.add_argument("--data", type=Path, default=RESULTS_DIR / "tracking",
+                   help="where the generated sequences are (made there when missing)")
+    f = sub.add_parser("fit", help="fit the weights on the records")
+    f.add_argument("--seeds", default="0,1")
+    f.add_argument("--sequences", default=",".join(SEQUENCE_NAMES))
+    f.add_argument("--seed", type=int, default=0, help="draws the frames held out")
+    f.add_argument("--holdout", type=float, default=0.3, help="share of frames held out of the fit")
+    f.add_argument("--temperature-mm", type=float, default=TEMPERATURE_MM)
+    f.add_argument("--ridge", type=float, default=RIDGE)
+    f.add_argument("--write", type=Path, help="TrackerConfig JSON of the weights fitted on every frame")
+    for q in (r, f):
+        q.add_argument("--out", type=Path, default=RESULTS_DIR / "fit_score")
+    args = p.parse_args(argv)
+    try:
+        seeds = [int(s) for s in args.seeds.split(",") if s.strip()]
+    except ValueError:
+        seeds = []
+    sequences = [s for s in args.sequences.split(",") if s]
+    if not seeds or not sequences or any(s not in SEQUENCE_NAMES for s in sequences):
+        print(f"error: need seeds and sequences of {', '.join(SEQUENCE_NAMES)}", file=sys.stderr)
+        return 2
+    if args.command == "record":
+        from mocap.track import TrackerConfig
+
+        config = TrackerConfig.from_json(args.config_file) if args.config_file else TrackerConfig()
+        for seed in seeds:
+            for sequence in sequences:
+                if record_path(args.out, sequence, seed).is_file():
+                    continue
+                print(f"recording {sequence} seed {seed}", flush=True)
+                record_sequence(sequence, seed, args.out, config, args.sigma_px, args.data, args.max_frames)
+        return 0
+    paths = [record_path(args.out, q, s) for s in seeds for q in sequences]
+    missing = [str(x) for x in paths if not x.is_file()]
+    if missing:
+        print(f"error: no record {', '.join(missing)} (run record first)", file=sys.stderr)
+        return 2
+    every = load_records(paths)
+    held = _frames_held_out(every, args.holdout, args.seed)
+    train = informative(every.subset(~held))
+    w_fit = fit_weights(train, temperature_mm=args.temperature_mm, ridge=args.ridge)
+    w_all = fit_weights(informative(every), temperature_mm=args.temperature_mm, ridge=args.ridge)
+    head = "| weights | frames | chosen's error about the neck mm (mean) | in the camera mm | > 100 mm about the neck | missed (another within) | no candidate within |"
+    print(f"records: seeds {args.seeds}; {len(sequences)} sequences; {len(np.unique(every.frame))} frames, "
+          f"{len(every)} candidates; fitted on {len(np.unique(train.frame))} informative frames of "
+          f"{int(np.sum(~held))} rows; held out {len(np.unique(every.frame[held]))} frames (seed {args.seed})\n")
+    print(head + "\n" + "|---" * 7 + "|")
+    held_c = every.subset(held)
+    print(_choice_line("default, held-out frames", choose(held_c, default_weights())))
+    print(_choice_line("fitted on the rest, held-out frames", choose(held_c, w_fit)))
+    print(_choice_line("default, all frames", choose(every, default_weights())))
+    print(_choice_line("fitted on all, all frames", choose(every, w_all)))
+    print("\n| term | default | fitted on the rest | fitted on all |\n|---|---|---|---|")
+    for j, t in enumerate(TERMS):
+        print(f"| {t} | {default_weights()[j]:g} | {in_tracker_units(w_fit)[j]:.4g} | {in_tracker_units(w_all)[j]:.4g} |")
+    if args.write:
+        tracker_config(w_all).to_json(args.write)
+        print(f"\nwrote {args.write}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

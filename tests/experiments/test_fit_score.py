@@ -1,0 +1,83 @@
+"""The score's weight fit (experiments.fit_score): reproducible, and right where the answer is known."""
+import numpy as np
+import pytest
+
+from experiments.fit_score import (TERMS, Candidates, choose, default_weights, fit_weights, in_tracker_units,
+                                   informative, tracker_config, _frames_held_out)
+from mocap.track import TrackerConfig
+from mocap.track.config import REGION_WEIGHT
+
+#: Weights that make the synthetic candidates' best by construction (one per term).
+TRUE_WEIGHTS = np.array([50.0, 2.0, 1.5, 0.05, 0.8, 1.2])
+
+
+def synthetic(frames=300, per_frame=6, seed=0, noise=0.0):
+    """Frames whose candidates' error about the neck rises with their score under ``TRUE_WEIGHTS``
+    (so the best candidate of every frame is the lowest-scored one), each term on its own scale."""
+    rng = np.random.default_rng(seed)
+    scales = np.array([0.05, 1.0, 2.0, 20.0, 3.0, 2.0])
+    x = rng.normal(size=(frames * per_frame, len(TERMS))) * scales + 3 * scales
+    score = x @ TRUE_WEIGHTS + noise * rng.normal(size=len(x))
+    frame = np.repeat(np.arange(frames), per_frame)
+    best = np.minimum.reduceat(score, np.arange(0, len(x), per_frame))
+    error = 20.0 + 8.0 * (score - np.repeat(best, per_frame))
+    return Candidates(frame=frame, features=x, error_mm=error, camera_error_mm=error + 5.0,
+                      origin=np.array(["tracked"] * len(x)))
+
+
+def naive_choose(c: Candidates, w, threshold=100.0):
+    chosen, best = [], []
+    for f in np.unique(c.frame):
+        rows = np.flatnonzero(c.frame == f)
+        s = [sum(w[j] * (0.0 if np.isnan(c.features[r, j]) else c.features[r, j]) for j in range(len(w))) for r in rows]
+        chosen.append(c.error_mm[rows[int(np.argmin(s))]])
+        best.append(c.error_mm[rows].min())
+    chosen, best = np.array(chosen), np.array(best)
+    return chosen.mean(), np.mean(chosen > threshold), np.mean((chosen > threshold) & (best <= threshold))
+
+
+def test_the_fit_recovers_weights_that_pick_the_best_candidate_known_by_construction():
+    data = synthetic()
+    w = fit_weights(data)
+    assert np.all(w >= 0)
+    picked = choose(data, w)
+    assert picked.mean_error_mm == pytest.approx(20.0, abs=0.2)      # the best (error 20) on (nearly) every frame
+    truth = choose(data, TRUE_WEIGHTS)
+    assert truth.mean_error_mm == pytest.approx(20.0)
+    # the direction of the true weights, term by term (relative to F's)
+    np.testing.assert_allclose(in_tracker_units(w), TRUE_WEIGHTS, rtol=0.15)
+    # and the default weights, which weigh the terms otherwise, do worse on these frames
+    assert choose(data, default_weights()).mean_error_mm > picked.mean_error_mm + 1.0
+
+
+def test_the_fit_is_reproducible_for_a_seed():
+    data = synthetic(noise=5.0, seed=3)
+    held = _frames_held_out(data, 0.3, seed=7)
+    np.testing.assert_array_equal(held, _frames_held_out(data, 0.3, seed=7))
+    assert not np.array_equal(held, _frames_held_out(data, 0.3, seed=8))
+    a = fit_weights(informative(data.subset(~held)))
+    b = fit_weights(informative(data.subset(~_frames_held_out(data, 0.3, seed=7))))
+    np.testing.assert_array_equal(a, b)
+
+
+def test_choose_equals_a_loop_and_reads_missing_terms_as_zero():
+    data = synthetic(frames=40, per_frame=5, seed=1, noise=30.0)
+    features = data.features.copy()
+    features[::7, 2] = np.nan                      # a term that does not apply adds nothing
+    data = Candidates(frame=data.frame, features=features, error_mm=data.error_mm + 60.0,
+                      camera_error_mm=data.camera_error_mm, origin=data.origin)
+    for w in (TRUE_WEIGHTS, default_weights(), np.array([1.0, 0, 0, 0, 0, 0])):
+        c = choose(data, w)
+        mean, failing, missed = naive_choose(data, w)
+        assert c.mean_error_mm == pytest.approx(mean)
+        assert c.failure_rate == pytest.approx(failing) and c.miss_rate == pytest.approx(missed)
+
+
+def test_weights_in_tracker_units_make_a_config():
+    w = np.array([25.0, 1.0, 1.0, 0.1, 0.25, 0.5])
+    config = tracker_config(w)
+    assert config == TrackerConfig(edge_weight=2.0, keypoint_weight=2.0, prior_weight=0.2, lifter_weight=0.5,
+                                   motion_weight=1.0)
+    np.testing.assert_allclose(default_weights(), [REGION_WEIGHT, 2.0, 2.0, 0.05, 0.5, 1.0])
+    with pytest.raises(ValueError):
+        in_tracker_units(np.zeros(6))
