@@ -56,6 +56,8 @@ WEIGHT_FIELDS = {"edge": "edge_weight", "keypoint": "keypoint_weight", "prior": 
 MIN_SPREAD_MM = 5.0
 #: Soft target's temperature (mm): a candidate this much worse than the frame's best gets 1/e of its weight.
 TEMPERATURE_MM = 10.0
+#: Lifter hypotheses kept per frame in a record (their joints about the neck and probabilities).
+K_SAVED = 10
 #: Ridge on the standardised weights (per frame of the fit).
 RIDGE = 1e-3
 
@@ -282,8 +284,8 @@ def record_sequence(sequence: str, seed: int, out: Path, config, sigma_px: float
     truth = loaded.ground_truth.joints
     keypoints = oracle_keypoints(truth[: len(prepared)], camera, sigma_px, seed)
     tracker = Tracker(loaded.model, camera, config, loaded.calibration.initial_pose)
-    rows: dict[str, list] = {k: [] for k in ("frame", "features", "error_mm", "camera_error_mm", "origin")}
-    lifter_best, results = [], []
+    rows: dict[str, list] = {k: [] for k in ("frame", "features", "error_mm", "camera_error_mm", "origin", "joints")}
+    lifter_best, results, lifted_joints, lifted_p = [], [], [], []
     for i, frame in enumerate(prepared):
         results += tracker.push(i, frame, keypoints[i])
         scored = tracker.scored
@@ -295,7 +297,10 @@ def record_sequence(sequence: str, seed: int, out: Path, config, sigma_px: float
             rows["error_mm"] += list(root_relative_mpjpe(joints, t, per_frame=True))
             rows["camera_error_mm"] += list(mpjpe(joints, t, per_frame=True))
             rows["origin"] += [c.origin for c in scored]
+            rows["joints"] += list(joints)
         lifted = tracker.lifted
+        lifted_joints.append(np.full((K_SAVED, 10, 3), np.nan) if lifted is None else lifted.joints[:K_SAVED])
+        lifted_p.append(np.full(K_SAVED, np.nan) if lifted is None else lifted.probabilities[:K_SAVED])
         lifter_best.append(math.inf if lifted is None else float(np.min(root_relative_mpjpe(
             lifted.joints, np.repeat(truth[i:i + 1], len(lifted), axis=0), per_frame=True))))
     results += tracker.finish()
@@ -305,6 +310,9 @@ def record_sequence(sequence: str, seed: int, out: Path, config, sigma_px: float
                         features=np.array(rows["features"], dtype=np.float64).reshape(-1, len(TERMS)),
                         error_mm=np.array(rows["error_mm"]), camera_error_mm=np.array(rows["camera_error_mm"]),
                         origin=np.array(rows["origin"], dtype=str), lifter_best_mm=np.array(lifter_best),
+                        joints=np.array(rows["joints"], dtype=np.float64).reshape(-1, 10, 3),
+                        truth=truth[: len(prepared)], lifted_joints=np.array(lifted_joints),
+                        lifted_probabilities=np.array(lifted_p),
                         tracked_error_mm=root_relative_mpjpe(tracked, truth[: len(tracked)], per_frame=True),
                         tracked_camera_error_mm=mpjpe(tracked, truth[: len(tracked)], per_frame=True),
                         config=np.array(json.dumps(config.to_dict(), sort_keys=True)), sigma_px=np.array(sigma_px))

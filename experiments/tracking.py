@@ -53,6 +53,10 @@ CONFIGS = MappingProxyType({
     # the keypoint term alone; issue 34)
     "oracle-keypoints": {},
     "oracle-no-lifter": {"lifter_weight": 0.0},
+    # the score's weights fitted by experiments.fit_score (conditional logit, temperature 10 mm) on the
+    # candidates recorded with oracle keypoints on seeds 0-1 (docs/research-log.md, issue 34)
+    "oracle-fitted": {"edge_weight": 0.9433, "keypoint_weight": 6.353, "prior_weight": 0.2899,
+                      "lifter_weight": 2.315, "motion_weight": 0.8179},
     # the default tracker with the gradient step (issue 30; off by default: docs/research-log.md)
     "gradient": {"gradient_step": True},
 })
@@ -60,7 +64,7 @@ CONFIGS = MappingProxyType({
 #: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.
 TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
 #: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
-ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter")})
+ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter", "oracle-fitted")})
 
 
 def config_of(name: str) -> TrackerConfig:
