@@ -16,6 +16,11 @@ were chosen by hand. This script fits them on data, in two steps:
     ``.npz`` per (sequence, seed) under ``--out`` (default ``experiments/results/fit_score``,
     git-ignored), written atomically (a crash leaves the finished sequences; a second run skips
     them).
+``decompose``
+    Splits each record's failing frames (the decided pose over 100 mm about the neck) into where
+    they come from (:func:`decompose`): no lifter hypothesis within; one within but none of the
+    refined candidates; a candidate within but not the frame's lowest score; the lowest score
+    within but not the decided pose.
 ``fit``
     Reads the records and fits the weights offline by a conditional logit: within each frame
     the candidates' probabilities are the softmax of minus their scores (linear in the weights,
@@ -337,12 +342,84 @@ def load_records(paths: list[Path]) -> Candidates:
                          for k in ("frame", "features", "error_mm", "camera_error_mm", "origin")})
 
 
+@dataclass(frozen=True, kw_only=True)
+class Remains:
+    """Where the tracker's failing frames (over 100 mm about the neck) come from (:func:`decompose`);
+    shares of all frames, the four parts adding up to ``failing``.
+
+    Attributes
+    ----------
+    frames : int
+    failing : float
+        The tracked (decided) pose over the threshold about the neck.
+    lifter_misses : float
+        ...and none of the lifter's hypotheses (unrefined) within it: what covering must gain.
+    not_refined : float
+        ...a lifter hypothesis within, but none of the frame's scored candidates (after refinement):
+        lost by which proposals are refined, or by their refinement.
+    score_misses : float
+        ...a candidate within, but not the frame's lowest score (the weights given, the motion
+        from the previous best-path hypothesis): the score's choice.
+    decoder_misses : float
+        ...the frame's lowest score within, the decided pose not: the decoder (or the beam) lost it.
+    """
+
+    frames: int
+    failing: float
+    lifter_misses: float
+    not_refined: float
+    score_misses: float
+    decoder_misses: float
+
+
+def decompose(candidates: Candidates, lifter_best_mm: np.ndarray, tracked_error_mm: np.ndarray, weights,
+              threshold_mm: float = 100.0) -> Remains:
+    """Split the failing frames of one record (frame ids ``0 .. N-1``, every frame scored) into
+    :class:`Remains`' parts.
+
+    Parameters
+    ----------
+    candidates : Candidates
+        One record's candidates; ``frame`` indexes the next two arrays.
+    lifter_best_mm : ndarray, shape (N,)
+        The best lifter hypothesis's error about the neck per frame (``inf`` where none).
+    tracked_error_mm : ndarray, shape (N,)
+        The tracker's decided pose's error about the neck per frame.
+    weights : array_like, shape (len(TERMS),)
+    """
+    lifter_best_mm, tracked_error_mm = np.asarray(lifter_best_mm), np.asarray(tracked_error_mm)
+    n = len(tracked_error_mm)
+    if lifter_best_mm.shape != (n,) or len(candidates) == 0 or candidates.frame.max() >= n:
+        raise ValueError("need one lifter error and one tracked error per frame of the candidates")
+    starts, group = _groups(candidates.frame)
+    score = _filled(candidates.features) @ np.asarray(weights, dtype=np.float64)
+    order = np.lexsort((np.arange(len(score)), score, group))
+    first = order[np.r_[True, group[order][1:] != group[order][:-1]]]
+    frames = candidates.frame[starts]
+    best = np.full(n, np.inf)
+    best[frames] = _group_min(candidates.error_mm, starts)
+    chosen = np.full(n, np.inf)
+    chosen[frames] = candidates.error_mm[first]
+    fail = tracked_error_mm > threshold_mm
+    lifter_in, cand_in, chosen_in = (a <= threshold_mm for a in (lifter_best_mm, best, chosen))
+    parts = (fail & ~lifter_in, fail & lifter_in & ~cand_in, fail & lifter_in & cand_in & ~chosen_in,
+             fail & lifter_in & cand_in & chosen_in)
+    return Remains(frames=n, failing=float(fail.mean()), lifter_misses=float(parts[0].mean()),
+                   not_refined=float(parts[1].mean()), score_misses=float(parts[2].mean()),
+                   decoder_misses=float(parts[3].mean()))
+
+
 def _frames_held_out(candidates: Candidates, share: float, seed: int) -> np.ndarray:
     """Row mask of a random ``share`` of the frames (drawn with ``seed``)."""
     ids = np.unique(candidates.frame)
     rng = np.random.default_rng(seed)
     held = rng.choice(ids, size=int(round(share * len(ids))), replace=False)
     return np.isin(candidates.frame, held)
+
+
+def _remains_line(name: str, r: Remains) -> str:
+    return (f"| {name} | {r.frames} | {100 * r.failing:.1f} % | {100 * r.lifter_misses:.1f} % | "
+            f"{100 * r.not_refined:.1f} % | {100 * r.score_misses:.1f} % | {100 * r.decoder_misses:.1f} % |")
 
 
 def _choice_line(name: str, c: Choice) -> str:
@@ -363,6 +440,9 @@ def main(argv=None) -> int:
     r.add_argument("--max-frames", type=int, help="only the first frames of each sequence (a smoke test)")
     r.add_argument("--data", type=Path, default=RESULTS_DIR / "tracking",
                    help="where the generated sequences are (made there when missing)")
+    dsub = sub.add_parser("decompose", help="where each record's failing frames come from, at the default weights")
+    dsub.add_argument("--seeds", default="41")
+    dsub.add_argument("--sequences", default=",".join(SEQUENCE_NAMES))
     f = sub.add_parser("fit", help="fit the weights on the records")
     f.add_argument("--seeds", default="0,1")
     f.add_argument("--sequences", default=",".join(SEQUENCE_NAMES))
@@ -371,7 +451,7 @@ def main(argv=None) -> int:
     f.add_argument("--temperature-mm", type=float, default=TEMPERATURE_MM)
     f.add_argument("--ridge", type=float, default=RIDGE)
     f.add_argument("--write", type=Path, help="TrackerConfig JSON of the weights fitted on every frame")
-    for q in (r, f):
+    for q in (r, f, dsub):
         q.add_argument("--out", type=Path, default=RESULTS_DIR / "fit_score")
     args = p.parse_args(argv)
     try:
@@ -398,6 +478,23 @@ def main(argv=None) -> int:
     if missing:
         print(f"error: no record {', '.join(missing)} (run record first)", file=sys.stderr)
         return 2
+    if args.command == "decompose":
+        print("| record | frames | > 100 mm about the neck | no lifter hypothesis within | within, not among the refined "
+              "candidates | a candidate within, not the lowest score | the lowest score within, not decided |\n"
+              + "|---" * 7 + "|")
+        total = []
+        for path in paths:
+            with np.load(path) as z:
+                one = load_records([path])
+                part = decompose(one, z["lifter_best_mm"], z["tracked_error_mm"], default_weights())
+            total.append(part)
+            print(_remains_line(path.stem, part))
+        n = sum(x.frames for x in total)
+        pooled = Remains(frames=n, **{k: sum(getattr(x, k) * x.frames for x in total) / n
+                                      for k in ("failing", "lifter_misses", "not_refined", "score_misses",
+                                                "decoder_misses")})
+        print(_remains_line("all, pooled", pooled))
+        return 0
     every = load_records(paths)
     held = _frames_held_out(every, args.holdout, args.seed)
     train = informative(every.subset(~held))

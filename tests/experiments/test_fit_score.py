@@ -81,3 +81,22 @@ def test_weights_in_tracker_units_make_a_config():
     np.testing.assert_allclose(default_weights(), [REGION_WEIGHT, 2.0, 2.0, 0.05, 0.5, 1.0])
     with pytest.raises(ValueError):
         in_tracker_units(np.zeros(6))
+
+
+def test_decompose_splits_the_failing_frames_into_their_four_causes():
+    from experiments.fit_score import decompose
+
+    # five frames of two candidates each; the score is the first term (F) alone
+    features = np.zeros((10, len(TERMS)))
+    features[:, 0] = [0, 1, 0, 1, 0, 1, 0, 1, 0, 1]      # the first candidate of each frame is chosen
+    error = np.array([50, 150, 150, 150, 150, 50, 50, 150, 150, 150], dtype=float)
+    c = Candidates(frame=np.repeat(np.arange(5), 2), features=features, error_mm=error, camera_error_mm=error,
+                   origin=np.array(["tracked", "lifter"] * 5))
+    lifter = np.array([40.0, 40.0, 40.0, 40.0, 300.0])
+    tracked = np.array([50.0, 150.0, 150.0, 150.0, 150.0])
+    r = decompose(c, lifter, tracked, np.r_[1.0, np.zeros(len(TERMS) - 1)])
+    # frame 0 within; 1: no candidate within (not refined); 2: a candidate within, not chosen;
+    # 3: the chosen within, not decided; 4: no lifter hypothesis within
+    assert (r.failing, r.not_refined, r.score_misses, r.decoder_misses, r.lifter_misses) == (0.8, 0.2, 0.2, 0.2, 0.2)
+    with pytest.raises(ValueError):
+        decompose(c, lifter[:4], tracked, np.ones(len(TERMS)))
