@@ -409,6 +409,37 @@ def decompose(candidates: Candidates, lifter_best_mm: np.ndarray, tracked_error_
                    decoder_misses=float(parts[3].mean()))
 
 
+def decode_offline(candidates: Candidates, joints: np.ndarray, weights, motion_cap: float) -> np.ndarray:
+    """The best path (Viterbi, :func:`mocap.track.decode.viterbi`) through every scored candidate of
+    one record, the motion term recomputed between every pair of consecutive frames' candidates
+    from their joints (not only the beam the tracker kept); returns the chosen row of each frame.
+
+    Parameters
+    ----------
+    candidates : Candidates
+        One record's rows, frames in order.
+    joints : ndarray, shape (n, 10, 3), metres
+        Each row's joints.
+    weights : array_like, shape (len(TERMS),)
+        The last (motion) multiplies the truncated quadratic of
+        :data:`~mocap.track.config.MOTION_SIGMA_M`, capped at ``motion_cap``.
+    """
+    from mocap.track.config import MOTION_SIGMA_M
+    from mocap.track.decode import viterbi
+
+    w = np.asarray(weights, dtype=np.float64)
+    starts, _ = _groups(candidates.frame)
+    rows = np.split(np.arange(len(candidates)), starts[1:])
+    x = _filled(candidates.features)
+    unary = [x[r, :-1] @ w[:-1] for r in rows]
+    transition = [np.zeros((1, len(rows[0])))]
+    for a, b in zip(rows[:-1], rows[1:]):
+        squared = ((joints[a][:, None] - joints[b][None]) ** 2).sum(axis=3).mean(axis=2)
+        transition.append(w[-1] * np.minimum(0.5 * squared / MOTION_SIGMA_M ** 2, motion_cap))
+    path, _ = viterbi(unary, transition)
+    return np.array([r[k] for r, k in zip(rows, path)])
+
+
 def _frames_held_out(candidates: Candidates, share: float, seed: int) -> np.ndarray:
     """Row mask of a random ``share`` of the frames (drawn with ``seed``)."""
     ids = np.unique(candidates.frame)
@@ -443,6 +474,12 @@ def main(argv=None) -> int:
     dsub = sub.add_parser("decompose", help="where each record's failing frames come from, at the default weights")
     dsub.add_argument("--seeds", default="41")
     dsub.add_argument("--sequences", default=",".join(SEQUENCE_NAMES))
+    vsub = sub.add_parser("decode", help="offline Viterbi through every recorded candidate, motion weights and caps")
+    vsub.add_argument("--seeds", default="2,3")
+    vsub.add_argument("--sequences", default=",".join(SEQUENCE_NAMES))
+    vsub.add_argument("--motion-weights", default="0,0.3,1,3")
+    vsub.add_argument("--caps", default="8,20")
+    vsub.add_argument("--lifter-weights", default="0.5,2")
     f = sub.add_parser("fit", help="fit the weights on the records")
     f.add_argument("--seeds", default="0,1")
     f.add_argument("--sequences", default=",".join(SEQUENCE_NAMES))
@@ -451,7 +488,7 @@ def main(argv=None) -> int:
     f.add_argument("--temperature-mm", type=float, default=TEMPERATURE_MM)
     f.add_argument("--ridge", type=float, default=RIDGE)
     f.add_argument("--write", type=Path, help="TrackerConfig JSON of the weights fitted on every frame")
-    for q in (r, f, dsub):
+    for q in (r, f, dsub, vsub):
         q.add_argument("--out", type=Path, default=RESULTS_DIR / "fit_score")
     args = p.parse_args(argv)
     try:
@@ -494,6 +531,31 @@ def main(argv=None) -> int:
                                       for k in ("failing", "lifter_misses", "not_refined", "score_misses",
                                                 "decoder_misses")})
         print(_remains_line("all, pooled", pooled))
+        return 0
+    if args.command == "decode":
+        loaded = []
+        for path in paths:
+            with np.load(path) as z:
+                if "joints" not in z.files:
+                    print(f"error: {path} has no joints (recorded before they were kept)", file=sys.stderr)
+                    return 2
+                loaded.append((load_records([path]), z["joints"], z["tracked_error_mm"], z["tracked_camera_error_mm"]))
+        tracked = np.concatenate([t for *_, t, _ in loaded])
+        tracked_cam = np.concatenate([c for *_, c in loaded])
+        print(f"records: seeds {args.seeds}; {len(paths)} sequences, {len(tracked)} frames\n")
+        print("| decoding | motion weight | cap | lifter weight | mean error about the neck mm | > 100 mm about the neck | "
+              "mean in the camera mm | > 100 mm in the camera |\n" + "|---" * 8 + "|")
+        print(f"| the tracker (online, lag 8, its beam) | 1 | 8 | 0.5 | {tracked.mean():.1f} | "
+              f"{100 * np.mean(tracked > 100):.1f} % | {tracked_cam.mean():.1f} | {100 * np.mean(tracked_cam > 100):.1f} % |")
+        for m in (float(v) for v in args.motion_weights.split(",")):
+            for cap in (float(v) for v in args.caps.split(",")):
+                for lw in (float(v) for v in args.lifter_weights.split(",")):
+                    w = default_weights()
+                    w[TERMS.index("lifter")], w[TERMS.index("motion")] = lw, m
+                    err = np.concatenate([c.error_mm[decode_offline(c, j, w, cap)] for c, j, *_ in loaded])
+                    cam = np.concatenate([c.camera_error_mm[decode_offline(c, j, w, cap)] for c, j, *_ in loaded])
+                    print(f"| offline, every candidate | {m:g} | {cap:g} | {lw:g} | {err.mean():.1f} | "
+                          f"{100 * np.mean(err > 100):.1f} % | {cam.mean():.1f} | {100 * np.mean(cam > 100):.1f} % |")
         return 0
     every = load_records(paths)
     held = _frames_held_out(every, args.holdout, args.seed)

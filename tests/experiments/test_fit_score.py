@@ -100,3 +100,30 @@ def test_decompose_splits_the_failing_frames_into_their_four_causes():
     assert (r.failing, r.not_refined, r.score_misses, r.decoder_misses, r.lifter_misses) == (0.8, 0.2, 0.2, 0.2, 0.2)
     with pytest.raises(ValueError):
         decompose(c, lifter[:4], tracked, np.ones(len(TERMS)))
+
+
+def test_offline_decoding_equals_the_best_of_every_path():
+    import itertools
+
+    from experiments.fit_score import decode_offline
+    from mocap.track.config import MOTION_SIGMA_M
+
+    rng = np.random.default_rng(4)
+    sizes = [2, 3, 2, 3]
+    frame = np.repeat(np.arange(len(sizes)), sizes)
+    n = len(frame)
+    features = rng.uniform(0, 1, size=(n, len(TERMS)))
+    joints = rng.normal(0, 0.05, size=(n, 10, 3))
+    c = Candidates(frame=frame, features=features, error_mm=np.zeros(n), camera_error_mm=np.zeros(n),
+                   origin=np.array(["tracked"] * n))
+    w = np.array([50.0, 2.0, 2.0, 0.05, 0.5, 1.5])
+    rows = np.split(np.arange(n), np.cumsum(sizes)[:-1])
+
+    def cost(path):
+        total = sum(features[r, :-1] @ w[:-1] for r in path)
+        for a, b in zip(path[:-1], path[1:]):
+            total += w[-1] * min(0.5 * np.mean(np.sum((joints[a] - joints[b]) ** 2, axis=1)) / MOTION_SIGMA_M ** 2, 3.0)
+        return total
+
+    best = min(itertools.product(*rows), key=cost)
+    np.testing.assert_array_equal(decode_offline(c, joints, w, motion_cap=3.0), best)
