@@ -440,6 +440,20 @@ def decode_offline(candidates: Candidates, joints: np.ndarray, weights, motion_c
     return np.array([r[k] for r, k in zip(rows, path)])
 
 
+def score_miss_frames(candidates: Candidates, lifter_best_mm: np.ndarray, tracked_error_mm: np.ndarray, weights,
+                      threshold_mm: float = 100.0) -> np.ndarray:
+    """Frame indices of :class:`Remains`' ``score_misses`` part (see :func:`decompose`)."""
+    starts, group = _groups(candidates.frame)
+    score = _filled(candidates.features) @ np.asarray(weights, dtype=np.float64)
+    order = np.lexsort((np.arange(len(score)), score, group))
+    first = order[np.r_[True, group[order][1:] != group[order][:-1]]]
+    frames = candidates.frame[starts]
+    best, chosen = _group_min(candidates.error_mm, starts), candidates.error_mm[first]
+    keep = ((np.asarray(tracked_error_mm)[frames] > threshold_mm) & (np.asarray(lifter_best_mm)[frames] <= threshold_mm)
+            & (best <= threshold_mm) & (chosen > threshold_mm))
+    return frames[keep]
+
+
 def _frames_held_out(candidates: Candidates, share: float, seed: int) -> np.ndarray:
     """Row mask of a random ``share`` of the frames (drawn with ``seed``)."""
     ids = np.unique(candidates.frame)
@@ -531,6 +545,26 @@ def main(argv=None) -> int:
                                       for k in ("failing", "lifter_misses", "not_refined", "score_misses",
                                                 "decoder_misses")})
         print(_remains_line("all, pooled", pooled))
+        ranks, top_within, p_nearest, p_top = [], [], [], []
+        for path in paths:
+            with np.load(path) as z:
+                if "lifted_joints" not in z.files:
+                    continue
+                frames = score_miss_frames(load_records([path]), z["lifter_best_mm"], z["tracked_error_mm"],
+                                           default_weights())
+                truth = z["truth"][frames] - z["truth"][frames][:, 1:2]
+                lifted, prob = z["lifted_joints"][frames], z["lifted_probabilities"][frames]
+                error = 1e3 * np.linalg.norm(lifted - truth[:, None], axis=3).mean(axis=2)     # (frames, K)
+                nearest = np.argmin(error, axis=1)
+                ranks += list(nearest)
+                top_within += list(error[:, 0] <= 100.0)
+                p_nearest += list(prob[np.arange(len(frames)), nearest])
+                p_top += list(prob[:, 0])
+        if ranks:
+            print(f"\nOn the {len(ranks)} frames the score missed: the lifter's hypothesis nearest the truth has "
+                  f"probability rank (0: top) {np.bincount(ranks, minlength=K_SAVED).tolist()}, median probability "
+                  f"{np.median(p_nearest):.3f} (the top's {np.median(p_top):.3f}); the top hypothesis is within "
+                  f"100 mm about the neck on {100 * np.mean(top_within):.0f} % of them.")
         return 0
     if args.command == "decode":
         loaded = []

@@ -84,7 +84,7 @@ def test_weights_in_tracker_units_make_a_config():
 
 
 def test_decompose_splits_the_failing_frames_into_their_four_causes():
-    from experiments.fit_score import decompose
+    from experiments.fit_score import decompose, score_miss_frames
 
     # five frames of two candidates each; the score is the first term (F) alone
     features = np.zeros((10, len(TERMS)))
@@ -98,6 +98,7 @@ def test_decompose_splits_the_failing_frames_into_their_four_causes():
     # frame 0 within; 1: no candidate within (not refined); 2: a candidate within, not chosen;
     # 3: the chosen within, not decided; 4: no lifter hypothesis within
     assert (r.failing, r.not_refined, r.score_misses, r.decoder_misses, r.lifter_misses) == (0.8, 0.2, 0.2, 0.2, 0.2)
+    np.testing.assert_array_equal(score_miss_frames(c, lifter, tracked, np.r_[1.0, np.zeros(len(TERMS) - 1)]), [2])
     with pytest.raises(ValueError):
         decompose(c, lifter[:4], tracked, np.ones(len(TERMS)))
 
