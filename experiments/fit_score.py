@@ -318,6 +318,7 @@ def record_sequence(sequence: str, seed: int, out: Path, config, sigma_px: float
                         joints=np.array(rows["joints"], dtype=np.float64).reshape(-1, 10, 3),
                         truth=truth[: len(prepared)], lifted_joints=np.array(lifted_joints),
                         lifted_probabilities=np.array(lifted_p),
+                        tracked_joints=tracked, tracked_poses=np.array([r.pose for r in results]),
                         tracked_error_mm=root_relative_mpjpe(tracked, truth[: len(tracked)], per_frame=True),
                         tracked_camera_error_mm=mpjpe(tracked, truth[: len(tracked)], per_frame=True),
                         config=np.array(json.dumps(config.to_dict(), sort_keys=True)), sigma_px=np.array(sigma_px))
@@ -545,13 +546,20 @@ def main(argv=None) -> int:
                                       for k in ("failing", "lifter_misses", "not_refined", "score_misses",
                                                 "decoder_misses")})
         print(_remains_line("all, pooled", pooled))
-        ranks, top_within, p_nearest, p_top = [], [], [], []
+        ranks, top_within, p_nearest, p_top, higher, joint_error = [], [], [], [], [], []
         for path in paths:
             with np.load(path) as z:
                 if "lifted_joints" not in z.files:
                     continue
-                frames = score_miss_frames(load_records([path]), z["lifter_best_mm"], z["tracked_error_mm"],
-                                           default_weights())
+                one = load_records([path])
+                frames = score_miss_frames(one, z["lifter_best_mm"], z["tracked_error_mm"], default_weights())
+                score = _filled(one.features) @ default_weights()
+                for t in frames:
+                    rows = np.flatnonzero(one.frame == t)
+                    chosen, best = rows[np.argmin(score[rows])], rows[np.argmin(one.error_mm[rows])]
+                    higher.append(one.features[best] > one.features[chosen])
+                    about = z["joints"][chosen] - z["joints"][chosen][1]
+                    joint_error.append(1e3 * np.linalg.norm(about - (z["truth"][t] - z["truth"][t][1]), axis=1))
                 truth = z["truth"][frames] - z["truth"][frames][:, 1:2]
                 lifted, prob = z["lifted_joints"][frames], z["lifted_probabilities"][frames]
                 error = 1e3 * np.linalg.norm(lifted - truth[:, None], axis=3).mean(axis=2)     # (frames, K)
@@ -565,6 +573,12 @@ def main(argv=None) -> int:
                   f"probability rank (0: top) {np.bincount(ranks, minlength=K_SAVED).tolist()}, median probability "
                   f"{np.median(p_nearest):.3f} (the top's {np.median(p_top):.3f}); the top hypothesis is within "
                   f"100 mm about the neck on {100 * np.mean(top_within):.0f} % of them.")
+            from mocap.body import JOINT_NAMES
+            share = np.mean(higher, axis=0)
+            print("The candidate nearest the truth has the higher term than the chosen one on: "
+                  + ", ".join(f"{t} {100 * share[j]:.0f} %" for j, t in enumerate(TERMS)) + " of them.")
+            print("The chosen candidate's median error about the neck per joint (mm): "
+                  + ", ".join(f"{n} {v:.0f}" for n, v in zip(JOINT_NAMES, np.median(joint_error, axis=0))))
         return 0
     if args.command == "decode":
         loaded = []
