@@ -455,6 +455,33 @@ def score_miss_frames(candidates: Candidates, lifter_best_mm: np.ndarray, tracke
     return frames[keep]
 
 
+def smooth_depth(joints: np.ndarray, window: int, joint: int = 1) -> np.ndarray:
+    """Each frame's body moved along the camera ray through ``joint`` (default the neck) to the
+    median depth of that joint over a centred window of ``window`` frames (odd; shorter at the
+    ends): the root's depth taken over frames, the projection of ``joint`` kept.
+
+    Parameters
+    ----------
+    joints : ndarray, shape (N, 10, 3), metres, camera coordinates (depth ``z`` > 0)
+    window : int
+        Frames, odd, at least 1 (1 returns the joints unchanged).
+
+    Returns
+    -------
+    ndarray, shape (N, 10, 3)
+    """
+    joints = np.asarray(joints, dtype=np.float64)
+    if window < 1 or window % 2 == 0:
+        raise ValueError(f"window must be an odd number of frames, got {window}")
+    if joints.ndim != 3 or joints.shape[2] != 3 or np.any(joints[:, joint, 2] <= 0):
+        raise ValueError("joints must be (N, J, 3) with the joint in front of the camera")
+    z = joints[:, joint, 2]
+    h = window // 2
+    smoothed = np.array([np.median(z[max(0, i - h): i + h + 1]) for i in range(len(z))])
+    shift = joints[:, joint] * (smoothed / z - 1.0)[:, None]
+    return joints + shift[:, None, :]
+
+
 def _frames_held_out(candidates: Candidates, share: float, seed: int) -> np.ndarray:
     """Row mask of a random ``share`` of the frames (drawn with ``seed``)."""
     ids = np.unique(candidates.frame)
@@ -495,6 +522,10 @@ def main(argv=None) -> int:
     vsub.add_argument("--motion-weights", default="0,0.3,1,3")
     vsub.add_argument("--caps", default="8,20")
     vsub.add_argument("--lifter-weights", default="0.5,2")
+    rsub = sub.add_parser("depth", help="the decided poses' depth taken over frames (a centred median), measured")
+    rsub.add_argument("--seeds", default="0,1")
+    rsub.add_argument("--sequences", default=",".join(SEQUENCE_NAMES))
+    rsub.add_argument("--windows", default="1,5,9,17,33")
     f = sub.add_parser("fit", help="fit the weights on the records")
     f.add_argument("--seeds", default="0,1")
     f.add_argument("--sequences", default=",".join(SEQUENCE_NAMES))
@@ -503,7 +534,7 @@ def main(argv=None) -> int:
     f.add_argument("--temperature-mm", type=float, default=TEMPERATURE_MM)
     f.add_argument("--ridge", type=float, default=RIDGE)
     f.add_argument("--write", type=Path, help="TrackerConfig JSON of the weights fitted on every frame")
-    for q in (r, f, dsub, vsub):
+    for q in (r, f, dsub, vsub, rsub):
         q.add_argument("--out", type=Path, default=RESULTS_DIR / "fit_score")
     args = p.parse_args(argv)
     try:
@@ -579,6 +610,24 @@ def main(argv=None) -> int:
                   + ", ".join(f"{t} {100 * share[j]:.0f} %" for j, t in enumerate(TERMS)) + " of them.")
             print("The chosen candidate's median error about the neck per joint (mm): "
                   + ", ".join(f"{n} {v:.0f}" for n, v in zip(JOINT_NAMES, np.median(joint_error, axis=0))))
+        return 0
+    if args.command == "depth":
+        from mocap.metrics import mpjpe
+
+        tracks = []
+        for path in paths:
+            with np.load(path) as z:
+                if "tracked_joints" not in z.files:
+                    print(f"error: {path} has no tracked joints (recorded before they were kept)", file=sys.stderr)
+                    return 2
+                tracks.append((z["tracked_joints"], z["truth"][: len(z["tracked_joints"])]))
+        print(f"records: seeds {args.seeds}; {len(paths)} sequences\n\n| window (frames) | mean MPJPE mm | median of "
+              "the sequences' MPJPE mm | > 100 mm |\n|---|---|---|---|")
+        for window in (int(v) for v in args.windows.split(",")):
+            errors = [mpjpe(smooth_depth(j, window), t, per_frame=True) for j, t in tracks]
+            every = np.concatenate(errors)
+            print(f"| {window} | {every.mean():.1f} | {np.median([e.mean() for e in errors]):.1f} | "
+                  f"{100 * np.mean(every > 100):.1f} % |")
         return 0
     if args.command == "decode":
         loaded = []

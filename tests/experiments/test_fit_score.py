@@ -128,3 +128,19 @@ def test_offline_decoding_equals_the_best_of_every_path():
 
     best = min(itertools.product(*rows), key=cost)
     np.testing.assert_array_equal(decode_offline(c, joints, w, motion_cap=3.0), best)
+
+
+def test_depth_over_frames_keeps_the_projection_and_the_pose_about_the_neck():
+    from experiments.fit_score import smooth_depth
+
+    rng = np.random.default_rng(2)
+    joints = rng.normal(0.0, 0.2, size=(15, 10, 3))
+    joints[..., 2] += 3.0
+    np.testing.assert_array_equal(smooth_depth(joints, 1), joints)
+    out = smooth_depth(joints, 5)
+    np.testing.assert_allclose(out[:, 1, :2] / out[:, 1, 2:], joints[:, 1, :2] / joints[:, 1, 2:])   # the neck's pixel
+    np.testing.assert_allclose(out - out[:, 1:2], joints - joints[:, 1:2], atol=1e-12)                # the pose about it
+    np.testing.assert_allclose(out[7, 1, 2], np.median(joints[5:10, 1, 2]))                         # the window's median
+    np.testing.assert_allclose(out[0, 1, 2], np.median(joints[0:3, 1, 2]))                          # shorter at the ends
+    with pytest.raises(ValueError):
+        smooth_depth(joints, 4)
