@@ -273,10 +273,10 @@ def record_path(out: Path, sequence: str, seed: int) -> Path:
     return out / "records" / f"{sequence}-s{seed}.npz"
 
 
-def record_sequence(sequence: str, seed: int, out: Path, config, sigma_px: float, data_root: Path,
+def record_sequence(sequence: str, seed: int, out: Path, config, sigma_px: float | None, data_root: Path,
                     max_frames: int | None = None) -> Path:
-    """Track one sequence with oracle keypoints and write its candidates (see the module); ``max_frames``:
-    only its first frames."""
+    """Track one sequence with oracle keypoints (``sigma_px`` None: without keypoints) and write its
+    candidates (see the module); ``max_frames``: only its first frames."""
     from experiments.ambiguity import benchmark_sequence
     from experiments.keypoints import oracle_keypoints
     from mocap.io.files import write_bytes_atomic
@@ -287,7 +287,8 @@ def record_sequence(sequence: str, seed: int, out: Path, config, sigma_px: float
     prepared = prepared[:max_frames]
     camera = loaded.calibration.camera
     truth = loaded.ground_truth.joints
-    keypoints = oracle_keypoints(truth[: len(prepared)], camera, sigma_px, seed)
+    keypoints = ([None] * len(prepared) if sigma_px is None
+                 else oracle_keypoints(truth[: len(prepared)], camera, sigma_px, seed))
     tracker = Tracker(loaded.model, camera, config, loaded.calibration.initial_pose)
     rows: dict[str, list] = {k: [] for k in ("frame", "features", "error_mm", "camera_error_mm", "origin", "joints")}
     lifter_best, results, lifted_joints, lifted_p = [], [], [], []
@@ -321,7 +322,7 @@ def record_sequence(sequence: str, seed: int, out: Path, config, sigma_px: float
                         tracked_joints=tracked, tracked_poses=np.array([r.pose for r in results]),
                         tracked_error_mm=root_relative_mpjpe(tracked, truth[: len(tracked)], per_frame=True),
                         tracked_camera_error_mm=mpjpe(tracked, truth[: len(tracked)], per_frame=True),
-                        config=np.array(json.dumps(config.to_dict(), sort_keys=True)), sigma_px=np.array(sigma_px))
+                        config=np.array(json.dumps(config.to_dict(), sort_keys=True)), sigma_px=np.array(np.nan if sigma_px is None else sigma_px))
     path = record_path(out, sequence, seed)
     path.parent.mkdir(parents=True, exist_ok=True)
     write_bytes_atomic(path, buffer.getvalue())
@@ -509,6 +510,7 @@ def main(argv=None) -> int:
     r.add_argument("--seeds", default="0,1")
     r.add_argument("--sequences", default=",".join(SEQUENCE_NAMES))
     r.add_argument("--sigma-px", type=float, default=2.0, help="the oracle keypoints' noise (pixels)")
+    r.add_argument("--no-keypoints", action="store_true", help="track without keypoints (the silhouette only)")
     r.add_argument("--config-file", type=Path, help="TrackerConfig JSON to record with (default: the defaults)")
     r.add_argument("--max-frames", type=int, help="only the first frames of each sequence (a smoke test)")
     r.add_argument("--data", type=Path, default=RESULTS_DIR / "tracking",
@@ -554,7 +556,8 @@ def main(argv=None) -> int:
                 if record_path(args.out, sequence, seed).is_file():
                     continue
                 print(f"recording {sequence} seed {seed}", flush=True)
-                record_sequence(sequence, seed, args.out, config, args.sigma_px, args.data, args.max_frames)
+                record_sequence(sequence, seed, args.out, config, None if args.no_keypoints else args.sigma_px, args.data,
+                                args.max_frames)
         return 0
     paths = [record_path(args.out, q, s) for s in seeds for q in sequences]
     missing = [str(x) for x in paths if not x.is_file()]
@@ -628,6 +631,12 @@ def main(argv=None) -> int:
             every = np.concatenate(errors)
             print(f"| {window} | {every.mean():.1f} | {np.median([e.mean() for e in errors]):.1f} | "
                   f"{100 * np.mean(every > 100):.1f} % |")
+        bound = []
+        for j, t in tracks:      # the neck moved along its ray to the true neck's depth: what depth alone can give
+            bound.append(mpjpe(j + (j[:, 1] * (t[:, 1, 2] / j[:, 1, 2] - 1.0)[:, None])[:, None], t, per_frame=True))
+        every = np.concatenate(bound)
+        print(f"| the true depth (a bound) | {every.mean():.1f} | {np.median([e.mean() for e in bound]):.1f} | "
+              f"{100 * np.mean(every > 100):.1f} % |")
         return 0
     if args.command == "decode":
         loaded = []
@@ -659,6 +668,10 @@ def main(argv=None) -> int:
     train = informative(every.subset(~held))
     w_fit = fit_weights(train, temperature_mm=args.temperature_mm, ridge=args.ridge)
     w_all = fit_weights(informative(every), temperature_mm=args.temperature_mm, ridge=args.ridge)
+    # a term that never applied (without keypoints: the keypoint and lifter terms) keeps its default weight
+    unseen = np.all(np.isnan(every.features), axis=0)
+    for w in (w_fit, w_all):
+        w[unseen] = default_weights()[unseen] * w[0] / default_weights()[0]
     head = "| weights | frames | chosen's error about the neck mm (mean) | in the camera mm | > 100 mm about the neck | missed (another within) | no candidate within |"
     print(f"records: seeds {args.seeds}; {len(sequences)} sequences; {len(np.unique(every.frame))} frames, "
           f"{len(every)} candidates; fitted on {len(np.unique(train.frame))} informative frames of "
@@ -671,7 +684,8 @@ def main(argv=None) -> int:
     print(_choice_line("fitted on all, all frames", choose(every, w_all)))
     print("\n| term | default | fitted on the rest | fitted on all |\n|---|---|---|---|")
     for j, t in enumerate(TERMS):
-        print(f"| {t} | {default_weights()[j]:g} | {in_tracker_units(w_fit)[j]:.4g} | {in_tracker_units(w_all)[j]:.4g} |")
+        note = " (never applied: the default kept)" if unseen[j] else ""
+        print(f"| {t}{note} | {default_weights()[j]:g} | {in_tracker_units(w_fit)[j]:.4g} | {in_tracker_units(w_all)[j]:.4g} |")
     if args.write:
         tracker_config(w_all).to_json(args.write)
         print(f"\nwrote {args.write}")

@@ -57,6 +57,9 @@ CONFIGS = MappingProxyType({
     # candidates recorded with oracle keypoints on seeds 0-1 (docs/research-log.md, issue 34)
     "oracle-fitted": {"edge_weight": 0.9433, "keypoint_weight": 6.353, "prior_weight": 0.2899,
                       "lifter_weight": 2.315, "motion_weight": 0.8179},
+    # the same fit on candidates recorded without keypoints (seeds 0-1): F's weight nearly alone; the
+    # keypoint and lifter weights are the defaults' (their terms never applied there)
+    "fitted-silhouette": {"edge_weight": 0.01516, "prior_weight": 0.00708, "motion_weight": 0.0},
     # the default tracker with the gradient step (issue 30; off by default: docs/research-log.md)
     "gradient": {"gradient_step": True},
 })
