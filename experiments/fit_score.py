@@ -249,6 +249,16 @@ def fit_weights(candidates: Candidates, *, temperature_mm: float = TEMPERATURE_M
     return u / scale
 
 
+def keep_unseen(weights, features: np.ndarray) -> np.ndarray:
+    """``weights`` with the terms that never applied (NaN on every row of ``features``, e.g. the
+    keypoint and lifter terms without keypoints) set to their default, on the same scale (F's
+    weight over :data:`~mocap.track.config.REGION_WEIGHT`): the data says nothing of them."""
+    w = np.array(weights, dtype=np.float64)
+    unseen = np.all(np.isnan(np.asarray(features, dtype=np.float64)), axis=0)
+    w[unseen] = default_weights()[unseen] * w[0] / default_weights()[0]
+    return w
+
+
 def in_tracker_units(weights) -> np.ndarray:
     """Weights rescaled so that F's is :data:`~mocap.track.config.REGION_WEIGHT` (the tracker's unit)."""
     from mocap.track.config import REGION_WEIGHT
@@ -668,10 +678,8 @@ def main(argv=None) -> int:
     train = informative(every.subset(~held))
     w_fit = fit_weights(train, temperature_mm=args.temperature_mm, ridge=args.ridge)
     w_all = fit_weights(informative(every), temperature_mm=args.temperature_mm, ridge=args.ridge)
-    # a term that never applied (without keypoints: the keypoint and lifter terms) keeps its default weight
     unseen = np.all(np.isnan(every.features), axis=0)
-    for w in (w_fit, w_all):
-        w[unseen] = default_weights()[unseen] * w[0] / default_weights()[0]
+    w_fit, w_all = (keep_unseen(w, every.features) for w in (w_fit, w_all))
     head = "| weights | frames | chosen's error about the neck mm (mean) | in the camera mm | > 100 mm about the neck | missed (another within) | no candidate within |"
     print(f"records: seeds {args.seeds}; {len(sequences)} sequences; {len(np.unique(every.frame))} frames, "
           f"{len(every)} candidates; fitted on {len(np.unique(train.frame))} informative frames of "

@@ -144,3 +144,12 @@ def test_depth_over_frames_keeps_the_projection_and_the_pose_about_the_neck():
     np.testing.assert_allclose(out[0, 1, 2], np.median(joints[0:3, 1, 2]))                          # shorter at the ends
     with pytest.raises(ValueError):
         smooth_depth(joints, 4)
+
+
+def test_a_term_that_never_applied_keeps_its_default_weight():
+    from experiments.fit_score import keep_unseen
+
+    features = np.ones((4, len(TERMS)))
+    features[:, [2, 4]] = np.nan                     # no keypoints: neither keypoint nor lifter term
+    w = keep_unseen(np.array([25.0, 1.0, 0.0, 0.1, 0.0, 0.5]), features)
+    np.testing.assert_allclose(in_tracker_units(w), [50.0, 2.0, 2.0, 0.2, 0.5, 1.0])
