@@ -56,6 +56,9 @@ TERMS: tuple[str, ...] = ("region", "edge", "keypoint", "prior", "lifter", "moti
 #: The :class:`~mocap.track.TrackerConfig` field of each term's weight (``region``: the constant unit).
 WEIGHT_FIELDS = {"edge": "edge_weight", "keypoint": "keypoint_weight", "prior": "prior_weight",
                  "lifter": "lifter_weight", "motion": "motion_weight"}
+#: The fields of the weights on frames without keypoints (the keypoint and lifter terms never apply there).
+SILHOUETTE_FIELDS = {"edge": "silhouette_edge_weight", "prior": "silhouette_prior_weight",
+                     "motion": "silhouette_motion_weight"}
 #: Candidates whose errors about the neck all lie within this (mm) of each other leave nothing to choose:
 #: such frames are left out of the fit.
 MIN_SPREAD_MM = 5.0
@@ -125,13 +128,15 @@ class Choice:
     best_failure_rate: float
 
 
-def default_weights() -> np.ndarray:
-    """The shipped weights, :data:`TERMS` order, shape (6,)."""
+def default_weights(silhouette: bool = False) -> np.ndarray:
+    """The shipped weights, :data:`TERMS` order, shape (6,): of frames with keypoints, or
+    (``silhouette``) without (their keypoint and lifter weights apply to no term there)."""
     from mocap.track import TrackerConfig
     from mocap.track.config import REGION_WEIGHT
 
     c = TrackerConfig()
-    return np.array([REGION_WEIGHT] + [getattr(c, WEIGHT_FIELDS[t]) for t in TERMS[1:]], dtype=np.float64)
+    fields = {**WEIGHT_FIELDS, **SILHOUETTE_FIELDS} if silhouette else WEIGHT_FIELDS
+    return np.array([REGION_WEIGHT] + [getattr(c, fields[t]) for t in TERMS[1:]], dtype=np.float64)
 
 
 def _groups(frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -249,13 +254,15 @@ def fit_weights(candidates: Candidates, *, temperature_mm: float = TEMPERATURE_M
     return u / scale
 
 
-def keep_unseen(weights, features: np.ndarray) -> np.ndarray:
+def keep_unseen(weights, features: np.ndarray, defaults=None) -> np.ndarray:
     """``weights`` with the terms that never applied (NaN on every row of ``features``, e.g. the
     keypoint and lifter terms without keypoints) set to their default, on the same scale (F's
-    weight over :data:`~mocap.track.config.REGION_WEIGHT`): the data says nothing of them."""
+    weight over :data:`~mocap.track.config.REGION_WEIGHT`): the data says nothing of them.
+    ``defaults``: the weights to keep (default :func:`default_weights`)."""
     w = np.array(weights, dtype=np.float64)
+    d = default_weights() if defaults is None else np.asarray(defaults, dtype=np.float64)
     unseen = np.all(np.isnan(np.asarray(features, dtype=np.float64)), axis=0)
-    w[unseen] = default_weights()[unseen] * w[0] / default_weights()[0]
+    w[unseen] = d[unseen] * w[0] / d[0]
     return w
 
 
@@ -269,13 +276,15 @@ def in_tracker_units(weights) -> np.ndarray:
     return w * (REGION_WEIGHT / w[0])
 
 
-def tracker_config(weights, base=None):
-    """The :class:`~mocap.track.TrackerConfig` with these weights (in the tracker's units) in its score."""
+def tracker_config(weights, base=None, silhouette: bool = False):
+    """The :class:`~mocap.track.TrackerConfig` with these weights (in the tracker's units) in its score:
+    of frames with keypoints, or (``silhouette``) of frames without (edge, prior and motion only)."""
     from mocap.track import TrackerConfig
 
     w = in_tracker_units(weights)
+    fields = SILHOUETTE_FIELDS if silhouette else WEIGHT_FIELDS
     return replace(base if base is not None else TrackerConfig(),
-                   **{WEIGHT_FIELDS[t]: float(w[j]) for j, t in enumerate(TERMS) if t in WEIGHT_FIELDS})
+                   **{fields[t]: float(w[j]) for j, t in enumerate(TERMS) if t in fields})
 
 
 # -- recording ---------------------------------------------------------------------------------
@@ -679,23 +688,25 @@ def main(argv=None) -> int:
     w_fit = fit_weights(train, temperature_mm=args.temperature_mm, ridge=args.ridge)
     w_all = fit_weights(informative(every), temperature_mm=args.temperature_mm, ridge=args.ridge)
     unseen = np.all(np.isnan(every.features), axis=0)
-    w_fit, w_all = (keep_unseen(w, every.features) for w in (w_fit, w_all))
+    silhouette = bool(unseen[TERMS.index("keypoint")])        # recorded without keypoints
+    defaults = default_weights(silhouette)
+    w_fit, w_all = (keep_unseen(w, every.features, defaults) for w in (w_fit, w_all))
     head = "| weights | frames | chosen's error about the neck mm (mean) | in the camera mm | > 100 mm about the neck | missed (another within) | no candidate within |"
     print(f"records: seeds {args.seeds}; {len(sequences)} sequences; {len(np.unique(every.frame))} frames, "
           f"{len(every)} candidates; fitted on {len(np.unique(train.frame))} informative frames of "
           f"{int(np.sum(~held))} rows; held out {len(np.unique(every.frame[held]))} frames (seed {args.seed})\n")
     print(head + "\n" + "|---" * 7 + "|")
     held_c = every.subset(held)
-    print(_choice_line("default, held-out frames", choose(held_c, default_weights())))
+    print(_choice_line("default, held-out frames", choose(held_c, defaults)))
     print(_choice_line("fitted on the rest, held-out frames", choose(held_c, w_fit)))
-    print(_choice_line("default, all frames", choose(every, default_weights())))
+    print(_choice_line("default, all frames", choose(every, defaults)))
     print(_choice_line("fitted on all, all frames", choose(every, w_all)))
     print("\n| term | default | fitted on the rest | fitted on all |\n|---|---|---|---|")
     for j, t in enumerate(TERMS):
         note = " (never applied: the default kept)" if unseen[j] else ""
-        print(f"| {t}{note} | {default_weights()[j]:g} | {in_tracker_units(w_fit)[j]:.4g} | {in_tracker_units(w_all)[j]:.4g} |")
+        print(f"| {t}{note} | {defaults[j]:g} | {in_tracker_units(w_fit)[j]:.4g} | {in_tracker_units(w_all)[j]:.4g} |")
     if args.write:
-        tracker_config(w_all).to_json(args.write)
+        tracker_config(w_all, silhouette=silhouette).to_json(args.write)
         print(f"\nwrote {args.write}")
     return 0
 

@@ -45,7 +45,7 @@ CONFIGS = MappingProxyType({
     "L0": {"lag": 0},
     "L16": {"lag": 16},
     "offline": {"offline": True},
-    "no-prior": {"prior_weight": 0.0},
+    "no-prior": {"prior_weight": 0.0, "silhouette_prior_weight": 0.0},
     "no-jumps": {"jumps": False},
     "two-class": {},
     # given the oracle's 2D keypoints (ORACLE_KEYPOINTS): the default tracker (the learned lifter's
@@ -57,9 +57,11 @@ CONFIGS = MappingProxyType({
     # candidates recorded with oracle keypoints on seeds 0-1 (docs/research-log.md, issue 34)
     "oracle-fitted": {"edge_weight": 0.9433, "keypoint_weight": 6.353, "prior_weight": 0.2899,
                       "lifter_weight": 2.315, "motion_weight": 0.8179},
-    # the same fit on candidates recorded without keypoints (seeds 0-1): F's weight nearly alone; the
-    # keypoint and lifter weights are the defaults' (their terms never applied there)
-    "fitted-silhouette": {"edge_weight": 0.01516, "prior_weight": 0.00708, "motion_weight": 0.0},
+    # without keypoints, the hand-chosen weights of frames without keypoints before issue 34 (the default
+    # now has the fitted silhouette_* weights: experiments.fit_score on candidates recorded without keypoints)
+    "hand-silhouette": {"silhouette_edge_weight": 2.0, "silhouette_prior_weight": 0.05, "silhouette_motion_weight": 1.0},
+    # the weights fitted without keypoints given to the frames with the oracle's keypoints too (did not pay)
+    "oracle-fitted-silhouette": {"edge_weight": 0.01516, "prior_weight": 0.00708, "motion_weight": 0.0},
     # the default tracker with the gradient step (issue 30; off by default: docs/research-log.md)
     "gradient": {"gradient_step": True},
 })
@@ -67,7 +69,8 @@ CONFIGS = MappingProxyType({
 #: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.
 TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
 #: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
-ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter", "oracle-fitted")})
+ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter", "oracle-fitted",
+                                                              "oracle-fitted-silhouette")})
 
 
 def config_of(name: str) -> TrackerConfig:

@@ -130,6 +130,15 @@ class ScoredCandidate:
 
 
 @dataclass(frozen=True)
+class _Weights:
+    """The score's weights of one frame (with keypoints or without: :meth:`Tracker._weights`)."""
+
+    edge: float
+    prior: float
+    motion: float
+
+
+@dataclass(frozen=True)
 class _Terms:
     region: float
     edge: float
@@ -193,7 +202,9 @@ class Tracker:
         if config.mesh_resolution and model.mesh.resolution != config.mesh_resolution:
             model = model.with_resolution(config.mesh_resolution)
         self.model, self.camera, self.config = model, camera, config
-        self.prior = prior if prior is not None else (default_prior() if config.prior_weight > 0 else None)
+        self.prior = prior if prior is not None else (default_prior() if max(config.prior_weight,
+                                                                              config.silhouette_prior_weight) > 0
+                                                      else None)
         #: The lifting (None when ``config`` does not use the lifter); also the default keypoint source.
         self.lifting: LifterSource | None = LifterSource(lifter) if config.uses_lifter else None
         self.sources: tuple[ProposalSource, ...] = tuple(proposal_sources(config, self.lifting) if sources is None
@@ -287,6 +298,7 @@ class Tracker:
         keypoint_cost = self.keypoint_cost(keypoints)
         fit = functools.partial(register, region_cost, edge_cost, config=cfg, keypoint_cost=keypoint_cost)
         lifted = self.lifting.lift(keypoints, self.camera, self.model) if self.lifting is not None else None
+        weights = self._weights(keypoint_cost is not None or lifted is not None)
         candidates: list[tuple[Registration, str]] = []
         evaluations = 0
         t1 = time.perf_counter()
@@ -314,21 +326,22 @@ class Tracker:
         t3 = time.perf_counter()
         if self.sources and cfg.proposals_refined > 0:
             context = ProposalContext(lifted=lifted)
-            rough = functools.partial(self._rough_unary, region_cost, edge_cost, keypoint_cost, lifted)
+            rough = functools.partial(self._rough_unary, region_cost, edge_cost, keypoint_cost, lifted, weights)
             for source in self.sources:
                 evaluations += self._propose(source, prepared, context, rough, fit, candidates)
         timings["proposals"] = 1e3 * (time.perf_counter() - t3)
         joints = [self.model.joint_positions(reg.pose) for reg, _ in candidates]
-        terms = [self._terms(reg.region_residual, reg.edge_residual, reg.keypoint_residual, reg.pose, j, lifted)
-                 for (reg, _), j in zip(candidates, joints)]
-        hypotheses = [self._hypothesis(reg, origin, j, t) for (reg, origin), j, t in zip(candidates, joints, terms)]
+        terms = [self._terms(reg.region_residual, reg.edge_residual, reg.keypoint_residual, reg.pose, j, lifted,
+                             weights) for (reg, _), j in zip(candidates, joints)]
+        hypotheses = [self._hypothesis(reg, origin, j, t, weights)
+                      for (reg, origin), j, t in zip(candidates, joints, terms)]
         self.candidates = [(h.origin, h.pose) for h in hypotheses]
         motion = self._motion(self._beam, hypotheses)
         self.scored = [ScoredCandidate(origin=h.origin, pose=h.pose, joints=h.joints, region=t.region, edge=t.edge,
                                        keypoint=t.keypoint, prior=t.prior, lifter=t.lifter, motion=motion[:, j],
                                        unary=h.unary) for j, (h, t) in enumerate(zip(hypotheses, terms))]
         self.lifted = lifted
-        transition = motion if cfg.motion_weight == 1.0 else cfg.motion_weight * motion
+        transition = motion if weights.motion == 1.0 else weights.motion * motion
         cost, back = viterbi_step(self._cost, transition, np.array([h.unary for h in hypotheses]))
         keep = self._select(hypotheses, cost)
         timings["beam"] = 1e3 * (time.perf_counter() - t2)
@@ -337,40 +350,49 @@ class Tracker:
         return _Frame(index, False, [hypotheses[k] for k in keep], kept_cost - kept_cost[0], back[keep], evaluations,
                       timings)
 
+    def _weights(self, keypoints: bool) -> _Weights:
+        """The score's weights on a frame with keypoints (``edge_weight``, ``prior_weight``,
+        ``motion_weight``) or without (their ``silhouette_`` twins)."""
+        cfg = self.config
+        if keypoints:
+            return _Weights(cfg.edge_weight, cfg.prior_weight, cfg.motion_weight)
+        return _Weights(cfg.silhouette_edge_weight, cfg.silhouette_prior_weight, cfg.silhouette_motion_weight)
+
     def _terms(self, region: float, edge: float, keypoint: float, pose: np.ndarray, joints: np.ndarray,
-               lifted: LiftedHypotheses | None) -> _Terms:
+               lifted: LiftedHypotheses | None, weights: _Weights) -> _Terms:
         """The terms of a candidate's unary score before their weights (see :class:`ScoredCandidate`)."""
         cfg = self.config
-        prior = self.prior.energy(pose) if self.prior is not None and cfg.prior_weight > 0 else math.nan
+        prior = self.prior.energy(pose) if self.prior is not None and weights.prior > 0 else math.nan
         lifter = self.lifting.energy(lifted, joints) if lifted is not None and cfg.lifter_weight > 0 else math.nan
         return _Terms(region, edge, keypoint, prior, lifter)
 
-    def _weighted(self, t: _Terms) -> float:
+    def _weighted(self, t: _Terms, weights: _Weights) -> float:
         """The unary score of a candidate's terms (see the module)."""
         cfg = self.config
-        unary = REGION_WEIGHT * t.region + cfg.edge_weight * t.edge
+        unary = REGION_WEIGHT * t.region + weights.edge * t.edge
         if not math.isnan(t.keypoint):
             unary += cfg.keypoint_weight * t.keypoint
         if not math.isnan(t.prior):
-            unary += cfg.prior_weight * t.prior
+            unary += weights.prior * t.prior
         if not math.isnan(t.lifter):
             unary += cfg.lifter_weight * t.lifter
         return float(unary)
 
     def _unary(self, region: float, edge: float, keypoint: float, pose: np.ndarray, joints: np.ndarray,
-               lifted: LiftedHypotheses | None) -> float:
+               lifted: LiftedHypotheses | None, weights: _Weights) -> float:
         """The unary score of a candidate from its residuals (see the module)."""
-        return self._weighted(self._terms(region, edge, keypoint, pose, joints, lifted))
+        return self._weighted(self._terms(region, edge, keypoint, pose, joints, lifted, weights), weights)
 
     def _rough_unary(self, region_cost, edge_cost, keypoint_cost, lifted: LiftedHypotheses | None,
-                     pose: np.ndarray) -> float:
+                     weights: _Weights, pose: np.ndarray) -> float:
         """The unary score of an unrefined pose (one evaluation of each cost): what ranks proposals."""
         return self._unary(region_cost.evaluate_unchecked(pose), edge_cost(pose),
                            math.nan if keypoint_cost is None else keypoint_cost(pose), pose,
-                           self.model.joint_positions(pose), lifted)
+                           self.model.joint_positions(pose), lifted, weights)
 
-    def _hypothesis(self, reg: Registration, origin: str, joints: np.ndarray, terms: _Terms) -> _Hypothesis:
-        unary = self._weighted(terms)
+    def _hypothesis(self, reg: Registration, origin: str, joints: np.ndarray, terms: _Terms,
+                    weights: _Weights) -> _Hypothesis:
+        unary = self._weighted(terms, weights)
         return _Hypothesis(reg.pose, joints, reg.region_residual, reg.edge_residual,
                            reg.edge_residual_after_region, reg.failed(self.config), origin, unary,
                            reg.region.iterations if reg.region else 0, reg.edge.iterations if reg.edge else 0)

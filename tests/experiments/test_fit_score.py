@@ -79,6 +79,13 @@ def test_weights_in_tracker_units_make_a_config():
     assert config == TrackerConfig(edge_weight=2.0, keypoint_weight=2.0, prior_weight=0.2, lifter_weight=0.5,
                                    motion_weight=1.0)
     np.testing.assert_allclose(default_weights(), [REGION_WEIGHT, 2.0, 2.0, 0.05, 0.5, 1.0])
+    # without keypoints: the silhouette's own edge, prior and motion weights
+    silhouette = tracker_config(w, silhouette=True)
+    assert silhouette == TrackerConfig(silhouette_edge_weight=2.0, silhouette_prior_weight=0.2, silhouette_motion_weight=1.0)
+    c = TrackerConfig()
+    np.testing.assert_allclose(default_weights(silhouette=True),
+                               [REGION_WEIGHT, c.silhouette_edge_weight, 2.0, c.silhouette_prior_weight, 0.5,
+                                c.silhouette_motion_weight])
     with pytest.raises(ValueError):
         in_tracker_units(np.zeros(6))
 
