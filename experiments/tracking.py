@@ -57,9 +57,11 @@ CONFIGS = MappingProxyType({
     # candidates recorded with oracle keypoints on seeds 0-1 (docs/research-log.md, issue 34)
     "oracle-fitted": {"edge_weight": 0.9433, "keypoint_weight": 6.353, "prior_weight": 0.2899,
                       "lifter_weight": 2.315, "motion_weight": 0.8179},
-    # without keypoints, the hand-chosen weights of frames without keypoints before issue 34 (the default
-    # now has the fitted silhouette_* weights: experiments.fit_score on candidates recorded without keypoints)
-    "hand-silhouette": {"silhouette_edge_weight": 2.0, "silhouette_prior_weight": 0.05, "silhouette_motion_weight": 1.0},
+    # without keypoints, the weights fitted by experiments.fit_score on candidates recorded without
+    # keypoints (seeds 0-1); and the same with the motion term kept (not shipped: docs/research-log.md)
+    "fitted-silhouette": {"silhouette_edge_weight": 0.01516, "silhouette_prior_weight": 0.00708,
+                          "silhouette_motion_weight": 0.0},
+    "silhouette-motion": {"silhouette_edge_weight": 0.01516, "silhouette_prior_weight": 0.00708},
     # the weights fitted without keypoints given to the frames with the oracle's keypoints too (did not pay)
     "oracle-fitted-silhouette": {"edge_weight": 0.01516, "prior_weight": 0.00708, "motion_weight": 0.0},
     # the default tracker with the gradient step (issue 30; off by default: docs/research-log.md)

@@ -139,13 +139,12 @@ class TrackerConfig(JsonConfig):
         ``edge_weight``, ``prior_weight`` and ``motion_weight`` score the frames with keypoints (or
         lifted); the frames without keypoints have their own three:
     silhouette_edge_weight, silhouette_prior_weight, silhouette_motion_weight : float
-        The score's weights on frames without keypoints (the silhouette alone). Fitted on data
-        (``python -m experiments.fit_score``: candidates recorded without keypoints on seeds 0-1,
-        a conditional logit): F nearly alone decides (edge 0.01516 per pixel, prior 0.00708 per
-        nat, no motion term). On the unseen seeds 41 and 43 they took the default tracker from 141 /
-        125 mm median MPJPE to 116 / 119 mm and from 50.9 / 52.4 % to 46.1 / 46.6 % of frames over
-        100 mm against the hand-chosen 2 / 0.05 / 1 (docs/research-log.md, issue 34); with
-        keypoints the same weights did not pay, so those frames keep theirs.
+        The score's weights on frames without keypoints (the silhouette alone); by default the
+        same hand-chosen 2 / 0.05 / 1. Weights fitted on data (``python -m experiments.fit_score``
+        on candidates recorded without keypoints, seeds 0-1: 0.01516 / 0.00708 / 0) improved the
+        unseen seeds 41 and 43 (141 / 125 -> 116 / 119 mm median) but failed the end-to-end check
+        of a 16-frame clip at 300 evaluations (165 mm against a bound of 110), and with the motion
+        term kept they lost on seed 43: not shipped (docs/research-log.md, issue 34).
     proposals_refined : int
         Proposals of each source refined per frame: the lowest-F ones (0: the stage is off).
     proposal_evaluations : int
@@ -176,9 +175,9 @@ class TrackerConfig(JsonConfig):
     prior_weight: float = 0.05
     edge_weight: float = 2.0
     motion_weight: float = 1.0
-    silhouette_edge_weight: float = 0.01516
-    silhouette_prior_weight: float = 0.00708
-    silhouette_motion_weight: float = 0.0
+    silhouette_edge_weight: float = 2.0
+    silhouette_prior_weight: float = 0.05
+    silhouette_motion_weight: float = 1.0
     proposals_refined: int = 2
     proposal_evaluations: int = 100
     gradient_step: bool = False
@@ -221,8 +220,7 @@ class TrackerConfig(JsonConfig):
             unknown names raise TypeError.
         """
         return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0, gradient_step=False,
-                           prior_weight=0.0, keypoint_weight=0.0, lifter_weight=0.0, silhouette_edge_weight=2.0,
-                           silhouette_prior_weight=0.0, silhouette_motion_weight=1.0),
+                           prior_weight=0.0, keypoint_weight=0.0, lifter_weight=0.0, silhouette_prior_weight=0.0),
                        **changes)
 
     @property
