@@ -15,7 +15,8 @@ were chosen by hand. This script fits them on data, in two steps:
     and their error against the truth: MPJPE about the neck and in the camera, millimetres. One
     ``.npz`` per (sequence, seed) under ``--out`` (default ``experiments/results/fit_score``,
     git-ignored), written atomically (a crash leaves the finished sequences; a second run skips
-    them).
+    them); also each candidate's joints, the truth, the lifter's hypotheses and the decided
+    poses. ``--no-keypoints`` tracks the silhouette alone.
 ``decompose``
     Splits each record's failing frames (the decided pose over 100 mm about the neck) into where
     they come from (:func:`decompose`): no lifter hypothesis within; one within but none of the
@@ -29,9 +30,17 @@ were chosen by hand. This script fits them on data, in two steps:
     plus a small ridge on the weights (:func:`fit_weights`; convex, L-BFGS-B, deterministic).
     The seed draws the frames held out (``--holdout``), on which the fitted and the default
     weights' choices are compared (:func:`choose`). The weights are given in the tracker's units
-    (F's weight kept at :data:`~mocap.track.config.REGION_WEIGHT`) and written as a
-    :class:`~mocap.track.TrackerConfig` JSON (``fitted.json``) that ``experiments.tracking``
-    reads (``--config-file``).
+    (F's weight kept at :data:`~mocap.track.config.REGION_WEIGHT`) and written (``--write``) as
+    a :class:`~mocap.track.TrackerConfig` JSON: on records without keypoints into the
+    ``silhouette_*`` weights (the keypoint and lifter weights, whose terms never applied, kept).
+    The fits measured in full runs are named configurations of ``experiments.tracking``
+    (``oracle-fitted``, ``fitted-silhouette``).
+``decode``
+    An offline Viterbi through every recorded candidate (:func:`decode_offline`) at several
+    motion weights, caps and lifter weights, against the tracker's own decisions.
+``depth``
+    The decided poses moved along the neck's ray to a median depth over frames
+    (:func:`smooth_depth`), and the true depth's bound.
 
 The fit chooses per frame with the motion from the previous frame's best-path hypothesis; the
 tracker decodes paths (``lag`` frames later), and the refinements change with the keypoint
