@@ -18,6 +18,12 @@ configuration and measures, against ground truth:
   what a perfect choice among the beam could reach, so the part of the error that the search,
   not the score or the decoder, leaves;
 
+* ``root_relative_failure_rate``: the share of frames over 100 mm about the neck; with the lifter
+  (frames with keypoints) ``lifter_oracle_failure_rate``: the share of frames on which none of
+  the lifter's hypotheses (unrefined) is within 100 mm about the neck, and ``branch_miss_rate``:
+  the share on which the tracker's pose is over 100 mm about the neck while one of them is
+  within (a choice missed; None without the lifter);
+
 * ``cost_equivalent_failure_rate``: the share of frames that fail (over 100 mm) although the
   tracked pose's F (eq. 1) is no higher than the true pose's, on the same label image with the
   same model; ``cost_equivalent_both_rate`` asks the same of F and of the mean edge distance
@@ -157,6 +163,26 @@ def cost_equivalent_rates(error_mm: np.ndarray, tracked: np.ndarray, truth: np.n
     return float((failing & region_le).mean()), float((failing & both_le).mean())
 
 
+def choice_rates(relative_error_mm: np.ndarray, lifter_best_mm: np.ndarray,
+                 threshold_mm: float = DEFAULT_FAILURE_MM) -> tuple[float, float, float]:
+    """Shares of frames: the tracked pose over ``threshold_mm`` about the neck; no lifter hypothesis
+    within it (the lifter's oracle); the first while not the second (a choice missed).
+
+    Parameters
+    ----------
+    relative_error_mm : ndarray, shape (N,)
+        The tracked pose's MPJPE about the neck per frame (millimetres).
+    lifter_best_mm : ndarray, shape (N,)
+        The best lifter hypothesis's MPJPE about the neck per frame (``inf`` where none).
+    """
+    relative_error_mm, lifter_best_mm = np.asarray(relative_error_mm), np.asarray(lifter_best_mm)
+    if relative_error_mm.shape != lifter_best_mm.shape or relative_error_mm.ndim != 1 or len(relative_error_mm) == 0:
+        raise ValueError(f"need two equal non-empty per-frame arrays, got {relative_error_mm.shape} and "
+                         f"{lifter_best_mm.shape}")
+    failing, covered = relative_error_mm > threshold_mm, lifter_best_mm <= threshold_mm
+    return float(failing.mean()), float((~covered).mean()), float((failing & covered).mean())
+
+
 def benchmark_sequence(sequence: str, root: Path, seed: int, without: tuple[str, ...] = ()):
     """The generated, prepared benchmark sequence (loaded sequence, prepared frames)."""
     spec = DataSpec(sequence, None, SEQUENCES[sequence].frames, seed, *SIZE)
@@ -198,7 +224,7 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     truth_joints = loaded.ground_truth.joints
     keypoints = ([None] * len(prepared) if oracle_sigma_px is None
                  else oracle_keypoints(truth_joints[: len(prepared)], camera, oracle_sigma_px, seed))
-    results, beam_best, proposal_best, other_best, seconds = [], [], [], [], 0.0
+    results, beam_best, proposal_best, other_best, lifter_best, seconds = [], [], [], [], [], 0.0
     proposal_origins = {source.origin for source in tracker.sources}
     error = lambda q, i: mpjpe(loaded.model.joint_positions(q)[None], truth_joints[i:i + 1])
     for i, frame in enumerate(prepared):      # track_prepared's loop, timed and with the beam looked at
@@ -209,6 +235,9 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
         candidates = tracker.candidates if not frame.is_empty else []
         proposal_best.append(min([error(q, i) for o, q in candidates if o in proposal_origins], default=math.inf))
         other_best.append(min([error(q, i) for o, q in candidates if o not in proposal_origins], default=math.inf))
+        lifted = tracker.lifted if not frame.is_empty else None
+        lifter_best.append(math.inf if lifted is None else float(np.min(root_relative_mpjpe(
+            lifted.joints, np.repeat(truth_joints[i:i + 1], len(lifted), axis=0), per_frame=True))))
     started = time.perf_counter()
     results += tracker.finish()
     seconds += time.perf_counter() - started
@@ -220,6 +249,9 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     truth = loaded.ground_truth.joints[: len(joints)]
     oracle = flip_oracle(joints, truth)
     proposed = bool(np.isfinite(proposal_best).any())      # a source that never proposed (no keypoints) is no stage
+    lifted_any = bool(np.isfinite(lifter_best).any())
+    relative_failing, lifter_missing, branch_missed = choice_rates(root_relative_mpjpe(joints, truth, per_frame=True),
+                                                                   np.array(lifter_best))
     tracked_costs = np.array([(r.region_residual, r.edge_residual) for r in results])
     truth_costs = np.array([(region(q), edge(q)) for (region, edge), q in
                             zip(map(tracker.costs, prepared), loaded.ground_truth.poses[: len(joints)])])
@@ -228,6 +260,9 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     return {"sequence": sequence, "frames": len(joints), "classes": ",".join(loaded.model.class_names),
             "mpjpe_mm": mpjpe(joints, truth), "failure_rate": failure_rate(joints, truth),
             "root_relative_mpjpe_mm": root_relative_mpjpe(joints, truth), "pa_mpjpe_mm": pa_mpjpe(joints, truth),
+            "root_relative_failure_rate": relative_failing,
+            "lifter_oracle_failure_rate": lifter_missing if lifted_any else None,
+            "branch_miss_rate": branch_missed if lifted_any else None,
             "frame_mpjpe_mm": mpjpe(joints, truth, per_frame=True).tolist(),
             "beam_oracle_mpjpe_mm": float(np.mean(beam_best)),
             "beam_oracle_failure_rate": float(np.mean(np.array(beam_best) > DEFAULT_FAILURE_MM)),

@@ -45,7 +45,7 @@ CONFIGS = MappingProxyType({
     "L0": {"lag": 0},
     "L16": {"lag": 16},
     "offline": {"offline": True},
-    "no-prior": {"prior_weight": 0.0},
+    "no-prior": {"prior_weight": 0.0, "silhouette_prior_weight": 0.0},
     "no-jumps": {"jumps": False},
     "two-class": {},
     # given the oracle's 2D keypoints (ORACLE_KEYPOINTS): the default tracker (the learned lifter's
@@ -53,6 +53,17 @@ CONFIGS = MappingProxyType({
     # the keypoint term alone; issue 34)
     "oracle-keypoints": {},
     "oracle-no-lifter": {"lifter_weight": 0.0},
+    # the score's weights fitted by experiments.fit_score (conditional logit, temperature 10 mm) on the
+    # candidates recorded with oracle keypoints on seeds 0-1 (docs/research-log.md, issue 34)
+    "oracle-fitted": {"edge_weight": 0.9433, "keypoint_weight": 6.353, "prior_weight": 0.2899,
+                      "lifter_weight": 2.315, "motion_weight": 0.8179},
+    # without keypoints, the weights fitted by experiments.fit_score on candidates recorded without
+    # keypoints (seeds 0-1); and the same with the motion term kept (not shipped: docs/research-log.md)
+    "fitted-silhouette": {"silhouette_edge_weight": 0.01516, "silhouette_prior_weight": 0.00708,
+                          "silhouette_motion_weight": 0.0},
+    "silhouette-motion": {"silhouette_edge_weight": 0.01516, "silhouette_prior_weight": 0.00708},
+    # the weights fitted without keypoints given to the frames with the oracle's keypoints too (did not pay)
+    "oracle-fitted-silhouette": {"edge_weight": 0.01516, "prior_weight": 0.00708, "motion_weight": 0.0},
     # the default tracker with the gradient step (issue 30; off by default: docs/research-log.md)
     "gradient": {"gradient_step": True},
 })
@@ -60,7 +71,8 @@ CONFIGS = MappingProxyType({
 #: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.
 TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
 #: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
-ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter")})
+ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter", "oracle-fitted",
+                                                              "oracle-fitted-silhouette")})
 
 
 def config_of(name: str) -> TrackerConfig:
@@ -108,7 +120,8 @@ def summarise(rows: list[dict]) -> dict:
                                                           weights=[r["frames"] for r in rows])),
             **{key: float(np.average([math.nan if r.get(key) is None else r[key] for r in rows],
                                      weights=[r["frames"] for r in rows]))
-               for key in ("proposal_oracle_failure_rate", "proposal_catches_rate", "others_miss_rate")},
+               for key in ("proposal_oracle_failure_rate", "proposal_catches_rate", "others_miss_rate",
+                           "root_relative_failure_rate", "lifter_oracle_failure_rate", "branch_miss_rate")},
             "ms_per_frame": float(np.average([r["tracking_ms_per_frame"] + r["prepare_ms_per_frame"] for r in rows],
                                              weights=[r["frames"] for r in rows])),
             "evaluations_per_frame": float(np.average([r.get("evaluations_per_frame", math.nan) for r in rows],
@@ -118,14 +131,17 @@ def summarise(rows: list[dict]) -> dict:
 def table(summaries: dict[str, dict]) -> str:
     """Markdown table of :func:`summarise` results by configuration name."""
     head = ("configuration", "median MPJPE mm", "median root-rel. mm", "median PA-MPJPE mm",
-            f"frames > {DEFAULT_FAILURE_MM:g} mm", "worst sequence mm", "beam oracle > 100 mm",
-            "proposal oracle > 100 mm", "caught by a proposal alone", "failing, costs <= truth's", "ms / frame (fps)")
+            f"frames > {DEFAULT_FAILURE_MM:g} mm", f"root-rel. > {DEFAULT_FAILURE_MM:g} mm", "worst sequence mm", "beam oracle > 100 mm",
+            "proposal oracle > 100 mm", "caught by a proposal alone", "lifter's best of K > 100 mm root-rel.",
+            "branch missed (root-rel.)", "failing, costs <= truth's", "ms / frame (fps)")
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for name, s in summaries.items():
         lines.append(f"| {name} | {s['median_mpjpe_mm']:.0f} | {s['median_root_relative_mm']:.0f} | "
-                     f"{s['median_pa_mpjpe_mm']:.0f} | {100 * s['failure_rate']:.1f} % | {s['worst_mpjpe_mm']:.0f} | "
+                     f"{s['median_pa_mpjpe_mm']:.0f} | {100 * s['failure_rate']:.1f} % | "
+                     f"{_percent(s['root_relative_failure_rate'])} | {s['worst_mpjpe_mm']:.0f} | "
                      f"{100 * s['beam_oracle_failure_rate']:.1f} % | {_percent(s['proposal_oracle_failure_rate'])} | "
-                     f"{_percent(s['proposal_catches_rate'])} | {100 * s['cost_equivalent_both_rate']:.1f} % | "
+                     f"{_percent(s['proposal_catches_rate'])} | {_percent(s['lifter_oracle_failure_rate'])} | "
+                     f"{_percent(s['branch_miss_rate'])} | {100 * s['cost_equivalent_both_rate']:.1f} % | "
                      f"{s['ms_per_frame']:.1f} "
                      f"({1e3 / s['ms_per_frame']:.0f}) |")
     return "\n".join(lines)

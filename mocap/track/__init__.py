@@ -15,9 +15,9 @@ from mocap.track.decode import backtrack, viterbi, viterbi_step
 from mocap.track.proposals import (LifterSource, Proposal, ProposalContext, ProposalSource, jump_proposals,
                                    reach_proposals, unexplained_hands)
 from mocap.track.registration import Registration, register
-from mocap.track.tracker import FrameResult, Tracker, proposal_sources, track_prepared
+from mocap.track.tracker import FrameResult, ScoredCandidate, Tracker, proposal_sources, track_prepared
 
 __all__ = ["AUTO_SPLIT_THRESHOLD", "EDGE_STARTS", "FrameResult", "LifterSource", "Proposal", "ProposalContext",
-           "ProposalSource", "Registration", "Tracker", "TrackerConfig",
+           "ProposalSource", "Registration", "ScoredCandidate", "Tracker", "TrackerConfig",
            "backtrack", "jump_proposals", "proposal_sources", "reach_proposals", "register", "split_budget", "track_prepared",
            "unexplained_hands", "viterbi", "viterbi_step"]

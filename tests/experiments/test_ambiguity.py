@@ -1,5 +1,6 @@
 import json
 import numpy as np
+import pytest
 from experiments.ambiguity import ARM_JOINTS, flip_oracle, reflect_in_depth, table
 
 
@@ -235,3 +236,16 @@ def test_code_key_changes_with_any_source_or_model_and_ignores_caches(tmp_path):
     (package / "a.py").rename(package / "c.py")         # the same bytes under another name
     seen.add(code_key(package, (module,)))
     assert len(seen) == 6
+
+
+def test_choice_rates_count_frames_missed_while_a_lifter_hypothesis_was_within():
+    from experiments.ambiguity import choice_rates
+
+    tracked = np.array([50.0, 150.0, 150.0, 120.0, 80.0])
+    lifter = np.array([40.0, 60.0, 130.0, np.inf, 200.0])
+    failing, lifter_missing, missed = choice_rates(tracked, lifter)
+    assert failing == pytest.approx(3 / 5)          # frames 1, 2, 3
+    assert lifter_missing == pytest.approx(3 / 5)   # frames 2, 3 (none), 4
+    assert missed == pytest.approx(1 / 5)           # frame 1 only
+    with pytest.raises(ValueError):
+        choice_rates(tracked, lifter[:4])

@@ -23,7 +23,7 @@ def test_summary_pools_frames_and_takes_medians_over_sequences():
     assert s["worst_mpjpe_mm"] == pytest.approx(110.0)
     assert s["ms_per_frame"] == pytest.approx(25.0)
     text = table({"default": s})
-    assert "| default | 60 | 30 | 20 | 22.2 % | 110 | 0.0 % | - | - | 0.0 % | 25.0 (40) |" in text
+    assert "| default | 60 | 30 | 20 | 22.2 % | - | 110 | 0.0 % | - | - | - | - | 0.0 % | 25.0 (40) |" in text
     assert all(line.count("|") == text.splitlines()[0].count("|") for line in text.splitlines())
 
 
