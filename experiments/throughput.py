@@ -23,9 +23,10 @@ its per-frame times; the decoding not counted). Runs with ``--keypoints mediapip
 measurement need the optional extra ``keypoints``.
 
 Writes ``OUT/throughput.json`` (every run, the commands, the load average (1 min) before each
-run, the cores, the CPU, the commit) and ``OUT/throughput.md`` (one table: medians over the
-repeats); ``--docs PAGE`` also puts the table into ``PAGE`` (``docs/results.md``) as its
-``## Throughput`` section, replacing the one there. Compare figures of one call only: the
+run, the cores, the CPU, the commit, the command) and ``OUT/throughput.md`` (one table: medians
+over the repeats); ``--docs PAGE`` also puts the table into ``PAGE`` (``docs/results.md``) as its
+``## Throughput`` section, replacing the one there; ``--from-json`` writes them from a stored
+``throughput.json`` without measuring. Compare figures of one call only: the
 machine may be shared (the load average says how much).
 """
 from __future__ import annotations
@@ -97,7 +98,8 @@ def detector_alone(clip: Path, max_frames: int | None) -> dict:
     if done.returncode != 0:
         raise RuntimeError(f"MediaPipe alone failed ({done.returncode}): {done.stderr[-2000:]}")
     return {**json.loads(done.stdout.strip().splitlines()[-1]), "load": load,
-            "command": f"taskset -c {_cpu_list(1)} python -m experiments.throughput --detector-only CLIP"}
+            "command": f"taskset -c {_cpu_list(1)} python -m experiments.throughput --detector-only {_shown(clip)}"
+                       + ("" if max_frames is None else f" --max-frames {max_frames}")}
 
 
 def _detector_only(clip: Path, max_frames: int | None) -> int:
@@ -123,8 +125,8 @@ def table(result: dict) -> str:
     """The Markdown of ``result`` (:func:`measure`): one row per cores x keypoints, medians."""
     clip = result["clip"]
     loads = [r["load"] for r in result["runs"]]
-    lines = [f"`python -m experiments.throughput` on {result['date']} at commit {result['commit']}: "
-             f"`python -m mocap track {clip} --keypoints K` (default settings, overlay written"
+    lines = [f"`{result.get('command', 'python -m experiments.throughput')}` on {result['date']} at commit "
+             f"{result['commit']}: `python -m mocap track {_shown(clip)} --keypoints K` (default settings, overlay written"
              + ("" if result["max_frames"] is None else f", first {result['max_frames']} frames")
              + f"), pinned to the first 1 or 2 cores; {result['frames']} frames of {result['size']}, "
              f"median of {result['repeats']} alternating run(s); load average (1 min) "
@@ -139,6 +141,9 @@ def table(result: dict) -> str:
             kp = _median(rows, "keypoints_ms_per_frame")
             lines.append(f"| {cores} | {keypoints} | {_median(rows, 'fps'):.1f} | {_median(rows, 'loop_fps'):.1f} | "
                          f"{_median(rows, 'end_to_end_fps'):.1f} | {'' if kp is None else f'{kp:.1f}'} |")
+    if max(loads) > result["cpu_count"]:
+        lines += ["", f"The machine was shared (load average above its {result['cpu_count']} cores): a second core "
+                      "was mostly another job's, and every figure is lower than a quiet machine's."]
     alone = result.get("mediapipe_alone")
     if alone is not None:
         lines += ["", f"MediaPipe Pose alone (`MediaPipeKeypoints`, image mode, model complexity 1) on the same "
@@ -146,6 +151,15 @@ def table(result: dict) -> str:
                       f"mean {alone['ms_per_frame_mean']:.1f}), load {alone['load']:.1f} "
                       f"(`{alone['command']}`)."]
     return "\n".join(lines) + "\n"
+
+
+def _shown(path: str) -> str:
+    """``path`` as the commands of this checkout name it: relative to the checkout's folder's
+    parent (``../shared/data/...``) where it lies under it."""
+    try:
+        return "../" + Path(path).resolve().relative_to(EXPERIMENTS_DIR.parent.parent.resolve()).as_posix()
+    except ValueError:
+        return str(path)
 
 
 def replace_section(page: Path, text: str) -> None:
@@ -191,11 +205,12 @@ def _cpu_name() -> str:
 
 
 def measure(clip: Path, out: Path, *, cores=(1, 2), keypoints=("none", "mediapipe"), repeats: int = 1,
-            max_frames: int | None = None, detector: bool = True, progress=print) -> dict:
+            max_frames: int | None = None, detector: bool = True, progress=print,
+            command: str = "python -m experiments.throughput") -> dict:
     """Every run (see the module); writes ``out/throughput.json`` and ``out/throughput.md`` and
-    returns the result."""
+    returns the result (``command``: the command line that asked, kept with it)."""
     out.mkdir(parents=True, exist_ok=True)
-    result = {"clip": str(clip), "cores": list(cores), "keypoints": list(keypoints),
+    result = {"command": command, "clip": str(clip), "cores": list(cores), "keypoints": list(keypoints),
               "repeats": repeats, "max_frames": max_frames, "commit": _commit(),
               "date": datetime.date.today().isoformat(), "cpu": _cpu_name(), "cpu_count": os.cpu_count(), "runs": []}
     pairs = [(c, k) for c in cores for k in keypoints]
@@ -226,10 +241,19 @@ def main(argv=None) -> int:
     parser.add_argument("--no-detector", action="store_true", help="leave out MediaPipe alone")
     parser.add_argument("--docs", type=Path, default=None, metavar="PAGE",
                         help=f"also write the table as the '{SECTION}' section of PAGE (docs/results.md)")
+    parser.add_argument("--from-json", type=Path, default=None, metavar="JSON",
+                        help="write the table (and --docs) from a stored throughput.json without measuring")
     parser.add_argument("--detector-only", type=Path, default=None, metavar="CLIP", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.detector_only is not None:
         return _detector_only(args.detector_only, args.max_frames)
+    if args.from_json is not None:
+        result = json.loads(args.from_json.read_text())
+        print(table(result), end="")
+        if args.docs is not None:
+            replace_section(args.docs, table(result))
+            print(f"wrote the '{SECTION}' section of {args.docs}")
+        return 0
     if args.repeats < 1 or (args.max_frames is not None and args.max_frames < 1):
         parser.error("--repeats and --max-frames must be at least 1")
     if not args.clip.exists():
@@ -241,8 +265,10 @@ def main(argv=None) -> int:
         parser.error(f"--cores must be integers separated by commas, got {args.cores!r}")
     keypoints = tuple(k for k in args.keypoints.split(",") if k)
     try:
+        asked = " ".join(["python -m experiments.throughput", *(sys.argv[1:] if argv is None else argv)])
         result = measure(args.clip, args.out, cores=cores, keypoints=keypoints, repeats=args.repeats,
-                         max_frames=args.max_frames, detector=not args.no_detector and "mediapipe" in keypoints)
+                         max_frames=args.max_frames, detector=not args.no_detector and "mediapipe" in keypoints,
+                         command=asked)
     except (ValueError, RuntimeError, OSError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -40,6 +40,10 @@ def test_the_runs_the_json_the_table_and_the_docs_section(tiny_clip, tmp_path, c
     text = page.read_text()
     assert text.count("## Throughput") == 1 and "old" not in text and rows[0] in text
     assert text.index("## Speed") < text.index("## Throughput") < text.index("## Accuracy") and "kept" in text
+    # the same table again from the stored JSON, without measuring
+    again = tmp_path / "again.md"
+    assert throughput.main(["--from-json", str(tmp_path / "out" / "throughput.json"), "--docs", str(again)]) == 0
+    assert throughput.section_of(again) == throughput.section_of(page) == markdown
 
 
 def test_a_core_count_beyond_the_machine_is_refused():
