@@ -11,7 +11,8 @@
 
 Measurements are kept in ``WORK/measurements.json`` (and every run folder under ``WORK``, so
 an interrupted command resumes); ``--from-json`` rewrites the page from stored measurements
-without measuring. Tracking is pinned to one core as the benchmark is.
+without measuring. Tracking is pinned to one core as the benchmark is. The page's ``## Throughput``
+section, written by ``python -m experiments.throughput --docs``, is kept as it is.
 """
 from __future__ import annotations
 
@@ -23,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments import EXPERIMENTS_DIR
+from experiments import EXPERIMENTS_DIR, throughput
 from experiments.tables import PAPER_TABLE2
 from mocap.io.files import read_json, write_json, write_text_atomic
 
@@ -248,7 +249,10 @@ def main(argv: list[str] | None = None) -> int:
             m = measure(args.work, evaluations=budgets, names=args.only, frames=args.frames,
                         auto_calibration=not args.no_auto_calibration, bench=not args.no_bench,
                         bench_json=args.bench_json)
+        kept = throughput.section_of(args.out)     # measured apart (python -m experiments.throughput --docs)
         write_text_atomic(args.out, render_page(m))
+        if kept is not None:
+            throughput.replace_section(args.out, kept)
     except (ValueError, OSError, KeyError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -10,7 +10,7 @@ from mocap.io import mediapipe_keypoints
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = REPO_ROOT.parent / "shared" / "data"
-#: Whether MediaPipe imports, as the library asks it (kept before the session's patch).
+#: Whether MediaPipe is installed, as the library asks it (kept before the session's patch).
 _REAL_AVAILABLE = mediapipe_keypoints.available
 #: Test files that share a session fixture costing a minute (the tiny sweep of
 #: tests/experiments/conftest.py): one pytest-xdist group, so that one worker makes it once.
@@ -56,7 +56,7 @@ def bare_install_keypoints():
 
 @pytest.fixture(autouse=True)
 def real_keypoints_extra(request, monkeypatch):
-    """Tests marked ``mediapipe`` see whether MediaPipe really imports."""
+    """Tests marked ``mediapipe`` see whether MediaPipe is really installed."""
     if request.node.get_closest_marker("mediapipe") is not None:
         monkeypatch.setattr(mediapipe_keypoints, "available", _REAL_AVAILABLE)
 

@@ -25,6 +25,10 @@ def test_page_reports_the_runs_it_made(tmp_path):
     again = tmp_path / "again.md"
     assert main(["--from-json", str(tmp_path / "work" / "measurements.json"), "--out", str(again)]) == 0
     assert again.read_text() == page
+    # the throughput section (python -m experiments.throughput --docs) is measured apart: kept as it is
+    again.write_text(page + "\n## Throughput\n\n| cores | ... |\n")
+    assert main(["--from-json", str(tmp_path / "work" / "measurements.json"), "--out", str(again)]) == 0
+    assert again.read_text() == page + "\n## Throughput\n\n| cores | ... |\n"
 
 
 def test_speed_table_from_bench_rows():
