@@ -1,5 +1,4 @@
-"""2D keypoints detected on a thread of their own, frames ahead of the one who asks for them; a
-detector opened on a thread of its own while the caller sets up.
+"""2D keypoints detected on a thread of their own, frames ahead of the one who asks for them.
 
 A detector (MediaPipe Pose, :mod:`mocap.io.mediapipe_keypoints`) costs about as much per frame
 as the tracker. :class:`KeypointPipeline` wraps any :class:`~mocap.io.keypoints.KeypointSource`:
@@ -14,26 +13,18 @@ At most ``depth`` frames are in the pipeline at once (submitted and not yet take
 that gets ahead waits, so the memory it holds is bounded. An error of the detector is raised by
 :meth:`~KeypointPipeline.take` of its frame. A crash leaves nothing behind: the frames are in
 memory only.
-
-Opening a detector takes time of its own (MediaPipe: its import about 0.9 s, its graph about
-0.7 s), which a run can spend looking for the person. :class:`OpeningSource` makes the source
-on a thread as soon as it is asked for, and its first :meth:`~OpeningSource.keypoints` waits
-for it: the same source, called with the same frames in the same order, so the same keypoints
-as a source made in the foreground. An error while opening it is raised by every call that
-needs the source (the first frame's, in a run), not where it was asked for.
 """
 from __future__ import annotations
 
 import collections
 import queue
 import threading
-from typing import Callable
 
 import numpy as np
 
 from mocap.io.keypoints import KeypointSource, Keypoints
 
-__all__ = ["DETECT_AHEAD", "KeypointPipeline", "OpeningSource"]
+__all__ = ["DETECT_AHEAD", "KeypointPipeline"]
 
 #: Frames a run's detector may be ahead of the frames taken.
 DETECT_AHEAD = 3
@@ -137,84 +128,6 @@ class KeypointPipeline:
         self._thread.join(timeout=30.0)
 
     def __enter__(self) -> "KeypointPipeline":
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
-
-
-class OpeningSource:
-    """A :class:`~mocap.io.keypoints.KeypointSource` made on a thread of its own (see the module).
-
-    Parameters
-    ----------
-    open : callable () -> KeypointSource
-        Makes the source; called once, on the opening thread, started here.
-    suffix : str
-        Added to the source's ``description``.
-
-    Use as a context manager, or call :meth:`close` (which waits for the opening to end and
-    closes the source where it has a ``close``).
-    """
-
-    def __init__(self, open: Callable[[], KeypointSource], *, suffix: str = "",
-                 name: str = "mocap-detector-opening") -> None:
-        self.suffix = suffix
-        self._opened: KeypointSource | None = None
-        self._error: BaseException | None = None
-        self._closed = False
-        self._thread = threading.Thread(target=self._open, args=(open,), name=name, daemon=True)
-        self._thread.start()
-
-    def _open(self, open: Callable[[], KeypointSource]) -> None:
-        try:
-            self._opened = open()
-        except BaseException as exc:        # raised by every call that needs the source
-            self._error = exc
-
-    @property
-    def opening(self) -> bool:
-        """Whether the source is still being made (does not wait)."""
-        return self._thread.is_alive()
-
-    @property
-    def source(self) -> KeypointSource:
-        """The source, once made (waits for it); the opening's error is raised here."""
-        if self._closed:
-            raise ValueError("the keypoint source is closed")
-        self._thread.join()
-        if self._error is not None:
-            raise self._error
-        return self._opened
-
-    def keypoints(self, frame_index: int, image: np.ndarray | None) -> Keypoints:
-        """As a :class:`~mocap.io.keypoints.KeypointSource`: the source's keypoints of the frame
-        (waiting for the source the first time)."""
-        return self.source.keypoints(frame_index, image)
-
-    @property
-    def description(self) -> str:
-        """The source's ``description`` and :attr:`suffix` (waits for the source)."""
-        return f"{getattr(self.source, 'description', type(self.source).__name__)}{self.suffix}"
-
-    @property
-    def milliseconds(self) -> list[float] | None:
-        """The source's ``milliseconds`` (its own time per frame) where it keeps them; None where
-        it does not, or could not be made (waits for the opening to end)."""
-        self._thread.join()
-        return getattr(self._opened, "milliseconds", None)
-
-    def close(self) -> None:
-        """Wait for the opening to end and close the source (safe to call twice)."""
-        if self._closed:
-            return
-        self._closed = True
-        self._thread.join()
-        close = getattr(self._opened, "close", None)
-        if close is not None:
-            close()
-
-    def __enter__(self) -> "OpeningSource":
         return self
 
     def __exit__(self, *exc) -> None:

@@ -25,16 +25,15 @@ Python warning of protobuf's deprecated ``SymbolDatabase.GetPrototype`` (ignored
 that message and module alone, set where MediaPipe is imported) and the lines its native code
 writes to the process's stderr when its graph opens (TensorFlow Lite's delegate, absl's
 logging notice, the feedback manager's warning: :data:`NATIVE_NOISE`, dropped from what is
-written there while the graph opens, which the constructor waits for; anything else written there
-meanwhile, a progress bar of another thread included, is passed on as it comes).
+written there while the graph opens, which the constructor waits for; any other line is passed
+on).
 """
 from __future__ import annotations
 
-import importlib.util
 import os
 import re
 import sys
-import threading
+import tempfile
 import time
 import warnings
 from contextlib import contextmanager
@@ -101,17 +100,14 @@ def world_joints(world_landmarks, visibility, min_visibility: float = MIN_WORLD_
     return joints, present
 
 
-def installed() -> bool:
-    """Whether MediaPipe (the optional extra ``keypoints``) is installed here, found without
-    importing it (its import takes about 1 s). An installation that is found and fails to import
-    is reported by :class:`MediaPipeKeypoints`."""
-    return importlib.util.find_spec("mediapipe") is not None
-
-
 def available() -> bool:
-    """Whether ``--keypoints auto`` runs MediaPipe: :func:`installed` (a test session makes it
-    answer as a bare install would, tests/conftest.py)."""
-    return installed()
+    """Whether MediaPipe Pose (the optional extra ``keypoints``) imports here: what
+    ``--keypoints auto`` asks (an import of about 2 s the first time)."""
+    try:
+        from mediapipe.python.solutions import pose  # noqa: F401
+    except ImportError:
+        return False
+    return True
 
 
 class MediaPipeKeypoints:
@@ -204,65 +200,25 @@ NATIVE_NOISE = (r"INFO: Created TensorFlow Lite XNNPACK delegate",
                 r"W\d{4} .*inference_feedback_manager\.cc:\d+\] Feedback manager requires")
 
 
-#: Seconds the end of :func:`_native_noise_dropped` waits for its filter thread at most.
-_PASS_ON_WAIT_S = 1.0
-#: Held while file descriptor 2 goes through the filter: one graph opens at a time (the
-#: descriptor is the process's, not a thread's).
-_STDERR_FILTERED = threading.Lock()
-
-
 @contextmanager
 def _native_noise_dropped():
     """Within the block, what is written to file descriptor 2 (native code's stderr, and
-    Python's, from any thread) goes through a pipe to a thread that passes it on to the real
-    stderr as it comes, less the whole lines that are :data:`NATIVE_NOISE`. After the block the
-    thread ends when the pipe has no writer left: at once, or when a child process started
-    meanwhile with the parent's stderr ends (it is waited for :data:`_PASS_ON_WAIT_S` at most).
-    One block at a time in a process (:data:`_STDERR_FILTERED`): another thread's waits."""
-    with _STDERR_FILTERED:
-        with _stderr_filtered():
-            yield
-
-
-@contextmanager
-def _stderr_filtered():
+    Python's) goes to a temporary file; after it, the lines that are not :data:`NATIVE_NOISE`
+    are written to ``sys.stderr`` (nothing is lost, only delayed)."""
     noise = re.compile("|".join(NATIVE_NOISE))
     sys.stderr.flush()
     saved = os.dup(2)
-    read_end, write_end = os.pipe()
-    passer = threading.Thread(target=_pass_on, args=(read_end, os.dup(saved), noise), name="mocap-stderr-filter",
-                              daemon=True)
-    passer.start()
-    os.dup2(write_end, 2)
-    os.close(write_end)
-    try:
-        yield
-    finally:
-        sys.stderr.flush()
-        os.dup2(saved, 2)               # the pipe's last writer gone (normally): the passer ends
-        os.close(saved)
-        passer.join(timeout=_PASS_ON_WAIT_S)
-
-
-def _pass_on(read_end: int, out: int, noise: re.Pattern) -> None:
-    """Copy what comes through ``read_end`` to ``out`` until the pipe's writers are gone, less
-    the lines ``noise`` matches (native code writes a line in several pieces: a line is held
-    until its newline comes, unless it holds a carriage return, a progress bar's redraw, which
-    is passed on as it comes); both descriptors are closed after."""
-    held = b""
-    try:
-        while chunk := os.read(read_end, 65536):
-            *lines, held = (held + chunk).split(b"\n")
-            kept = b"".join(line + b"\n" for line in lines if not noise.search(line.decode("utf-8", "replace")))
-            if b"\r" in held:
-                kept, held = kept + held, b""
-            _write_all(out, kept)
-        _write_all(out, held)
-    finally:
-        os.close(read_end)
-        os.close(out)
-
-
-def _write_all(out: int, data: bytes) -> None:
-    while data:
-        data = data[os.write(out, data):]
+    with tempfile.TemporaryFile() as caught:
+        os.dup2(caught.fileno(), 2)
+        try:
+            yield
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+            caught.seek(0)
+            kept = [line for line in caught.read().decode("utf-8", "replace").splitlines(keepends=True)
+                    if not noise.search(line)]
+            if kept:
+                sys.stderr.write("".join(kept))
+                sys.stderr.flush()

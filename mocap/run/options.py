@@ -80,7 +80,7 @@ class OwnVideoOptions(JsonConfig):
         Start afresh instead of resuming a run in the output folder.
     keypoints : str or None
         2D keypoints: ``"auto"`` (the default, as on the command line: MediaPipe when the extra
-        is installed, none otherwise, :func:`resolve_keypoints`), ``"mediapipe"`` (MediaPipe Pose,
+        imports, none otherwise, :func:`resolve_keypoints`), ``"mediapipe"`` (MediaPipe Pose,
         the optional extra ``keypoints``), a keypoint file (:mod:`mocap.io.keypoints`) or
         ``"none"`` (or None); the tracker adds them as a cue (``tracker.keypoint_weight``).
     tracker : TrackerConfig
@@ -152,8 +152,7 @@ class RunChoices:
         Which, and why for ``auto`` (:func:`resolve_keypoints`): what the command prints and
         ``run.json`` ``settings.own_video.keypoints``.
     keypoint_source : KeypointSource or None
-        The source itself (None for ``"none"``), made once; MediaPipe opens on a thread of its
-        own (:func:`keypoint_source`). :meth:`close` closes it.
+        The source itself (None for ``"none"``), made once.
     colour : {"calibration", "face"}
         Where the colour classes are learnt (:data:`COLOUR_SOURCES`); ``face`` only where the
         run learns them itself (:meth:`check_colour`).
@@ -176,13 +175,6 @@ class RunChoices:
         return cls(keypoints="none" if resolved is None else resolved, keypoints_line=line,
                    keypoint_source=_source(resolved, options.keypoints == "auto"), colour=options.colour,
                    background_mode=options.background_mode(sequence_background))
-
-    def close(self) -> None:
-        """Close the keypoint source where it has a ``close`` (MediaPipe: waits for its opening
-        to end, then releases its graph; safe to call twice)."""
-        close = getattr(self.keypoint_source, "close", None)
-        if close is not None:
-            close()
 
     @property
     def keypoint_cue(self) -> str | None:
@@ -224,7 +216,7 @@ def resolve_keypoints(name: str | None) -> tuple[str | None, str]:
     if name == "auto":
         from mocap.io import mediapipe_keypoints
 
-        if mediapipe_keypoints.available():     # installed (found, not imported)
+        if mediapipe_keypoints.available():
             return "mediapipe", "mediapipe (auto: the optional extra 'keypoints' is installed)"
         return None, ("none (auto: MediaPipe Pose, the optional extra 'keypoints', is not installed; "
                       "pip install 'mocap[keypoints]' adds 2D keypoints as a cue)")
@@ -234,27 +226,21 @@ def resolve_keypoints(name: str | None) -> tuple[str | None, str]:
 def keypoint_source(name: str | None):
     """The :class:`~mocap.io.keypoints.KeypointSource` of ``OwnVideoOptions.keypoints``: None,
     MediaPipe Pose for ``"mediapipe"`` (ValueError in one line without the extra) and for
-    ``"auto"`` where the extra is installed (:func:`resolve_keypoints`), opened on a thread of
-    its own (:class:`~mocap.io.keypoint_pipeline.OpeningSource`: its first frame waits for it,
-    and raises what opening it raised), else a keypoint file (FileNotFoundError, ValueError
-    naming the line of a malformed one)."""
+    ``"auto"`` where the extra imports (:func:`resolve_keypoints`), else a keypoint file
+    (FileNotFoundError, ValueError naming the line of a malformed one)."""
     return _source(resolve_keypoints(name)[0], name == "auto")
 
 
 def _source(resolved: str | None, auto: bool):
     """The keypoint source of a resolved name (:func:`resolve_keypoints`); ``auto``: chosen by
-    ``--keypoints auto`` (said in its description). MediaPipe is opened on a thread of its own
-    (:class:`~mocap.io.keypoint_pipeline.OpeningSource`: its import and graph take about 1.6 s,
-    which the set-up's face search and background overlap); ValueError (one line) here when it
-    is not installed, an error while opening it at the first frame that needs it."""
+    ``--keypoints auto`` (said in its description)."""
     if resolved is None:
         return None
     if resolved == "mediapipe":
-        from mocap.io import mediapipe_keypoints
-        from mocap.io.keypoint_pipeline import OpeningSource
-
-        if not mediapipe_keypoints.installed():
-            raise ValueError(mediapipe_keypoints.MISSING_EXTRA)
-        return OpeningSource(mediapipe_keypoints.MediaPipeKeypoints, suffix=" (--keypoints auto)" if auto else "")
+        from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
+        source = MediaPipeKeypoints()
+        if auto:
+            source.description += " (--keypoints auto)"
+        return source
     from mocap.io.keypoints import KeypointFile
     return KeypointFile(resolved)

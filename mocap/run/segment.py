@@ -201,29 +201,24 @@ class _Segmenter:
     def run(self) -> None:
         options, out, source, factor = self.options, self.out, self.source, self.factor
         keypoints = keypoint_source(options.keypoints)      # a bad keypoint file stops before anything is written
-        try:
-            settings = _settings(self.video, options, self.stop, factor)
-            settings_file = out / files.SEGMENT_JSON
-            if settings_file.is_file():
-                held, wanted = read_json(settings_file), json.loads(json.dumps(settings))
-                if held != wanted:
-                    raise ValueError(_other_settings(out, held, wanted))
-            for sub in ("labels", "edges", "distance"):
-                (out / sub).mkdir(parents=True, exist_ok=True)
-            write_json(settings_file, settings)
-            background = self.background()
-            if factor > 1:
-                print(f"working resolution {source.width // factor}x{source.height // factor} (input "
-                      f"{source.width}x{source.height} reduced {factor}x, as track sees it)")
-            model = self.colours(background)
-            self.config.to_json(out / "imaging.json")
-            started = time.perf_counter()
-            counts = self.frames(background, model, keypoints)
-            self.report(counts, time.perf_counter() - started, model)
-        finally:
-            close = getattr(keypoints, "close", None)     # MediaPipe's graph (opened on a thread)
-            if close is not None:
-                close()
+        settings = _settings(self.video, options, self.stop, factor)
+        settings_file = out / files.SEGMENT_JSON
+        if settings_file.is_file():
+            held, wanted = read_json(settings_file), json.loads(json.dumps(settings))
+            if held != wanted:
+                raise ValueError(_other_settings(out, held, wanted))
+        for sub in ("labels", "edges", "distance"):
+            (out / sub).mkdir(parents=True, exist_ok=True)
+        write_json(settings_file, settings)
+        background = self.background()
+        if factor > 1:
+            print(f"working resolution {source.width // factor}x{source.height // factor} (input "
+                  f"{source.width}x{source.height} reduced {factor}x, as track sees it)")
+        model = self.colours(background)
+        self.config.to_json(out / "imaging.json")
+        started = time.perf_counter()
+        counts = self.frames(background, model, keypoints)
+        self.report(counts, time.perf_counter() - started, model)
 
     def frame(self, index: int, frame: np.ndarray, background, model: ColourModel, counts: dict):
         """One frame's three pictures, written (or read back from an interrupted run)."""

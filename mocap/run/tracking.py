@@ -135,10 +135,8 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
     options = OwnVideoOptions() if options is None else options
     opened = RunInput.open(source, options)
     frames_in = opened.frames
-    choices = None
     try:
-        # a bad keypoint file stops here; MediaPipe opens on a thread while the set-up looks for the person
-        choices = RunChoices.of(options, opened.sequence_background)
+        choices = RunChoices.of(options, opened.sequence_background)     # a bad keypoint file stops here
         with compiling_announced(progress, "the set-up's kernels"):
             found = find_setup(frames_in, opened.request(options, choices, progress))
         choices.check_colour(found.setup.colour_model is not None, found.setup.record.calibration_from, frames_in.live)
@@ -160,12 +158,10 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
                            show=options.show, newcomer=newcomer, keypoints=choices.keypoint_source)
         summary = track_frames(frames_in, setup, out_dir, params)
     finally:
-        if choices is not None:
-            choices.close()
         if not frames_in.live:
             frames_in.close()       # the damage check's ffmpeg, when the run ended before it did
     used = choices.keypoint_cue
-    # whether the extra is installed matters only to advice on a run without keypoints
+    # whether the extra is installed matters only to advice on a run without keypoints (its import takes ~2 s)
     extra = used is not None or (mostly_failed(summary.frames, summary.failures) and mediapipe_keypoints.available())
     facts = RunFacts(frames=summary.frames, failures=summary.failures, keypoints=used, keypoints_extra=extra,
                      background=account.background_mode, height_given=options.height_m is not None,

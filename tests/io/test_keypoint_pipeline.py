@@ -1,13 +1,12 @@
 """The keypoint pipeline: a detector on its own thread, frames ahead, results in order; a run's
-outputs are the same with and without it. A detector opened on a thread of its own: the same
-keypoints and outputs as one opened in the foreground, its opening's error at its first use."""
+outputs are the same with and without it."""
 import json
 import threading
 
 import numpy as np
 import pytest
 
-from mocap.io.keypoint_pipeline import KeypointPipeline, OpeningSource
+from mocap.io.keypoint_pipeline import KeypointPipeline
 from mocap.io.keypoints import Keypoints
 
 
@@ -19,12 +18,6 @@ class ImageDetector:
         self.calls: list[int] = []
         self.threads: set[str] = set()
         self.fail_on = fail_on
-        self.milliseconds = [1.0]
-        self.description = "image detector"
-        self.closed = 0
-
-    def close(self):
-        self.closed += 1
 
     def keypoints(self, frame_index, image):
         self.calls.append(int(frame_index))
@@ -89,49 +82,6 @@ def test_as_a_source_and_its_errors_and_misuse():
         KeypointPipeline(ImageDetector(), depth=0)
 
 
-def test_a_source_opened_on_its_own_thread_is_the_source_opened_in_the_foreground():
-    """Its keypoints are the source's; it is made on the opening thread, once, while the caller
-    goes on (the opening is held until the caller has gone on: no clock involved)."""
-    images = _images(5, seed=1)
-    expected = [ImageDetector().keypoints(i, im) for i, im in enumerate(images)]
-    release, made = threading.Event(), []
-
-    def slow_open():
-        release.wait()
-        made.append(threading.current_thread().name)
-        return ImageDetector()
-
-    opening = OpeningSource(slow_open, suffix=" (auto)")
-    assert opening.opening and made == []               # the caller goes on while it opens
-    release.set()
-    got = [opening.keypoints(i, im) for i, im in enumerate(images)]
-    assert made == ["mocap-detector-opening"] and not opening.opening
-    for a, b in zip(got, expected):
-        np.testing.assert_array_equal(a.uv, b.uv)
-        np.testing.assert_array_equal(a.confidence, b.confidence)
-    assert opening.source.calls == list(range(5)) and opening.description == "image detector (auto)"
-    assert opening.milliseconds == [1.0]
-    detector = opening.source
-    opening.close()
-    opening.close()                                     # twice: closed once
-    assert detector.closed == 1
-    with pytest.raises(ValueError, match="closed"):
-        opening.keypoints(0, images[0])
-
-
-def test_an_error_while_opening_is_raised_where_the_source_is_first_needed():
-    def broken():
-        raise RuntimeError("the detector's graph did not open")
-
-    opening = OpeningSource(broken)                     # not raised here
-    with pytest.raises(RuntimeError, match="did not open"):
-        opening.keypoints(0, _images(1)[0])
-    with pytest.raises(RuntimeError, match="did not open"):
-        opening.keypoints(1, _images(1)[0])             # nor lost after the first time
-    assert opening.milliseconds is None
-    opening.close()                                     # nothing to close
-
-
 @pytest.fixture(scope="module")
 def sequence(tmp_path_factory):
     from mocap.synth import generate_sequence
@@ -180,42 +130,3 @@ def test_a_run_with_the_detector_ahead_writes_what_a_sequential_run_writes(seque
     sequential, pipelined = _outputs(tmp_path / "ahead0"), _outputs(tmp_path / "ahead3")
     assert sequential[0] == pipelined[0] and len(sequential[0]) == 11
     assert sequential[1:] == pipelined[1:]
-
-
-def test_a_run_with_the_detector_opened_on_a_thread_writes_what_a_foreground_one_writes(sequence, tmp_path,
-                                                                                     monkeypatch):
-    """poses.csv (timing columns aside), run.json's settings and metrics, poses.bvh and
-    keypoints.csv are the same byte for byte whether the detector was opened on a thread of its
-    own (as ``--keypoints mediapipe`` opens MediaPipe) or before the run; a detector that fails
-    to open stops the run at its first frame with the opening's error, and is closed after."""
-    import mocap.run.options
-    from mocap.run import OwnVideoOptions, track
-    from mocap.track import TrackerConfig
-
-    options = OwnVideoOptions(tracker=TrackerConfig(evaluations=60, hypothesis_evaluations=20, jump_evaluations=10,
-                                                    proposal_evaluations=10), overlay=False, keypoints="auto")
-    detectors = {"foreground": ImageDetector()}
-    monkeypatch.setattr(mocap.run.options, "_source", lambda resolved, auto: detectors["foreground"])
-    track(sequence, tmp_path / "foreground", options, progress=False)
-    opened = []
-
-    def background(resolved, auto):
-        opened.append(OpeningSource(ImageDetector))
-        return opened[-1]
-
-    monkeypatch.setattr(mocap.run.options, "_source", background)
-    track(sequence, tmp_path / "background", options, progress=False)
-    detector = opened[0]._opened
-    assert detector.calls == detectors["foreground"].calls and len(detector.calls) >= 10
-    assert detector.closed == 1                          # the run closed it
-    foreground, behind = _outputs(tmp_path / "foreground"), _outputs(tmp_path / "background")
-    assert foreground[0] == behind[0] and len(foreground[0]) == 11
-    assert foreground[1:] == behind[1:]
-
-    def broken():
-        raise RuntimeError("the detector's graph did not open")
-
-    monkeypatch.setattr(mocap.run.options, "_source", lambda resolved, auto: OpeningSource(broken))
-    with pytest.raises(RuntimeError, match="did not open"):
-        track(sequence, tmp_path / "broken", options, progress=False)
-    assert not (tmp_path / "broken" / "poses.csv").exists()

@@ -75,30 +75,3 @@ def test_missing_extra_is_one_clear_line(monkeypatch):
     with pytest.raises(ValueError, match="pip install 'mocap\\[keypoints\\]'") as info:
         MediaPipeKeypoints()
     assert "\n" not in str(info.value) and str(info.value) == MISSING_EXTRA
-
-
-def test_mediapipe_opened_on_a_thread_gives_the_keypoints_of_mediapipe_opened_before(shared_data, mediapipe_available,
-                                                                                   capfd):
-    """MediaPipe made on a thread of its own (as a run makes it,
-    :class:`~mocap.io.keypoint_pipeline.OpeningSource`) gives, frame for frame, the keypoints of
-    MediaPipe made in the foreground, bit for bit; what the caller writes to stderr while it opens
-    comes through, MediaPipe's own lines do not."""
-    from mocap.io.keypoint_pipeline import OpeningSource
-    from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
-    from mocap.io.video import iter_frames
-
-    capfd.readouterr()
-    line = b"the caller's line, written while MediaPipe opens\n"
-    with OpeningSource(MediaPipeKeypoints) as behind:
-        os.write(2, line)
-        with MediaPipeKeypoints() as foreground:
-            found = 0
-            for i, frame in enumerate(iter_frames(shared_data / "video" / "intel_asl_no.mkv", 0, 40)):
-                if i % 4:
-                    continue
-                a, b = behind.keypoints(i, frame), foreground.keypoints(i, frame)
-                np.testing.assert_array_equal(a.uv, b.uv)
-                np.testing.assert_array_equal(a.confidence, b.confidence)
-                found += int(a.present.sum() > 0)
-    assert found == 10 and len(behind.milliseconds) == 10
-    assert capfd.readouterr().err == line.decode()
