@@ -27,6 +27,15 @@ failed frames where MediaPipe found the person); on the synthetic clips (too sma
 at their own size) a keypoint file of MediaPipe's 2D arm joints found on the enlarged frames
 (``--keypoints FILE``), measured by arm PA-MPJPE against MediaPipe's own 3D.
 
+* **cmu** (issue 34, item 5; ground truth): the toolkit's generator
+  (:func:`mocap.synth.generate_sequence` with ``motion=``) driven by trials of ONE training subject
+  of ``../shared/data/mocap/train`` (``--subject``, default 14: boxing, jumping jacks, side twists,
+  directing traffic), MediaPipe's 2D arm joints (frames enlarged 4x) as ``--keypoints FILE``, and
+  the tracker given a lifter trained without that subject (``--lifter FILE``, the tracker's
+  ``lifter_file``; ``python -m experiments.fit_lifter --trials-from experiments/fit_lifter.json
+  --exclude-subject 14 --out experiments/peers/work/lifter_no14.npz``, never shipped). Arm PA-MPJPE
+  of ours and of MediaPipe's own 3D per clip, and their ratio.
+
 Speed: our ``ms_total`` per frame (image side and registration, as ``run.json``) and
 MediaPipe's ``process`` time per frame, both wall-clock on this machine as loaded.
 Writes ``results.json``, ``peers.md`` (the table) and overlay stills ``still_<clip>.png``.
@@ -53,6 +62,11 @@ SYNTHETIC = ("turning", "arms-crossing", "not-facing", "gestures-2")
 SYNTHETIC_FRAMES = 60
 #: Real clips (in the shared data's video folder).
 REAL = ("intel_asl_no.mkv", "intel_asl_sister.mkv", "intel_asl_book.mkv")
+#: CMU-driven clips (``--only cmu``): the held-out subject's trials, each rendered with one of the
+#: synthetic sequences' actor and scene (in this order, cycled), and their length in frames (25 fps).
+CMU_TRIALS = {"14": ("14_02", "14_06", "14_20", "14_24")}
+CMU_SCENES = ("gestures-2", "turning", "arms-crossing", "not-facing")
+CMU_FRAMES = 150
 
 
 def arm_indices() -> np.ndarray:
@@ -84,12 +98,13 @@ def run_mediapipe(frames, upscale: int = 1) -> dict:
     """MediaPipe Pose (video mode, model complexity 1) on frames.
 
     Returns ``uv`` (N, 6, 2) pixels of the given frames, ``world`` (N, 6, 3) metres, both
-    NaN where no person was found, and ``ms`` (N,) per frame.
+    NaN where no person was found, ``ms`` (N,) per frame, and every landmark's world position
+    ``world33`` (N, 33, 3) metres and ``visibility33`` (N, 33) (NaN where not found).
     """
     import mediapipe as mp
     from skimage.transform import rescale
 
-    uv, world, ms = [], [], []
+    uv, world, ms, world33, seen33 = [], [], [], [], []
     order = [MEDIAPIPE_INDEX[j] for j in ARM_JOINTS]
     with mp.solutions.pose.Pose(static_image_mode=False, model_complexity=1) as pose:
         for frame in frames:
@@ -102,20 +117,30 @@ def run_mediapipe(frames, upscale: int = 1) -> dict:
             if result.pose_landmarks is None:
                 uv.append(np.full((6, 2), np.nan))
                 world.append(np.full((6, 3), np.nan))
+                world33.append(np.full((33, 3), np.nan))
+                seen33.append(np.full(33, np.nan))
                 continue
             lm, wl = result.pose_landmarks.landmark, result.pose_world_landmarks.landmark
             uv.append([(lm[i].x * w, lm[i].y * h) for i in order])
             world.append([(wl[i].x, wl[i].y, wl[i].z) for i in order])
-    return {"uv": np.asarray(uv, float), "world": np.asarray(world, float), "ms": np.asarray(ms)}
+            world33.append([(p.x, p.y, p.z) for p in wl])
+            seen33.append([p.visibility for p in wl])
+    return {"uv": np.asarray(uv, float), "world": np.asarray(world, float), "ms": np.asarray(ms),
+            "world33": np.asarray(world33, float).reshape(-1, 33, 3), "visibility33": np.asarray(seen33, float).reshape(-1, 33)}
 
 
-def _track(video: Path, out: Path, *, overlay: bool, keypoints: str = "none") -> "PoseTable":  # noqa: F821
+def _track(video: Path, out: Path, *, overlay: bool, keypoints: str = "none",
+           lifter: Path | None = None) -> "PoseTable":  # noqa: F821
     """``python -m mocap track VIDEO --keypoints none`` with no other option (``--no-overlay``
-    unless ``overlay``; ``--keypoints`` when given), through the library entry point the CLI calls."""
+    unless ``overlay``; ``--keypoints`` when given), through the library entry point the CLI calls;
+    ``lifter``: the tracker's lifter file (default settings otherwise; None: the shipped lifter)."""
     from mocap.io.pose_table import PoseTable
+    from mocap.track.config import TrackerConfig
     import mocap.run
 
-    mocap.run.track(video, out, mocap.run.OwnVideoOptions(overlay=overlay, overwrite=True, keypoints=keypoints))
+    tracker = TrackerConfig() if lifter is None else TrackerConfig(lifter_file=str(lifter))
+    mocap.run.track(video, out, mocap.run.OwnVideoOptions(overlay=overlay, overwrite=True, keypoints=keypoints,
+                                                          tracker=tracker))
     return PoseTable.read(out / POSES_CSV)
 
 
@@ -166,6 +191,31 @@ def synthetic_row(name: str, work: Path, seed: int) -> dict:
             "mediapipe_pa_mpjpe_mm": arm_pa_mpjpe(mp["world"], truth),
             "mediapipe_found": float(np.isfinite(mp["world"]).all(axis=(1, 2)).mean()),
             "ours_ms": float(np.median(table.extra["ms_total"][1:])), "mediapipe_ms": float(np.median(mp["ms"][1:]))}
+
+
+def cmu_row(trial: str, scene: str, work: Path, *, train: Path, seed: int, frames: int,
+            lifter: Path | None) -> dict:
+    """One CMU-driven clip: ``trial``'s motion (``train/cmu_<trial>.amc``) rendered in ``scene``'s
+    setting, tracked with MediaPipe's 2D arm joints as keypoints and the lifter file ``lifter``;
+    arm PA-MPJPE of ours and of MediaPipe's 3D. MediaPipe's landmarks are kept in
+    ``work/<trial>-mediapipe.npz`` (with ``world33``/``visibility33``) for later analyses."""
+    from mocap.io.pose_table import PoseTable
+    from mocap.io.video import iter_frames
+    from mocap.synth import generate_sequence
+
+    name = f"cmu_{trial}"
+    seq = generate_sequence(scene, work / name, frames=frames, seed=seed, motion=train / f"{name}.amc", progress=False)
+    truth = PoseTable.read(seq / "ground_truth.csv").joints[:, arm_indices()]
+    mp = run_mediapipe(list(iter_frames(seq / "frames")), upscale=4)
+    np.savez(work / f"{trial}-mediapipe.npz", **mp)
+    keyed = _track(seq, work / f"{name}-keypoints-run", overlay=False,
+                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv")), lifter=lifter)
+    ours, theirs = arm_pa_mpjpe(keyed.joints[:, arm_indices()], truth), arm_pa_mpjpe(mp["world"], truth)
+    return {"clip": trial, "scene": scene, "frames": len(keyed), "lifter": None if lifter is None else lifter.name,
+            "ours_keypoints_pa_mpjpe_mm": ours, "mediapipe_pa_mpjpe_mm": theirs, "ratio": ours / theirs,
+            "mediapipe_found": float(np.isfinite(mp["world"]).all(axis=(1, 2)).mean()),
+            "ours_keypoints_ms": float(np.median(keyed.extra["ms_total"][1:])),
+            "mediapipe_ms": float(np.median(mp["ms"][1:]))}
 
 
 def real_row(video: Path, work: Path, out: Path) -> dict:
@@ -243,6 +293,12 @@ def markdown(results: dict) -> str:
                   "MediaPipe's 3D |", "|---|---|---|"]
         lines += [f"| {r['clip']} | {r['ours_keypoints_pa_mpjpe_mm']:.0f} | "
                   f"{r['ours_keypoints_pa_mpjpe_mm'] / r['mediapipe_pa_mpjpe_mm']:.2f} |" for r in keyed_synthetic]
+    if results.get("cmu"):
+        lines += ["", "| CMU-driven clip (subject held out of the lifter), MediaPipe's 2D as keypoints | scene | frames "
+                  "| lifter | ours PA-MPJPE arms (mm) | MediaPipe's 3D (mm) | ratio |", "|---|---|---|---|---|---|---|"]
+        lines += [f"| {r['clip']} | {r['scene']} | {r['frames']} | {r['lifter'] or 'shipped'} | "
+                  f"{r['ours_keypoints_pa_mpjpe_mm']:.0f} | {r['mediapipe_pa_mpjpe_mm']:.0f} | **{r['ratio']:.2f}** |"
+                  for r in results["cmu"]]
     if keyed_real:
         lines += ["", "| real clip | frames with all six arm joints within 1/4 shoulder width of MediaPipe: ours | "
                   "ours with `--keypoints mediapipe` | failed frames where MediaPipe found the person | "
@@ -294,8 +350,15 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=Path, default=EXPERIMENTS_DIR / "peers", help="results folder")
     p.add_argument("--work", type=Path, default=None, help="scratch folder for clips and runs (default OUT/work)")
     p.add_argument("--seed", type=int, default=0, help="synthetic clips' seed")
-    p.add_argument("--only", choices=("synthetic", "real"), default=None,
-                   help="run one part; the other part's stored results in OUT are kept")
+    p.add_argument("--only", choices=("synthetic", "real", "cmu"), default=None,
+                   help="run one part; the other parts' stored results in OUT are kept (cmu runs only when named)")
+    p.add_argument("--train", type=Path, default=None, help="CMU trials folder (default DATA/mocap/train)")
+    p.add_argument("--subject", default="14", help="cmu: the held-out subject (its trials: --trials, or the "
+                   f"default ones of subjects {sorted(CMU_TRIALS)})")
+    p.add_argument("--trials", default=None, help="cmu: comma-separated trials (default: the subject's four)")
+    p.add_argument("--cmu-frames", type=int, default=CMU_FRAMES, help="cmu: frames per clip (25 fps)")
+    p.add_argument("--lifter", type=Path, default=None,
+                   help="cmu: the lifter file, trained without --subject (default: the shipped one, which saw it)")
     args = p.parse_args(argv)
     try:
         import mediapipe  # noqa: F401
@@ -307,6 +370,17 @@ def main(argv: list[str] | None = None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     stored = args.out / "results.json"
     results = json.loads(stored.read_text()) if stored.exists() and args.only else {"synthetic": [], "real": []}
+    if args.only == "cmu":
+        if not args.trials and args.subject not in CMU_TRIALS:
+            print(f"error: no default trials for subject {args.subject}: give --trials")
+            return 2
+        trials = args.trials.split(",") if args.trials else CMU_TRIALS[args.subject]
+        if any(t.split("_")[0] != args.subject for t in trials):
+            print(f"error: --trials must all be subject {args.subject}'s, got {trials}")
+            return 2
+        train = args.train or args.data / "mocap" / "train"
+        results["cmu"] = [cmu_row(t, CMU_SCENES[i % len(CMU_SCENES)], work, train=train, seed=args.seed,
+                                  frames=args.cmu_frames, lifter=args.lifter) for i, t in enumerate(trials)]
     if args.only in (None, "synthetic"):
         results["synthetic"] = [synthetic_row(name, work, args.seed) for name in SYNTHETIC]
     if args.only in (None, "real"):

@@ -127,6 +127,10 @@ class TrackerConfig(JsonConfig):
         every candidate of a frame, tracked or proposed, pays it. 0.5 was the best of 0 / 0.2 / 0.5 / 1.5 on seed 0; on the unseen seed 23
         with oracle keypoints it took the tracker from 78 to 71 mm median and from 19.9 % to 16.5 %
         of frames over 100 mm (the lifter's proposals alone; docs/research-log.md, issue 29).
+    lifter_file : str or None
+        The lifter's file (:meth:`mocap.track.lifter.Lifter.load`); None: the shipped one. An
+        experiment's lifter trained without a subject is measured on that subject this way
+        (``experiments.peers --only cmu``); read at the first frame that is lifted.
     prior_weight : float
         Score per nat of the pose prior's negative log-density (:mod:`mocap.body.prior`); 0: off.
     proposals_refined : int
@@ -156,6 +160,7 @@ class TrackerConfig(JsonConfig):
     offline: bool = False
     keypoint_weight: float = 2.0
     lifter_weight: float = 0.5
+    lifter_file: str | None = None
     prior_weight: float = 0.05
     proposals_refined: int = 2
     proposal_evaluations: int = 100
@@ -174,6 +179,8 @@ class TrackerConfig(JsonConfig):
         for name in ("recovery", "hand_reacquisition", "jumps", "offline", "gradient_step"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
+        if self.lifter_file is not None and (not isinstance(self.lifter_file, str) or not self.lifter_file):
+            raise ValueError(f"lifter_file must be a file name or None, got {self.lifter_file!r}")
         split_budget(self.evaluations, self.split)          # validates the split
         if self.edge_start not in EDGE_STARTS:
             raise ValueError(f"edge_start must be one of {EDGE_STARTS}, got {self.edge_start!r}")

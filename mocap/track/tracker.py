@@ -124,7 +124,7 @@ class Tracker:
         experiments add others (an oracle) this way.
     lifter : Lifter, optional
         The 2D->3D lifter of frames with keypoints when ``config.uses_lifter`` (``lifter_weight``
-        > 0); default: the shipped one, loaded at the first frame with keypoints. The tracker's
+        > 0); default: ``config.lifter_file`` (None: the shipped one), loaded at the first frame with keypoints. The tracker's
         :class:`LifterSource` (:attr:`lifting`) owns it: lifts each such frame once, for the
         proposal stage and the score.
     """
@@ -137,7 +137,7 @@ class Tracker:
         self.model, self.camera, self.config = model, camera, config
         self.prior = prior if prior is not None else (default_prior() if config.prior_weight > 0 else None)
         #: The lifting (None when ``config`` does not use the lifter); also the default keypoint source.
-        self.lifting: LifterSource | None = LifterSource(lifter) if config.uses_lifter else None
+        self.lifting: LifterSource | None = LifterSource(lifter, config.lifter_file) if config.uses_lifter else None
         self.sources: tuple[ProposalSource, ...] = tuple(proposal_sources(config, self.lifting) if sources is None
                                                          else sources)
         self.candidates: list[tuple[str, np.ndarray]] = []
@@ -414,7 +414,7 @@ def proposal_sources(config: TrackerConfig, lifting: LifterSource | None = None)
     docs/research-log.md)."""
     if not config.uses_lifter:
         return []
-    return [lifting if lifting is not None else LifterSource()]
+    return [lifting if lifting is not None else LifterSource(path=config.lifter_file)]
 
 
 def track_prepared(prepared_frames, tracker: Tracker, *, first_index: int = 0, progress: bool = False,
