@@ -149,17 +149,25 @@ def ours_uv(table) -> np.ndarray:
     return np.stack([np.stack([table.extra[f"{j}_u"], table.extra[f"{j}_v"]], axis=1) for j in ARM_JOINTS], axis=1)
 
 
-def keypoint_file(uv: np.ndarray, path: Path) -> Path:
+def keypoint_file(uv: np.ndarray, path: Path, mp: dict | None = None) -> Path:
     """Write MediaPipe's arm joints (N, 6, 2), input pixels, NaN where not found, as a keypoint
-    file (confidence 1) for ``--keypoints FILE``."""
+    file (confidence 1) for ``--keypoints FILE``; with ``mp`` (:func:`run_mediapipe`'s result),
+    its world joints too (:func:`mocap.io.mediapipe_keypoints.world_joints` of ``world33``, the
+    file's ``x,y,z``), as ``--keypoints mediapipe`` gives them to the tracker."""
     from mocap.body.skeleton import JOINT_NAMES
     from mocap.io.keypoints import Keypoints, write_keypoints
+    from mocap.io.mediapipe_keypoints import world_joints
 
     frames = {}
     for i, frame_uv in enumerate(uv):
         full = np.full((len(JOINT_NAMES), 2), np.nan)
         full[arm_indices()] = frame_uv
-        frames[i] = Keypoints(full, np.where(np.isfinite(full).all(axis=1), 1.0, 0.0))
+        world = None
+        if mp is not None:
+            found = np.isfinite(mp["world33"][i]).all()
+            world = world_joints(mp["world33"][i], mp["visibility33"][i])[0] if found else \
+                np.full((len(JOINT_NAMES), 3), np.nan)
+        frames[i] = Keypoints(full, np.where(np.isfinite(full).all(axis=1), 1.0, 0.0), world)
     write_keypoints(path, frames)
     return path
 
@@ -183,8 +191,9 @@ def synthetic_row(name: str, work: Path, seed: int) -> dict:
     table = _track(seq, work / f"{name}-run", overlay=False)
     truth = PoseTable.read(seq / "ground_truth.csv").joints[:, arm_indices()]
     mp = run_mediapipe(list(iter_frames(seq / "frames")), upscale=4)
+    np.savez(work / f"{name}-mediapipe.npz", **mp)          # for later analyses (experiments.mediapipe_3d)
     keyed = _track(seq, work / f"{name}-keypoints-run", overlay=False,
-                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv")))
+                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv", mp)))
     return {"clip": name, "frames": len(table),
             "ours_pa_mpjpe_mm": arm_pa_mpjpe(table.joints[:, arm_indices()], truth),
             "ours_keypoints_pa_mpjpe_mm": arm_pa_mpjpe(keyed.joints[:, arm_indices()], truth),
@@ -209,7 +218,7 @@ def cmu_row(trial: str, scene: str, work: Path, *, train: Path, seed: int, frame
     mp = run_mediapipe(list(iter_frames(seq / "frames")), upscale=4)
     np.savez(work / f"{trial}-mediapipe.npz", **mp)
     keyed = _track(seq, work / f"{name}-keypoints-run", overlay=False,
-                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv")), lifter=lifter)
+                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv", mp)), lifter=lifter)
     ours, theirs = arm_pa_mpjpe(keyed.joints[:, arm_indices()], truth), arm_pa_mpjpe(mp["world"], truth)
     return {"clip": trial, "scene": scene, "frames": len(keyed), "lifter": None if lifter is None else lifter.name,
             "ours_keypoints_pa_mpjpe_mm": ours, "mediapipe_pa_mpjpe_mm": theirs, "ratio": ours / theirs,

@@ -45,6 +45,7 @@ from mocap.track.config import (EDGE_WEIGHT, JUMPS_REFINED, MERGE_DISTANCE_M, MO
                                 RECOVERY_STEP_SCALE, REGION_WEIGHT, TrackerConfig)
 from mocap.track.decode import backtrack, viterbi_step
 from mocap.track.lifter import LiftedHypotheses, Lifter
+from mocap.track.world import PlacedWorld, place_world
 from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, jump_proposals, reach_proposals,
                                    unexplained_hands)
 from mocap.track.registration import Registration, register
@@ -141,6 +142,7 @@ class Tracker:
         self.sources: tuple[ProposalSource, ...] = tuple(proposal_sources(config, self.lifting) if sources is None
                                                          else sources)
         self.candidates: list[tuple[str, np.ndarray]] = []
+        self._world: PlacedWorld | None = None
         q = clamp_to_limits(check_pose(initial_pose, name="initial pose"))
         start = _Hypothesis(q, model.joint_positions(q), math.nan, math.nan, math.nan, False, "initial",
                             0.0, 0, 0)
@@ -224,6 +226,8 @@ class Tracker:
         keypoint_cost = self.keypoint_cost(keypoints)
         fit = functools.partial(register, region_cost, edge_cost, config=cfg, keypoint_cost=keypoint_cost)
         lifted = self.lifting.lift(keypoints, self.camera, self.model) if self.lifting is not None else None
+        #: The frame's detector 3D placed onto the body (the score's world term), or None.
+        self._world = place_world(keypoints, self.model, self._beam[0].pose) if cfg.world_weight > 0 else None
         candidates: list[tuple[Registration, str]] = []
         evaluations = 0
         t1 = time.perf_counter()
@@ -277,6 +281,8 @@ class Tracker:
             unary += cfg.prior_weight * self.prior.energy(pose)
         if lifted is not None and cfg.lifter_weight > 0:
             unary += cfg.lifter_weight * self.lifting.energy(lifted, joints)
+        if self._world is not None:
+            unary += cfg.world_weight * self._world.energy(joints)
         return float(unary)
 
     def _rough_unary(self, region_cost, edge_cost, keypoint_cost, lifted: LiftedHypotheses | None,
