@@ -93,3 +93,22 @@ def test_started_with_both_arms_mirrored_the_3d_brings_the_tracker_back_at_the_d
 
     assert errors(TrackerConfig(lag=0))[2:].max() < BACK_M
     assert errors(TrackerConfig(lag=0, world_weight=0.0)).min() > BACK_M
+
+
+def test_without_the_detectors_3d_the_term_changes_nothing():
+    """Without keypoints, or with keypoints that carry no 3D (a keypoint file of 2D, the oracle),
+    ``world_weight`` leaves every pose and score bit-identical (the benchmark without MediaPipe is
+    unchanged)."""
+    truth = reaching_pose()
+    start = arm_jumps(truth, MODEL.skeleton, "l")["both"]
+    frames, keypoints = still_clip(truth, 3)
+
+    def track(weight, given):
+        tracker = Tracker(MODEL, CAMERA, TrackerConfig(lag=0, world_weight=weight), start)
+        return [(r.pose, r.score) for i, (f, k) in enumerate(zip(frames, given)) for r in tracker.push(i, f, k)]
+
+    for given in ([None] * 3, keypoints):
+        on, off = track(0.5, given), track(0.0, given)
+        for (p, s), (q, t) in zip(on, off):
+            np.testing.assert_array_equal(p, q)
+            assert s == t
