@@ -40,11 +40,10 @@ import numpy as np
 from experiments.peers import arm_indices, arm_pa_mpjpe
 from mocap.track.proposals import Proposal
 from mocap.track.tracker import Tracker
+from mocap.track.world import WORLD_CAP, WORLD_SIGMA_M, about_shoulders
 
-#: Scale of an arm joint's distance from the placed pose's in the score (metres).
-SIGMA_M = 0.1
-#: Most a joint adds to the score's term (in units of ``(d / SIGMA_M)^2``): far off, MediaPipe has no say.
-CAP = 9.0
+#: The term's scale and cap: the library's (:mod:`mocap.track.world`).
+SIGMA_M, CAP = WORLD_SIGMA_M, WORLD_CAP
 #: Variants: (MediaPipe's placed pose proposed, weight of its score term).
 VARIANTS = {"without": (False, 0.0), "proposals": (True, 0.0), "term 0.2": (False, 0.2), "term 0.5": (False, 0.5), "term 2": (False, 2.0),
             "both 0.5": (True, 0.5), "both 2": (True, 2.0)}
@@ -82,12 +81,6 @@ def placed_poses(world33: np.ndarray, visibility33: np.ndarray, skeleton) -> lis
         previous = fit_pose_to_joints(joints, present, skeleton, start=previous).pose
         out.append(previous)
     return out
-
-
-def about_shoulders(joints: np.ndarray) -> np.ndarray:
-    """The six arm joints (6, 3) about the midpoint of the shoulders, from all ten (10, 3)."""
-    arms = joints[arm_indices()]
-    return arms - 0.5 * (arms[0] + arms[3])
 
 
 class PlacedSource:
