@@ -45,8 +45,8 @@ from mocap.track.world import WORLD_CAP, WORLD_SIGMA_M, about_shoulders
 #: The term's scale and cap: the library's (:mod:`mocap.track.world`).
 SIGMA_M, CAP = WORLD_SIGMA_M, WORLD_CAP
 #: Variants: (MediaPipe's placed pose proposed, weight of its score term).
-VARIANTS = {"without": (False, 0.0), "proposals": (True, 0.0), "term 0.2": (False, 0.2), "term 0.5": (False, 0.5), "term 2": (False, 2.0),
-            "both 0.5": (True, 0.5), "both 2": (True, 2.0)}
+VARIANTS = {"without": (False, 0.0), "proposals": (True, 0.0), "term 0.2": (False, 0.2), "term 0.5": (False, 0.5),
+            "term 2": (False, 2.0), "both 0.5": (True, 0.5), "both 2": (True, 2.0)}
 
 
 def placed_poses(world33: np.ndarray, visibility33: np.ndarray, skeleton) -> list:

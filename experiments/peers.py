@@ -127,7 +127,8 @@ def run_mediapipe(frames, upscale: int = 1) -> dict:
             world33.append([(p.x, p.y, p.z) for p in wl])
             seen33.append([p.visibility for p in wl])
     return {"uv": np.asarray(uv, float), "world": np.asarray(world, float), "ms": np.asarray(ms),
-            "world33": np.asarray(world33, float).reshape(-1, 33, 3), "visibility33": np.asarray(seen33, float).reshape(-1, 33)}
+            "world33": np.asarray(world33, float).reshape(-1, 33, 3),
+            "visibility33": np.asarray(seen33, float).reshape(-1, 33)}
 
 
 def _track(video: Path, out: Path, *, overlay: bool, keypoints: str = "none",
@@ -197,7 +198,8 @@ def synthetic_row(name: str, work: Path, seed: int, world_weight: float | None =
     mp = run_mediapipe(list(iter_frames(seq / "frames")), upscale=4)
     np.savez(work / f"{name}-mediapipe.npz", **mp)          # for later analyses (experiments.mediapipe_3d)
     keyed = _track(seq, work / f"{name}-keypoints-run", overlay=False,
-                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv", mp)), world_weight=world_weight)
+                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv", mp)),
+                   world_weight=world_weight)
     return {"clip": name, "frames": len(table),
             "ours_pa_mpjpe_mm": arm_pa_mpjpe(table.joints[:, arm_indices()], truth),
             "ours_keypoints_pa_mpjpe_mm": arm_pa_mpjpe(keyed.joints[:, arm_indices()], truth),
@@ -309,8 +311,8 @@ def markdown(results: dict) -> str:
         lines += [f"| {r['clip']} | {r['ours_keypoints_pa_mpjpe_mm']:.0f} | "
                   f"{r['ours_keypoints_pa_mpjpe_mm'] / r['mediapipe_pa_mpjpe_mm']:.2f} |" for r in keyed_synthetic]
     if results.get("cmu"):
-        lines += ["", "| CMU-driven clip (subject held out of the lifter), MediaPipe's 2D as keypoints | scene | frames "
-                  "| lifter | ours PA-MPJPE arms (mm) | MediaPipe's 3D (mm) | ratio |", "|---|---|---|---|---|---|---|"]
+        lines += ["", "| CMU-driven clip (subject held out of the lifter), MediaPipe's 2D as keypoints | scene "
+                  "| frames | lifter | ours PA-MPJPE arms (mm) | MediaPipe's 3D (mm) | ratio |", "|---|---|---|---|---|---|---|"]
         lines += [f"| {r['clip']} | {r['scene']} | {r['frames']} | {r['lifter'] or 'shipped'} | "
                   f"{r['ours_keypoints_pa_mpjpe_mm']:.0f} | {r['mediapipe_pa_mpjpe_mm']:.0f} | **{r['ratio']:.2f}** |"
                   for r in results["cmu"]]
@@ -375,7 +377,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--lifter", type=Path, default=None,
                    help="cmu: the lifter file, trained without --subject (default: the shipped one, which saw it)")
     p.add_argument("--world-weight", type=float, default=None,
-                   help="the keypoint runs' weight of MediaPipe's 3D (TrackerConfig.world_weight; default: its default)")
+                   help="the keypoint runs' weight of MediaPipe's 3D (TrackerConfig.world_weight; "
+                   "default: its default)")
     args = p.parse_args(argv)
     try:
         import mediapipe  # noqa: F401

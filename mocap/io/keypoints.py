@@ -316,5 +316,6 @@ def _text(frames: Mapping[int, Keypoints], header: bool) -> str:
     return buf.getvalue()
 
 
-__all__ = ["KEYPOINT_COLUMNS", "KEYPOINT_WORLD_COLUMNS", "KeypointFile", "KeypointSource", "Keypoints", "append_keypoints", "parse_keypoints",
+__all__ = ["KEYPOINT_COLUMNS", "KEYPOINT_WORLD_COLUMNS", "KeypointFile", "KeypointSource", "Keypoints",
+           "append_keypoints", "parse_keypoints",
            "read_keypoints", "write_keypoints"]

@@ -10,7 +10,9 @@ keypoints, the learned lifter's whole-body hypotheses), each refined by a short 
 candidate gets a **unary score** (``REGION_WEIGHT * F + EDGE_WEIGHT * edge distance +
 prior_weight * pose-prior energy``; on frames with 2D keypoints plus ``keypoint_weight *
 keypoint distance``, which every registration of the frame then also adds, and ``lifter_weight``
-times the lifter's negative log-density at the candidate's joints); between consecutive frames a **motion term**
+times the lifter's negative log-density at the candidate's joints; where the keypoints carry
+MediaPipe's 3D, ``world_weight`` times the distance of the candidate's arms from it,
+:mod:`mocap.track.world`); between consecutive frames a **motion term**
 (half the mean squared joint displacement over ``MOTION_SIGMA_M**2``) links them. The forward
 Viterbi recursion (:func:`~mocap.track.decode.viterbi_step`) gives each candidate the cost of
 the best path to it; near-duplicates are merged and the ``beam`` cheapest survive.
@@ -125,9 +127,9 @@ class Tracker:
         experiments add others (an oracle) this way.
     lifter : Lifter, optional
         The 2D->3D lifter of frames with keypoints when ``config.uses_lifter`` (``lifter_weight``
-        > 0); default: ``config.lifter_file`` (None: the shipped one), loaded at the first frame with keypoints. The tracker's
-        :class:`LifterSource` (:attr:`lifting`) owns it: lifts each such frame once, for the
-        proposal stage and the score.
+        > 0); default: ``config.lifter_file`` (None: the shipped one), loaded at the first frame
+        with keypoints. The tracker's :class:`LifterSource` (:attr:`lifting`) owns it: lifts each
+        such frame once, for the proposal stage and the score.
     """
 
     def __init__(self, model: BodyModel, camera: Camera, config: TrackerConfig, initial_pose,
