@@ -27,6 +27,15 @@ failed frames where MediaPipe found the person); on the synthetic clips (too sma
 at their own size) a keypoint file of MediaPipe's 2D arm joints found on the enlarged frames
 (``--keypoints FILE``), measured by arm PA-MPJPE against MediaPipe's own 3D.
 
+* **cmu** (issue 34, item 5; ground truth): the toolkit's generator
+  (:func:`mocap.synth.generate_sequence` with ``motion=``) driven by trials of ONE training subject
+  of ``../shared/data/mocap/train`` (``--subject``, default 14: boxing, jumping jacks, side twists,
+  directing traffic), MediaPipe's 2D arm joints (frames enlarged 4x) as ``--keypoints FILE``, and
+  the tracker given a lifter trained without that subject (``--lifter FILE``, the tracker's
+  ``lifter_file``; ``python -m experiments.fit_lifter --trials-from experiments/fit_lifter.json
+  --exclude-subject 14 --out experiments/peers/work/lifter_no14.npz``, never shipped). Arm PA-MPJPE
+  of ours and of MediaPipe's own 3D per clip, and their ratio.
+
 Speed: our ``ms_total`` per frame (image side and registration, as ``run.json``) and
 MediaPipe's ``process`` time per frame, both wall-clock on this machine as loaded.
 Writes ``results.json``, ``peers.md`` (the table) and overlay stills ``still_<clip>.png``.
@@ -36,6 +45,7 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -53,6 +63,11 @@ SYNTHETIC = ("turning", "arms-crossing", "not-facing", "gestures-2")
 SYNTHETIC_FRAMES = 60
 #: Real clips (in the shared data's video folder).
 REAL = ("intel_asl_no.mkv", "intel_asl_sister.mkv", "intel_asl_book.mkv")
+#: CMU-driven clips (``--only cmu``): the held-out subject's trials, each rendered with one of the
+#: synthetic sequences' actor and scene (in this order, cycled), and their length in frames (25 fps).
+CMU_TRIALS = {"14": ("14_02", "14_06", "14_20", "14_24")}
+CMU_SCENES = ("gestures-2", "turning", "arms-crossing", "not-facing")
+CMU_FRAMES = 150
 
 
 def arm_indices() -> np.ndarray:
@@ -84,12 +99,13 @@ def run_mediapipe(frames, upscale: int = 1) -> dict:
     """MediaPipe Pose (video mode, model complexity 1) on frames.
 
     Returns ``uv`` (N, 6, 2) pixels of the given frames, ``world`` (N, 6, 3) metres, both
-    NaN where no person was found, and ``ms`` (N,) per frame.
+    NaN where no person was found, ``ms`` (N,) per frame, and every landmark's world position
+    ``world33`` (N, 33, 3) metres and ``visibility33`` (N, 33) (NaN where not found).
     """
     import mediapipe as mp
     from skimage.transform import rescale
 
-    uv, world, ms = [], [], []
+    uv, world, ms, world33, seen33 = [], [], [], [], []
     order = [MEDIAPIPE_INDEX[j] for j in ARM_JOINTS]
     with mp.solutions.pose.Pose(static_image_mode=False, model_complexity=1) as pose:
         for frame in frames:
@@ -102,20 +118,34 @@ def run_mediapipe(frames, upscale: int = 1) -> dict:
             if result.pose_landmarks is None:
                 uv.append(np.full((6, 2), np.nan))
                 world.append(np.full((6, 3), np.nan))
+                world33.append(np.full((33, 3), np.nan))
+                seen33.append(np.full(33, np.nan))
                 continue
             lm, wl = result.pose_landmarks.landmark, result.pose_world_landmarks.landmark
             uv.append([(lm[i].x * w, lm[i].y * h) for i in order])
             world.append([(wl[i].x, wl[i].y, wl[i].z) for i in order])
-    return {"uv": np.asarray(uv, float), "world": np.asarray(world, float), "ms": np.asarray(ms)}
+            world33.append([(p.x, p.y, p.z) for p in wl])
+            seen33.append([p.visibility for p in wl])
+    return {"uv": np.asarray(uv, float), "world": np.asarray(world, float), "ms": np.asarray(ms),
+            "world33": np.asarray(world33, float).reshape(-1, 33, 3),
+            "visibility33": np.asarray(seen33, float).reshape(-1, 33)}
 
 
-def _track(video: Path, out: Path, *, overlay: bool, keypoints: str = "none") -> "PoseTable":  # noqa: F821
+def _track(video: Path, out: Path, *, overlay: bool, keypoints: str = "none",
+           lifter: Path | None = None, world_weight: float | None = None) -> "PoseTable":  # noqa: F821
     """``python -m mocap track VIDEO --keypoints none`` with no other option (``--no-overlay``
-    unless ``overlay``; ``--keypoints`` when given), through the library entry point the CLI calls."""
+    unless ``overlay``; ``--keypoints`` when given), through the library entry point the CLI calls;
+    ``lifter``: the tracker's lifter file (None: the shipped lifter); ``world_weight``: the
+    tracker's weight of MediaPipe's 3D (None: the default); default settings otherwise."""
     from mocap.io.pose_table import PoseTable
+    from mocap.track.config import TrackerConfig
     import mocap.run
 
-    mocap.run.track(video, out, mocap.run.OwnVideoOptions(overlay=overlay, overwrite=True, keypoints=keypoints))
+    tracker = TrackerConfig(lifter_file=None if lifter is None else str(lifter))
+    if world_weight is not None:
+        tracker = replace(tracker, world_weight=float(world_weight))
+    mocap.run.track(video, out, mocap.run.OwnVideoOptions(overlay=overlay, overwrite=True, keypoints=keypoints,
+                                                          tracker=tracker))
     return PoseTable.read(out / POSES_CSV)
 
 
@@ -124,17 +154,25 @@ def ours_uv(table) -> np.ndarray:
     return np.stack([np.stack([table.extra[f"{j}_u"], table.extra[f"{j}_v"]], axis=1) for j in ARM_JOINTS], axis=1)
 
 
-def keypoint_file(uv: np.ndarray, path: Path) -> Path:
+def keypoint_file(uv: np.ndarray, path: Path, mp: dict | None = None) -> Path:
     """Write MediaPipe's arm joints (N, 6, 2), input pixels, NaN where not found, as a keypoint
-    file (confidence 1) for ``--keypoints FILE``."""
+    file (confidence 1) for ``--keypoints FILE``; with ``mp`` (:func:`run_mediapipe`'s result),
+    its world joints too (:func:`mocap.io.mediapipe_keypoints.world_joints` of ``world33``, the
+    file's ``x,y,z``), as ``--keypoints mediapipe`` gives them to the tracker."""
     from mocap.body.skeleton import JOINT_NAMES
     from mocap.io.keypoints import Keypoints, write_keypoints
+    from mocap.io.mediapipe_keypoints import world_joints
 
     frames = {}
     for i, frame_uv in enumerate(uv):
         full = np.full((len(JOINT_NAMES), 2), np.nan)
         full[arm_indices()] = frame_uv
-        frames[i] = Keypoints(full, np.where(np.isfinite(full).all(axis=1), 1.0, 0.0))
+        world = None
+        if mp is not None:
+            found = np.isfinite(mp["world33"][i]).all()
+            world = world_joints(mp["world33"][i], mp["visibility33"][i])[0] if found else \
+                np.full((len(JOINT_NAMES), 3), np.nan)
+        frames[i] = Keypoints(full, np.where(np.isfinite(full).all(axis=1), 1.0, 0.0), world)
     write_keypoints(path, frames)
     return path
 
@@ -149,7 +187,7 @@ def within_quarter(ours: np.ndarray, ref: np.ndarray) -> dict:
             "frames_all_within_quarter": float(close[found].all(axis=1).mean()) if found.any() else float("nan")}
 
 
-def synthetic_row(name: str, work: Path, seed: int) -> dict:
+def synthetic_row(name: str, work: Path, seed: int, world_weight: float | None = None) -> dict:
     from mocap.io.pose_table import PoseTable
     from mocap.io.video import iter_frames
     from mocap.synth import generate_sequence
@@ -158,8 +196,10 @@ def synthetic_row(name: str, work: Path, seed: int) -> dict:
     table = _track(seq, work / f"{name}-run", overlay=False)
     truth = PoseTable.read(seq / "ground_truth.csv").joints[:, arm_indices()]
     mp = run_mediapipe(list(iter_frames(seq / "frames")), upscale=4)
+    np.savez(work / f"{name}-mediapipe.npz", **mp)          # for later analyses (experiments.mediapipe_3d)
     keyed = _track(seq, work / f"{name}-keypoints-run", overlay=False,
-                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv")))
+                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv", mp)),
+                   world_weight=world_weight)
     return {"clip": name, "frames": len(table),
             "ours_pa_mpjpe_mm": arm_pa_mpjpe(table.joints[:, arm_indices()], truth),
             "ours_keypoints_pa_mpjpe_mm": arm_pa_mpjpe(keyed.joints[:, arm_indices()], truth),
@@ -168,7 +208,33 @@ def synthetic_row(name: str, work: Path, seed: int) -> dict:
             "ours_ms": float(np.median(table.extra["ms_total"][1:])), "mediapipe_ms": float(np.median(mp["ms"][1:]))}
 
 
-def real_row(video: Path, work: Path, out: Path) -> dict:
+def cmu_row(trial: str, scene: str, work: Path, *, train: Path, seed: int, frames: int,
+            lifter: Path | None, world_weight: float | None = None) -> dict:
+    """One CMU-driven clip: ``trial``'s motion (``train/cmu_<trial>.amc``) rendered in ``scene``'s
+    setting, tracked with MediaPipe's 2D arm joints as keypoints and the lifter file ``lifter``;
+    arm PA-MPJPE of ours and of MediaPipe's 3D. MediaPipe's landmarks are kept in
+    ``work/<trial>-mediapipe.npz`` (with ``world33``/``visibility33``) for later analyses."""
+    from mocap.io.pose_table import PoseTable
+    from mocap.io.video import iter_frames
+    from mocap.synth import generate_sequence
+
+    name = f"cmu_{trial}"
+    seq = generate_sequence(scene, work / name, frames=frames, seed=seed, motion=train / f"{name}.amc", progress=False)
+    truth = PoseTable.read(seq / "ground_truth.csv").joints[:, arm_indices()]
+    mp = run_mediapipe(list(iter_frames(seq / "frames")), upscale=4)
+    np.savez(work / f"{trial}-mediapipe.npz", **mp)
+    keyed = _track(seq, work / f"{name}-keypoints-run", overlay=False,
+                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv", mp)), lifter=lifter,
+                   world_weight=world_weight)
+    ours, theirs = arm_pa_mpjpe(keyed.joints[:, arm_indices()], truth), arm_pa_mpjpe(mp["world"], truth)
+    return {"clip": trial, "scene": scene, "frames": len(keyed), "lifter": None if lifter is None else lifter.name,
+            "ours_keypoints_pa_mpjpe_mm": ours, "mediapipe_pa_mpjpe_mm": theirs, "ratio": ours / theirs,
+            "mediapipe_found": float(np.isfinite(mp["world"]).all(axis=(1, 2)).mean()),
+            "ours_keypoints_ms": float(np.median(keyed.extra["ms_total"][1:])),
+            "mediapipe_ms": float(np.median(mp["ms"][1:]))}
+
+
+def real_row(video: Path, work: Path, out: Path, world_weight: float | None = None) -> dict:
     from mocap.io.video import iter_frames
 
     table = _track(video, work / f"{video.stem}-run", overlay=True)
@@ -187,7 +253,8 @@ def real_row(video: Path, work: Path, out: Path) -> dict:
     per_joint = {j: pck_2d(ours[:, [k]], ref[:, [k]], width) for k, j in enumerate(ARM_JOINTS)}
     run = json.loads((work / f"{video.stem}-run" / RUN_JSON).read_text())
     _still(frames[n // 2], ours[n // 2], ref[n // 2], out / f"still_{video.stem}.png")
-    keyed = _track(video, work / f"{video.stem}-keypoints-run", overlay=False, keypoints="mediapipe")
+    keyed = _track(video, work / f"{video.stem}-keypoints-run", overlay=False, keypoints="mediapipe",
+                   world_weight=world_weight)
     keyed_run = json.loads((work / f"{video.stem}-keypoints-run" / RUN_JSON).read_text())
     found = np.isfinite(ref).all(axis=(1, 2))
     quarter = {f"ours_{k}": v for k, v in within_quarter(ours, ref).items()}
@@ -243,6 +310,12 @@ def markdown(results: dict) -> str:
                   "MediaPipe's 3D |", "|---|---|---|"]
         lines += [f"| {r['clip']} | {r['ours_keypoints_pa_mpjpe_mm']:.0f} | "
                   f"{r['ours_keypoints_pa_mpjpe_mm'] / r['mediapipe_pa_mpjpe_mm']:.2f} |" for r in keyed_synthetic]
+    if results.get("cmu"):
+        lines += ["", "| CMU-driven clip (subject held out of the lifter), MediaPipe's 2D as keypoints | scene "
+                  "| frames | lifter | ours PA-MPJPE arms (mm) | MediaPipe's 3D (mm) | ratio |", "|---|---|---|---|---|---|---|"]
+        lines += [f"| {r['clip']} | {r['scene']} | {r['frames']} | {r['lifter'] or 'shipped'} | "
+                  f"{r['ours_keypoints_pa_mpjpe_mm']:.0f} | {r['mediapipe_pa_mpjpe_mm']:.0f} | **{r['ratio']:.2f}** |"
+                  for r in results["cmu"]]
     if keyed_real:
         lines += ["", "| real clip | frames with all six arm joints within 1/4 shoulder width of MediaPipe: ours | "
                   "ours with `--keypoints mediapipe` | failed frames where MediaPipe found the person | "
@@ -294,8 +367,18 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=Path, default=EXPERIMENTS_DIR / "peers", help="results folder")
     p.add_argument("--work", type=Path, default=None, help="scratch folder for clips and runs (default OUT/work)")
     p.add_argument("--seed", type=int, default=0, help="synthetic clips' seed")
-    p.add_argument("--only", choices=("synthetic", "real"), default=None,
-                   help="run one part; the other part's stored results in OUT are kept")
+    p.add_argument("--only", choices=("synthetic", "real", "cmu"), default=None,
+                   help="run one part; the other parts' stored results in OUT are kept (cmu runs only when named)")
+    p.add_argument("--train", type=Path, default=None, help="CMU trials folder (default DATA/mocap/train)")
+    p.add_argument("--subject", default="14", help="cmu: the held-out subject (its trials: --trials, or the "
+                   f"default ones of subjects {sorted(CMU_TRIALS)})")
+    p.add_argument("--trials", default=None, help="cmu: comma-separated trials (default: the subject's four)")
+    p.add_argument("--cmu-frames", type=int, default=CMU_FRAMES, help="cmu: frames per clip (25 fps)")
+    p.add_argument("--lifter", type=Path, default=None,
+                   help="cmu: the lifter file, trained without --subject (default: the shipped one, which saw it)")
+    p.add_argument("--world-weight", type=float, default=None,
+                   help="the keypoint runs' weight of MediaPipe's 3D (TrackerConfig.world_weight; "
+                   "default: its default)")
     args = p.parse_args(argv)
     try:
         import mediapipe  # noqa: F401
@@ -307,10 +390,22 @@ def main(argv: list[str] | None = None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     stored = args.out / "results.json"
     results = json.loads(stored.read_text()) if stored.exists() and args.only else {"synthetic": [], "real": []}
+    if args.only == "cmu":
+        if not args.trials and args.subject not in CMU_TRIALS:
+            print(f"error: no default trials for subject {args.subject}: give --trials")
+            return 2
+        trials = args.trials.split(",") if args.trials else CMU_TRIALS[args.subject]
+        if any(t.split("_")[0] != args.subject for t in trials):
+            print(f"error: --trials must all be subject {args.subject}'s, got {trials}")
+            return 2
+        train = args.train or args.data / "mocap" / "train"
+        results["cmu"] = [cmu_row(t, CMU_SCENES[i % len(CMU_SCENES)], work, train=train, seed=args.seed,
+                                  frames=args.cmu_frames, lifter=args.lifter, world_weight=args.world_weight)
+                          for i, t in enumerate(trials)]
     if args.only in (None, "synthetic"):
-        results["synthetic"] = [synthetic_row(name, work, args.seed) for name in SYNTHETIC]
+        results["synthetic"] = [synthetic_row(name, work, args.seed, args.world_weight) for name in SYNTHETIC]
     if args.only in (None, "real"):
-        results["real"] = [real_row(args.data / "video" / clip, work, args.out) for clip in REAL]
+        results["real"] = [real_row(args.data / "video" / clip, work, args.out, args.world_weight) for clip in REAL]
     (args.out / "results.json").write_text(json.dumps(results, indent=2))
     table = markdown(results)
     (args.out / "peers.md").write_text(table)

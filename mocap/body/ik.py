@@ -202,7 +202,8 @@ class JointFit:
 
 
 def fit_pose_to_joints(targets, present, skeleton: Skeleton, *, start=None,
-                       regularization: float = FIT_REGULARIZATION, limits: np.ndarray = JOINT_LIMITS) -> JointFit:
+                       regularization: float = FIT_REGULARIZATION, limits: np.ndarray = JOINT_LIMITS,
+                       headings_deg=FIT_START_YAWS_DEG) -> JointFit:
     """The pose, inside the joint limits, whose joints come closest to 3D targets up to a translation.
 
     Minimises the squared distances of the present joints from their targets, both taken about
@@ -228,6 +229,9 @@ def fit_pose_to_joints(targets, present, skeleton: Skeleton, *, start=None,
         to the solver's path.
     limits : ndarray, shape (23, 2)
         Joint limits (radians).
+    headings_deg : sequence of float, degrees
+        The torso's yaws tried besides ``start``'s own (default :data:`FIT_START_YAWS_DEG`); ``()``
+        fits from ``start`` alone (a warm start from a neighbouring frame's pose: one fit, not five).
 
     Returns
     -------
@@ -271,7 +275,7 @@ def fit_pose_to_joints(targets, present, skeleton: Skeleton, *, start=None,
 
     yaw = PARAMETER_INDEX["chest_yaw"]
     best = None
-    for heading in (None, *np.radians(FIT_START_YAWS_DEG)):
+    for heading in (None, *np.radians(np.asarray(headings_deg, dtype=np.float64))):
         x0 = anchor.copy()
         if heading is not None:
             x0[yaw - 3] = np.clip(heading, lower[yaw - 3], upper[yaw - 3])

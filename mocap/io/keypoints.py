@@ -12,6 +12,11 @@ pixel centres at half-integers as in :class:`~mocap.render.camera.Camera`), ``co
 [0, 1]. Frames or joints without a row, empty or NaN fields are absent evidence; anything else
 that does not parse (a wrong header, an unknown joint, a confidence outside [0, 1], a repeated
 (frame, joint)) is a ValueError naming the line.
+
+A detector that also gives 3D (MediaPipe Pose's world landmarks) writes the header
+``frame,joint,u,v,confidence,x,y,z`` instead: ``x, y, z`` the joint in metres about the
+detector's own origin (MediaPipe's: the hips' midpoint) on the camera's axes (x right, y down,
+z away from the camera), empty where the detector gave none (:attr:`Keypoints.world`).
 """
 from __future__ import annotations
 
@@ -29,6 +34,8 @@ from mocap.io.files import write_text_atomic
 
 #: Header of the keypoint file.
 KEYPOINT_COLUMNS: tuple[str, ...] = ("frame", "joint", "u", "v", "confidence")
+#: Header of a keypoint file that also carries the detector's 3D (:attr:`Keypoints.world`).
+KEYPOINT_WORLD_COLUMNS: tuple[str, ...] = KEYPOINT_COLUMNS + ("x", "y", "z")
 _JOINT = {name: i for i, name in enumerate(JOINT_NAMES)}
 
 
@@ -42,10 +49,16 @@ class Keypoints:
         ``(u, v)`` of each joint; NaN where absent.
     confidence : ndarray, shape (10,), float64
         In [0, 1]; 0 where absent (and wherever ``uv`` is NaN).
+    world : ndarray, shape (10, 3), float64, metres, or None
+        The detector's own 3D of each joint (MediaPipe Pose's world landmarks,
+        :func:`mocap.io.mediapipe_keypoints.world_joints`): about its origin, camera axes (x right,
+        y down, z away); NaN where absent, and wherever the joint's 2D is absent. None: the
+        detector gave no 3D.
     """
 
     uv: np.ndarray
     confidence: np.ndarray
+    world: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         uv = np.array(self.uv, dtype=np.float64)
@@ -61,7 +74,17 @@ class Keypoints:
         absent = np.isnan(uv).any(axis=1) | (conf == 0.0)
         uv[absent] = np.nan
         conf[absent] = 0.0
-        for a in (uv, conf):
+        arrays = [uv, conf]
+        if self.world is not None:
+            world = np.array(self.world, dtype=np.float64)
+            if world.shape != (len(JOINT_NAMES), 3):
+                raise ValueError(f"keypoints' world must have shape ({len(JOINT_NAMES)}, 3), got {world.shape}")
+            if np.any(np.isinf(world)):
+                raise ValueError("keypoints' world positions must be finite or NaN (absent)")
+            world[absent | np.isnan(world).any(axis=1)] = np.nan
+            arrays.append(world)
+            object.__setattr__(self, "world", world)
+        for a in arrays:
             a.setflags(write=False)
         object.__setattr__(self, "uv", uv)
         object.__setattr__(self, "confidence", conf)
@@ -107,7 +130,7 @@ class Keypoints:
         """
         if not (math.isfinite(sx) and math.isfinite(sy) and sx > 0 and sy > 0):
             raise ValueError(f"scale factors must be finite and positive, got {sx}, {sy}")
-        return Keypoints(self.uv * np.array([sx, sy]), self.confidence)
+        return Keypoints(self.uv * np.array([sx, sy]), self.confidence, self.world)
 
 
 class KeypointSource(Protocol):
@@ -172,19 +195,21 @@ def parse_keypoints(text: str, source: str = "keypoint file") -> dict[int, Keypo
     """
     rows = csv.reader(io.StringIO(text))
     header = next(rows, None)
-    if header is None or tuple(h.strip() for h in header) != KEYPOINT_COLUMNS:
-        raise ValueError(f"{source}: the first line must be {','.join(KEYPOINT_COLUMNS)}, got "
-                         f"{','.join(header) if header else 'nothing'}")
+    columns = None if header is None else tuple(h.strip() for h in header)
+    if columns not in (KEYPOINT_COLUMNS, KEYPOINT_WORLD_COLUMNS):
+        raise ValueError(f"{source}: the first line must be {','.join(KEYPOINT_COLUMNS)} (or "
+                         f"{','.join(KEYPOINT_WORLD_COLUMNS)}), got {','.join(header) if header else 'nothing'}")
+    has_world = columns == KEYPOINT_WORLD_COLUMNS
     uv: dict[int, np.ndarray] = {}
     conf: dict[int, np.ndarray] = {}
+    world: dict[int, np.ndarray] = {}
     for line, row in enumerate(rows, start=2):
         if not row or all(not cell.strip() for cell in row):
             continue
         where = f"{source} line {line}"
-        if len(row) != len(KEYPOINT_COLUMNS):
-            raise ValueError(f"{where}: expected {len(KEYPOINT_COLUMNS)} fields ({','.join(KEYPOINT_COLUMNS)}), "
-                             f"got {len(row)}")
-        frame_text, joint, u_text, v_text, c_text = (cell.strip() for cell in row)
+        if len(row) != len(columns):
+            raise ValueError(f"{where}: expected {len(columns)} fields ({','.join(columns)}), got {len(row)}")
+        frame_text, joint, u_text, v_text, c_text = (cell.strip() for cell in row[:5])
         try:
             frame = int(frame_text)
         except ValueError:
@@ -205,9 +230,15 @@ def parse_keypoints(text: str, source: str = "keypoint file") -> dict[int, Keypo
             raise ValueError(f"{where}: frame {frame} gives joint {joint!r} twice")
         frame_uv[j] = u, v
         frame_conf[j] = 0.0 if math.isnan(c) else c
+        if has_world:
+            xyz = [_number(t.strip(), name, where) for t, name in zip(row[5:], "xyz")]
+            if any(math.isinf(x) for x in xyz):
+                raise ValueError(f"{where}: x, y and z must be finite (or NaN / empty for absent)")
+            world.setdefault(frame, np.full((len(JOINT_NAMES), 3), np.nan))[j] = xyz
     out = {}
     for frame in sorted(uv):
-        k = Keypoints(uv[frame], np.maximum(conf[frame], 0.0))
+        k = Keypoints(uv[frame], np.maximum(conf[frame], 0.0),
+                      world.get(frame, np.full((len(JOINT_NAMES), 3), np.nan)) if has_world else None)
         if k.present.any():
             out[frame] = k
     return out
@@ -271,13 +302,20 @@ def _text(frames: Mapping[int, Keypoints], header: bool) -> str:
     """The keypoint file's lines of ``frames`` (present joints only, 17 significant digits)."""
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
+    with_world = any(k.world is not None for k in frames.values())
     if header:
-        writer.writerow(KEYPOINT_COLUMNS)
+        writer.writerow(KEYPOINT_WORLD_COLUMNS if with_world else KEYPOINT_COLUMNS)
     for frame in sorted(frames):
-        for name, (u, v, c) in frames[frame].as_mapping().items():
-            writer.writerow([int(frame), name, repr(u), repr(v), repr(c)])
+        keypoints = frames[frame]
+        for name, (u, v, c) in keypoints.as_mapping().items():
+            row = [int(frame), name, repr(u), repr(v), repr(c)]
+            if with_world:
+                xyz = np.full(3, np.nan) if keypoints.world is None else keypoints.world[_JOINT[name]]
+                row += ["" if math.isnan(x) else repr(float(x)) for x in xyz]
+            writer.writerow(row)
     return buf.getvalue()
 
 
-__all__ = ["KEYPOINT_COLUMNS", "KeypointFile", "KeypointSource", "Keypoints", "append_keypoints", "parse_keypoints",
+__all__ = ["KEYPOINT_COLUMNS", "KEYPOINT_WORLD_COLUMNS", "KeypointFile", "KeypointSource", "Keypoints",
+           "append_keypoints", "parse_keypoints",
            "read_keypoints", "write_keypoints"]

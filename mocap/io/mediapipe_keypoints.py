@@ -41,6 +41,7 @@ from types import MappingProxyType
 
 import numpy as np
 
+from mocap.body.skeleton import JOINT_NAMES
 from mocap.io.keypoints import Keypoints
 
 #: MediaPipe Pose landmark indices averaged into each joint (absent joints have none).
@@ -164,7 +165,8 @@ class MediaPipeKeypoints:
         Returns
         -------
         Keypoints
-            Input pixels; empty when no person was found.
+            Input pixels; empty when no person was found. Their ``world`` holds MediaPipe's
+            world joints (:func:`world_joints`; all NaN when no person was found).
         """
         if image is None or image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
             raise ValueError(f"MediaPipe needs an RGB uint8 frame (H, W, 3), got "
@@ -173,15 +175,22 @@ class MediaPipeKeypoints:
         started = time.perf_counter()
         result = self._pose.process(np.ascontiguousarray(image))
         self.milliseconds.append(1e3 * (time.perf_counter() - started))
+        none = np.full((len(JOINT_NAMES), 3), np.nan)     # the world columns: none this frame
         if result.pose_landmarks is None:
-            return Keypoints.empty()
+            empty = Keypoints.empty()
+            return Keypoints(empty.uv, empty.confidence, none)
         landmarks = result.pose_landmarks.landmark
         joints = {}
         for name, indices in MEDIAPIPE_LANDMARKS.items():
             points = np.array([(landmarks[i].x * width, landmarks[i].y * height) for i in indices])
             confidence = min(float(np.clip(landmarks[i].visibility, 0.0, 1.0)) for i in indices)
             joints[name] = (*points.mean(axis=0), confidence)
-        return Keypoints.from_mapping(joints)
+        flat = Keypoints.from_mapping(joints)
+        if result.pose_world_landmarks is None:
+            return Keypoints(flat.uv, flat.confidence, none)
+        world = result.pose_world_landmarks.landmark
+        xyz, _ = world_joints([(p.x, p.y, p.z) for p in world], [p.visibility for p in world])
+        return Keypoints(flat.uv, flat.confidence, xyz)
 
     def close(self) -> None:
         """Release MediaPipe's graph."""

@@ -128,6 +128,15 @@ class TrackerConfig(JsonConfig):
         every candidate of a frame, tracked or proposed, pays it. 0.5 was the best of 0 / 0.2 / 0.5 / 1.5 on seed 0; on the unseen seed 23
         with oracle keypoints it took the tracker from 78 to 71 mm median and from 19.9 % to 16.5 %
         of frames over 100 mm (the lifter's proposals alone; docs/research-log.md, issue 29).
+    world_weight : float
+        When the keypoints carry the detector's own 3D (MediaPipe's world landmarks,
+        :attr:`mocap.io.keypoints.Keypoints.world`): score per nat of the distance of a candidate's
+        arms from that 3D placed onto the body (:mod:`mocap.track.world`); 0: off. Without such
+        keypoints it changes nothing.
+    lifter_file : str or None
+        The lifter's file (:meth:`mocap.track.lifter.Lifter.load`); None: the shipped one. An
+        experiment's lifter trained without a subject is measured on that subject this way
+        (``experiments.peers --only cmu``); read at the first frame that is lifted.
     prior_weight : float
         Score per nat of the pose prior's negative log-density (:mod:`mocap.body.prior`); 0: off.
     edge_weight : float
@@ -172,6 +181,8 @@ class TrackerConfig(JsonConfig):
     offline: bool = False
     keypoint_weight: float = 2.0
     lifter_weight: float = 0.5
+    lifter_file: str | None = None
+    world_weight: float = 0.5
     prior_weight: float = 0.05
     edge_weight: float = 2.0
     motion_weight: float = 1.0
@@ -195,6 +206,8 @@ class TrackerConfig(JsonConfig):
         for name in ("recovery", "hand_reacquisition", "jumps", "offline", "gradient_step"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
+        if self.lifter_file is not None and (not isinstance(self.lifter_file, str) or not self.lifter_file):
+            raise ValueError(f"lifter_file must be a file name or None, got {self.lifter_file!r}")
         split_budget(self.evaluations, self.split)          # validates the split
         if self.edge_start not in EDGE_STARTS:
             raise ValueError(f"edge_start must be one of {EDGE_STARTS}, got {self.edge_start!r}")
@@ -203,7 +216,7 @@ class TrackerConfig(JsonConfig):
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be a finite positive number, got {v!r}")
         for name in ("ftol", "keypoint_weight", "lifter_weight", "prior_weight", "edge_weight", "motion_weight",
-                     "silhouette_edge_weight", "silhouette_prior_weight", "silhouette_motion_weight"):
+                     "silhouette_edge_weight", "silhouette_prior_weight", "silhouette_motion_weight", "world_weight"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise ValueError(f"{name} must be finite and non-negative, got {v!r}")
@@ -220,7 +233,8 @@ class TrackerConfig(JsonConfig):
             unknown names raise TypeError.
         """
         return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0, gradient_step=False,
-                           prior_weight=0.0, keypoint_weight=0.0, lifter_weight=0.0, silhouette_prior_weight=0.0),
+                           prior_weight=0.0, keypoint_weight=0.0, lifter_weight=0.0, silhouette_prior_weight=0.0,
+                           world_weight=0.0),
                        **changes)
 
     @property

@@ -20,6 +20,7 @@ Two kinds feed the beam (:class:`mocap.track.Tracker`):
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Protocol
 
 import numpy as np
@@ -237,20 +238,23 @@ class LifterSource:
     Parameters
     ----------
     lifter : Lifter, optional
-        The network (default: the shipped one, :meth:`Lifter.load`, loaded at the first frame
-        that is lifted; so a tracker that never sees keypoints never reads the file).
+        The network (default: :meth:`Lifter.load` of ``path``, loaded at the first frame that is
+        lifted; so a tracker that never sees keypoints never reads the file).
+    path : str or Path, optional
+        The lifter file read when ``lifter`` is not given (default: the shipped one).
     """
 
     origin: str = "lifter"
 
-    def __init__(self, lifter: Lifter | None = None) -> None:
+    def __init__(self, lifter: Lifter | None = None, path: str | Path | None = None) -> None:
         self._lifter = lifter
+        self._path = path
 
     @property
     def lifter(self) -> Lifter:
-        """The network (the shipped one is loaded here at first use)."""
+        """The network (its file, by default the shipped one, is read here at first use)."""
         if self._lifter is None:
-            self._lifter = Lifter.load()
+            self._lifter = Lifter.load(self._path)
         return self._lifter
 
     def lift(self, keypoints, camera: Camera, model: BodyModel) -> LiftedHypotheses | None:

@@ -99,3 +99,36 @@ def test_keypoints_reject_bad_values():
         Keypoints(np.zeros((len(JOINT_NAMES), 2)), np.full(len(JOINT_NAMES), 2.0))
     with pytest.raises(ValueError, match="unknown joint"):
         Keypoints.from_mapping({"nose": (1.0, 2.0, 1.0)})
+
+
+def test_a_file_with_the_detectors_3d_reads_back_exactly(tmp_path):
+    """``x,y,z`` columns (MediaPipe's world joints) round-trip bit for bit, absent ones stay NaN,
+    and a file without them reads as keypoints without 3D."""
+    from mocap.io.keypoints import KEYPOINT_WORLD_COLUMNS, Keypoints, append_keypoints, read_keypoints, write_keypoints
+
+    rng = np.random.default_rng(1)
+    uv = rng.uniform(0, 100, (10, 2))
+    uv[1] = np.nan                                            # the neck: absent in 2D, so in 3D too
+    world = rng.normal(0, 0.3, (10, 3))
+    world[4] = np.nan                                         # a joint with 2D but no 3D
+    k = Keypoints(uv, np.where(np.isnan(uv[:, 0]), 0.0, 0.7), world)
+    assert np.isnan(k.world[1]).all() and np.isnan(k.world[4]).all()
+    path = tmp_path / "k.csv"
+    write_keypoints(path, {3: k, 5: Keypoints(uv, np.full(10, 0.5))})
+    assert path.read_text().splitlines()[0] == ",".join(KEYPOINT_WORLD_COLUMNS)
+    back = read_keypoints(path)
+    np.testing.assert_array_equal(back[3].world, k.world)
+    np.testing.assert_array_equal(back[3].uv, k.uv)
+    assert np.isnan(back[5].world).all()                      # a frame given without 3D: none
+    np.testing.assert_array_equal(back[3].scaled(2.0, 2.0).world, k.world)     # 3D is not in pixels
+    journal = tmp_path / "j.csv"
+    append_keypoints(journal, 0, k)
+    append_keypoints(journal, 1, k)
+    np.testing.assert_array_equal(read_keypoints(journal)[1].world, k.world)
+    plain = tmp_path / "plain.csv"
+    write_keypoints(plain, {0: Keypoints(uv, np.full(10, 0.5))})
+    assert read_keypoints(plain)[0].world is None
+    bad = tmp_path / "bad.csv"
+    bad.write_text(",".join(KEYPOINT_WORLD_COLUMNS) + "\n0,head,1,2,0.5,0.1,inf,0.3\n")
+    with pytest.raises(ValueError, match="line 2"):
+        read_keypoints(bad)

@@ -57,6 +57,14 @@ def test_mediapipe_finds_the_visible_joints_of_a_real_clip(shared_data, mediapip
         assert np.hypot(found[name][0] - u, found[name][1] - v) < TOLERANCE_PX, name
     assert "neck" not in found and len(source.milliseconds) == 31
     assert k.uv.shape == (len(JOINT_NAMES), 2)
+    # its 3D (world landmarks) on the camera's axes: the person faces the camera, so their right
+    # shoulder is left of their left one (x right), the head above the shoulders (y down), the
+    # raised right wrist above the hanging left one; metres (shoulders 0.25-0.5 m apart)
+    w = {name: k.world[JOINT_NAMES.index(name)] for name in ANNOTATED}
+    assert w["r_shoulder"][0] < w["l_shoulder"][0] and w["head"][1] < min(w["r_shoulder"][1], w["l_shoulder"][1])
+    assert w["r_wrist"][1] < w["l_wrist"][1]
+    assert 0.25 < np.linalg.norm(w["r_shoulder"] - w["l_shoulder"]) < 0.5
+    assert np.isnan(k.world[JOINT_NAMES.index("neck")]).all()
 
 
 def test_missing_extra_is_one_clear_line(monkeypatch):

@@ -189,3 +189,28 @@ def test_the_score_weights_are_validated():
             TrackerConfig(**{name: -1.0})
         with pytest.raises(ValueError):
             TrackerConfig(**{name: float("nan")})
+
+
+def test_the_tracker_reads_the_lifter_file_its_config_names(lifter, tmp_path):
+    """``lifter_file`` (an experiment's lifter trained without a subject) is the file the tracker
+    lifts with, read at the first frame with keypoints; the lifted hypotheses are that file's."""
+    from dataclasses import replace
+
+    from mocap.track.lifter import Lifter as L
+    other = L(tuple(w * 0.5 for w in lifter.weights))        # a different network: halved weights
+    path = tmp_path / "other.npz"
+    other.save(path)
+    truth = reaching_pose()
+    frames, keypoints = still_clip(truth, 1)
+    config = TrackerConfig(lifter_file=str(path))
+    tracker = Tracker(MODEL, CAMERA, config, truth)
+    tracker.push(0, frames[0], keypoints[0])
+    expect = L.load(path).lift(keypoints[0].uv, np.ones(10, bool), CAMERA, MODEL).poses
+    np.testing.assert_array_equal(tracker.lifting.lift(keypoints[0], CAMERA, MODEL).poses, expect)
+    assert not np.allclose(expect, lifter.lift(keypoints[0].uv, np.ones(10, bool), CAMERA, MODEL).poses)
+    assert TrackerConfig.from_dict(config.to_dict()) == config               # saved in run.json and read back
+    missing = Tracker(MODEL, CAMERA, replace(config, lifter_file=str(tmp_path / "none.npz")), truth)
+    with pytest.raises(FileNotFoundError):
+        missing.push(0, frames[0], keypoints[0])
+    with pytest.raises(ValueError, match="lifter_file"):
+        TrackerConfig(lifter_file="")
