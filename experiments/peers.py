@@ -45,7 +45,6 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -132,18 +131,15 @@ def run_mediapipe(frames, upscale: int = 1) -> dict:
 
 
 def _track(video: Path, out: Path, *, overlay: bool, keypoints: str = "none",
-           lifter: Path | None = None, world_weight: float | None = None) -> "PoseTable":  # noqa: F821
+           lifter: Path | None = None) -> "PoseTable":  # noqa: F821
     """``python -m mocap track VIDEO --keypoints none`` with no other option (``--no-overlay``
     unless ``overlay``; ``--keypoints`` when given), through the library entry point the CLI calls;
-    ``lifter``: the tracker's lifter file (None: the shipped lifter); ``world_weight``: the
-    tracker's weight of MediaPipe's 3D (None: the default); default settings otherwise."""
+    ``lifter``: the tracker's lifter file (None: the shipped lifter); default settings otherwise."""
     from mocap.io.pose_table import PoseTable
     from mocap.track.config import TrackerConfig
     import mocap.run
 
     tracker = TrackerConfig(lifter_file=None if lifter is None else str(lifter))
-    if world_weight is not None:
-        tracker = replace(tracker, world_weight=float(world_weight))
     mocap.run.track(video, out, mocap.run.OwnVideoOptions(overlay=overlay, overwrite=True, keypoints=keypoints,
                                                           tracker=tracker))
     return PoseTable.read(out / POSES_CSV)
@@ -187,7 +183,7 @@ def within_quarter(ours: np.ndarray, ref: np.ndarray) -> dict:
             "frames_all_within_quarter": float(close[found].all(axis=1).mean()) if found.any() else float("nan")}
 
 
-def synthetic_row(name: str, work: Path, seed: int, world_weight: float | None = None) -> dict:
+def synthetic_row(name: str, work: Path, seed: int) -> dict:
     from mocap.io.pose_table import PoseTable
     from mocap.io.video import iter_frames
     from mocap.synth import generate_sequence
@@ -196,10 +192,9 @@ def synthetic_row(name: str, work: Path, seed: int, world_weight: float | None =
     table = _track(seq, work / f"{name}-run", overlay=False)
     truth = PoseTable.read(seq / "ground_truth.csv").joints[:, arm_indices()]
     mp = run_mediapipe(list(iter_frames(seq / "frames")), upscale=4)
-    np.savez(work / f"{name}-mediapipe.npz", **mp)          # for later analyses (experiments.mediapipe_3d)
+    np.savez(work / f"{name}-mediapipe.npz", **mp)          # for later analyses
     keyed = _track(seq, work / f"{name}-keypoints-run", overlay=False,
-                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv", mp)),
-                   world_weight=world_weight)
+                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv", mp)))
     return {"clip": name, "frames": len(table),
             "ours_pa_mpjpe_mm": arm_pa_mpjpe(table.joints[:, arm_indices()], truth),
             "ours_keypoints_pa_mpjpe_mm": arm_pa_mpjpe(keyed.joints[:, arm_indices()], truth),
@@ -209,7 +204,7 @@ def synthetic_row(name: str, work: Path, seed: int, world_weight: float | None =
 
 
 def cmu_row(trial: str, scene: str, work: Path, *, train: Path, seed: int, frames: int,
-            lifter: Path | None, world_weight: float | None = None) -> dict:
+            lifter: Path | None) -> dict:
     """One CMU-driven clip: ``trial``'s motion (``train/cmu_<trial>.amc``) rendered in ``scene``'s
     setting, tracked with MediaPipe's 2D arm joints as keypoints and the lifter file ``lifter``;
     arm PA-MPJPE of ours and of MediaPipe's 3D. MediaPipe's landmarks are kept in
@@ -224,8 +219,7 @@ def cmu_row(trial: str, scene: str, work: Path, *, train: Path, seed: int, frame
     mp = run_mediapipe(list(iter_frames(seq / "frames")), upscale=4)
     np.savez(work / f"{trial}-mediapipe.npz", **mp)
     keyed = _track(seq, work / f"{name}-keypoints-run", overlay=False,
-                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv", mp)), lifter=lifter,
-                   world_weight=world_weight)
+                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv", mp)), lifter=lifter)
     ours, theirs = arm_pa_mpjpe(keyed.joints[:, arm_indices()], truth), arm_pa_mpjpe(mp["world"], truth)
     return {"clip": trial, "scene": scene, "frames": len(keyed), "lifter": None if lifter is None else lifter.name,
             "ours_keypoints_pa_mpjpe_mm": ours, "mediapipe_pa_mpjpe_mm": theirs, "ratio": ours / theirs,
@@ -234,7 +228,7 @@ def cmu_row(trial: str, scene: str, work: Path, *, train: Path, seed: int, frame
             "mediapipe_ms": float(np.median(mp["ms"][1:]))}
 
 
-def real_row(video: Path, work: Path, out: Path, world_weight: float | None = None) -> dict:
+def real_row(video: Path, work: Path, out: Path) -> dict:
     from mocap.io.video import iter_frames
 
     table = _track(video, work / f"{video.stem}-run", overlay=True)
@@ -253,8 +247,7 @@ def real_row(video: Path, work: Path, out: Path, world_weight: float | None = No
     per_joint = {j: pck_2d(ours[:, [k]], ref[:, [k]], width) for k, j in enumerate(ARM_JOINTS)}
     run = json.loads((work / f"{video.stem}-run" / RUN_JSON).read_text())
     _still(frames[n // 2], ours[n // 2], ref[n // 2], out / f"still_{video.stem}.png")
-    keyed = _track(video, work / f"{video.stem}-keypoints-run", overlay=False, keypoints="mediapipe",
-                   world_weight=world_weight)
+    keyed = _track(video, work / f"{video.stem}-keypoints-run", overlay=False, keypoints="mediapipe")
     keyed_run = json.loads((work / f"{video.stem}-keypoints-run" / RUN_JSON).read_text())
     found = np.isfinite(ref).all(axis=(1, 2))
     quarter = {f"ours_{k}": v for k, v in within_quarter(ours, ref).items()}
@@ -376,9 +369,6 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--cmu-frames", type=int, default=CMU_FRAMES, help="cmu: frames per clip (25 fps)")
     p.add_argument("--lifter", type=Path, default=None,
                    help="cmu: the lifter file, trained without --subject (default: the shipped one, which saw it)")
-    p.add_argument("--world-weight", type=float, default=None,
-                   help="the keypoint runs' weight of MediaPipe's 3D (TrackerConfig.world_weight; "
-                   "default: its default)")
     args = p.parse_args(argv)
     try:
         import mediapipe  # noqa: F401
@@ -400,12 +390,12 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         train = args.train or args.data / "mocap" / "train"
         results["cmu"] = [cmu_row(t, CMU_SCENES[i % len(CMU_SCENES)], work, train=train, seed=args.seed,
-                                  frames=args.cmu_frames, lifter=args.lifter, world_weight=args.world_weight)
+                                  frames=args.cmu_frames, lifter=args.lifter)
                           for i, t in enumerate(trials)]
     if args.only in (None, "synthetic"):
-        results["synthetic"] = [synthetic_row(name, work, args.seed, args.world_weight) for name in SYNTHETIC]
+        results["synthetic"] = [synthetic_row(name, work, args.seed) for name in SYNTHETIC]
     if args.only in (None, "real"):
-        results["real"] = [real_row(args.data / "video" / clip, work, args.out, args.world_weight) for clip in REAL]
+        results["real"] = [real_row(args.data / "video" / clip, work, args.out) for clip in REAL]
     (args.out / "results.json").write_text(json.dumps(results, indent=2))
     table = markdown(results)
     (args.out / "peers.md").write_text(table)

@@ -128,11 +128,6 @@ class TrackerConfig(JsonConfig):
         every candidate of a frame, tracked or proposed, pays it. 0.5 was the best of 0 / 0.2 / 0.5 / 1.5 on seed 0; on the unseen seed 23
         with oracle keypoints it took the tracker from 78 to 71 mm median and from 19.9 % to 16.5 %
         of frames over 100 mm (the lifter's proposals alone; docs/research-log.md, issue 29).
-    world_weight : float
-        When the keypoints carry the detector's own 3D (MediaPipe's world landmarks,
-        :attr:`mocap.io.keypoints.Keypoints.world`): score per nat of the distance of a candidate's
-        arms from that 3D placed onto the body (:mod:`mocap.track.world`); 0: off. Without such
-        keypoints it changes nothing.
     lifter_file : str or None
         The lifter's file (:meth:`mocap.track.lifter.Lifter.load`); None: the shipped one. An
         experiment's lifter trained without a subject is measured on that subject this way
@@ -182,7 +177,6 @@ class TrackerConfig(JsonConfig):
     keypoint_weight: float = 2.0
     lifter_weight: float = 0.5
     lifter_file: str | None = None
-    world_weight: float = 0.5
     prior_weight: float = 0.05
     edge_weight: float = 2.0
     motion_weight: float = 1.0
@@ -216,7 +210,7 @@ class TrackerConfig(JsonConfig):
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be a finite positive number, got {v!r}")
         for name in ("ftol", "keypoint_weight", "lifter_weight", "prior_weight", "edge_weight", "motion_weight",
-                     "silhouette_edge_weight", "silhouette_prior_weight", "silhouette_motion_weight", "world_weight"):
+                     "silhouette_edge_weight", "silhouette_prior_weight", "silhouette_motion_weight"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise ValueError(f"{name} must be finite and non-negative, got {v!r}")
@@ -233,8 +227,7 @@ class TrackerConfig(JsonConfig):
             unknown names raise TypeError.
         """
         return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0, gradient_step=False,
-                           prior_weight=0.0, keypoint_weight=0.0, lifter_weight=0.0, silhouette_prior_weight=0.0,
-                           world_weight=0.0),
+                           prior_weight=0.0, keypoint_weight=0.0, lifter_weight=0.0, silhouette_prior_weight=0.0),
                        **changes)
 
     @property

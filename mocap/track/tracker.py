@@ -10,9 +10,7 @@ keypoints, the learned lifter's whole-body hypotheses), each refined by a short 
 candidate gets a **unary score** (``REGION_WEIGHT * F + edge_weight * edge distance +
 prior_weight * pose-prior energy``; on frames with 2D keypoints plus ``keypoint_weight *
 keypoint distance``, which every registration of the frame then also adds, and ``lifter_weight``
-times the lifter's negative log-density at the candidate's joints; where the keypoints carry
-MediaPipe's 3D, ``world_weight`` times the distance of the candidate's arms from it,
-:mod:`mocap.track.world`); between consecutive frames a **motion term**
+times the lifter's negative log-density at the candidate's joints); between consecutive frames a **motion term**
 (``motion_weight`` times half the mean squared joint displacement over ``MOTION_SIGMA_M**2``, capped) links
 them. Each frame's candidates and their terms before the weights stay readable in :attr:`Tracker.scored`
 (:class:`ScoredCandidate`; ``experiments.fit_score`` fits the weights on them). The forward
@@ -49,7 +47,6 @@ from mocap.track.config import (JUMPS_REFINED, MERGE_DISTANCE_M, MOTION_CAP, MOT
                                 RECOVERY_STEP_SCALE, REGION_WEIGHT, TrackerConfig)
 from mocap.track.decode import backtrack, viterbi_step
 from mocap.track.lifter import LiftedHypotheses, Lifter
-from mocap.track.world import PlacedWorld, place_world
 from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, jump_proposals, reach_proposals,
                                    unexplained_hands)
 from mocap.track.registration import Registration, register
@@ -91,8 +88,7 @@ class ScoredCandidate:
 
     What :attr:`Tracker.scored` holds for the frame just tracked (``experiments.fit_score``
     records it to fit the weights). The unary score is ``REGION_WEIGHT * region + edge_weight *
-    edge + keypoint_weight * keypoint + prior_weight * prior + lifter_weight * lifter + world_weight *
-    world`` (the terms
+    edge + keypoint_weight * keypoint + prior_weight * prior + lifter_weight * lifter`` (the terms
     that are NaN left out), and the motion term from the previous frame's hypothesis ``k`` is
     ``motion_weight * motion[k]``.
 
@@ -114,9 +110,6 @@ class ScoredCandidate:
         The pose prior's energy; NaN without a prior.
     lifter : float, nats
         The lifter term (:meth:`~mocap.track.proposals.LifterSource.energy`); NaN on frames not lifted.
-    world : float, nats
-        The world term (:mod:`mocap.track.world`): the distance of the arms from the detector's 3D
-        placed onto the body; NaN where the keypoints carry no 3D or ``world_weight`` is 0.
     motion : ndarray, shape (K_prev,), float64
         The motion term (truncated quadratic, :data:`~mocap.track.config.MOTION_SIGMA_M`,
         :data:`~mocap.track.config.MOTION_CAP`) from each hypothesis of the previous frame's beam.
@@ -132,7 +125,6 @@ class ScoredCandidate:
     keypoint: float
     prior: float
     lifter: float
-    world: float
     motion: np.ndarray
     unary: float
 
@@ -153,7 +145,6 @@ class _Terms:
     keypoint: float
     prior: float
     lifter: float
-    world: float
 
 
 @dataclass
@@ -223,7 +214,6 @@ class Tracker:
         self.scored: list[ScoredCandidate] = []
         #: The last frame's lifted hypotheses (None when it was not lifted).
         self.lifted: LiftedHypotheses | None = None
-        self._world: PlacedWorld | None = None
         q = clamp_to_limits(check_pose(initial_pose, name="initial pose"))
         start = _Hypothesis(q, model.joint_positions(q), math.nan, math.nan, math.nan, False, "initial",
                             0.0, 0, 0)
@@ -309,8 +299,6 @@ class Tracker:
         fit = functools.partial(register, region_cost, edge_cost, config=cfg, keypoint_cost=keypoint_cost)
         lifted = self.lifting.lift(keypoints, self.camera, self.model) if self.lifting is not None else None
         weights = self._weights(keypoint_cost is not None or lifted is not None)
-        #: The frame's detector 3D placed onto the body (the score's world term), or None.
-        self._world = place_world(keypoints, self.model, self._beam[0].pose) if cfg.world_weight > 0 else None
         candidates: list[tuple[Registration, str]] = []
         evaluations = 0
         t1 = time.perf_counter()
@@ -350,8 +338,7 @@ class Tracker:
         self.candidates = [(h.origin, h.pose) for h in hypotheses]
         motion = self._motion(self._beam, hypotheses)
         self.scored = [ScoredCandidate(origin=h.origin, pose=h.pose, joints=h.joints, region=t.region, edge=t.edge,
-                                       keypoint=t.keypoint, prior=t.prior, lifter=t.lifter, world=t.world,
-                                       motion=motion[:, j],
+                                       keypoint=t.keypoint, prior=t.prior, lifter=t.lifter, motion=motion[:, j],
                                        unary=h.unary) for j, (h, t) in enumerate(zip(hypotheses, terms))]
         self.lifted = lifted
         transition = motion if weights.motion == 1.0 else weights.motion * motion
@@ -377,8 +364,7 @@ class Tracker:
         cfg = self.config
         prior = self.prior.energy(pose) if self.prior is not None and weights.prior > 0 else math.nan
         lifter = self.lifting.energy(lifted, joints) if lifted is not None and cfg.lifter_weight > 0 else math.nan
-        world = self._world.energy(joints) if self._world is not None else math.nan
-        return _Terms(region, edge, keypoint, prior, lifter, world)
+        return _Terms(region, edge, keypoint, prior, lifter)
 
     def _weighted(self, t: _Terms, weights: _Weights) -> float:
         """The unary score of a candidate's terms (see the module)."""
@@ -390,8 +376,6 @@ class Tracker:
             unary += weights.prior * t.prior
         if not math.isnan(t.lifter):
             unary += cfg.lifter_weight * t.lifter
-        if not math.isnan(t.world):
-            unary += cfg.world_weight * t.world
         return float(unary)
 
     def _unary(self, region: float, edge: float, keypoint: float, pose: np.ndarray, joints: np.ndarray,

@@ -33,7 +33,7 @@ def test_the_cmu_group_renders_the_held_out_subjects_trial_and_passes_the_lifter
         return {"uv": np.zeros((n, 6, 2)), "world": world, "ms": np.ones(n),
                 "world33": np.zeros((n, 33, 3)), "visibility33": np.ones((n, 33))}
 
-    def fake_track(video, out, *, overlay, keypoints="none", lifter=None, world_weight=None):
+    def fake_track(video, out, *, overlay, keypoints="none", lifter=None):
         seen["sequence"], seen["lifter"], seen["keypoints"] = video, lifter, keypoints
         table = PoseTable.read(video / "ground_truth.csv")
         table.extra["ms_total"] = np.ones(len(table))
@@ -84,6 +84,3 @@ def test_track_hands_the_lifter_file_to_the_tracker_config(tmp_path, monkeypatch
             peers._track(tmp_path, tmp_path / "run", overlay=False, keypoints="none", lifter=lifter)
         assert got["options"].tracker == TrackerConfig(lifter_file=expect)
         assert got["options"].keypoints == "none"
-    with pytest.raises(RuntimeError, match="stop"):
-        peers._track(tmp_path, tmp_path / "run", overlay=False, world_weight=0.0)
-    assert got["options"].tracker == TrackerConfig(world_weight=0.0)
