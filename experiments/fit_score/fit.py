@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -175,6 +176,10 @@ def run(args, sequences: list[str], seeds: list[int]) -> int:
     print(_choice_line("fitted on the rest, held-out frames", choose(held_c, w_fit)))
     print(_choice_line("default, all frames", choose(every, defaults)))
     print(_choice_line("fitted on all, all frames", choose(every, w_all)))
+    if not (w_fit[0] > 0 and w_all[0] > 0):
+        print("error: F's weight was fitted to 0, so the score has no unit in the tracker (too few informative "
+              "frames? record more)", file=sys.stderr)
+        return 2
     print("\n| term | default | fitted on the rest | fitted on all |\n|---|---|---|---|")
     for j, t in enumerate(TERMS):
         note = " (never applied: the default kept)" if unseen[j] else ""

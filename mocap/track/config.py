@@ -15,7 +15,8 @@ import numpy as np
 
 from mocap.body.pose import N_PARAMETERS
 from mocap.config import JsonConfig
-from mocap.track.score import MOTION_CAP, MOTION_SIGMA_M, REGION_WEIGHT, WEIGHT_FIELDS  # noqa: F401 (re-exported)
+from mocap.track.score import BEYOND_PAPER_FIELDS, WEIGHT_FIELDS
+from mocap.track.score import MOTION_CAP, MOTION_SIGMA_M, REGION_WEIGHT  # noqa: F401 (re-exported: the score's constants)
 
 #: Total budget below which the ``auto`` policy gives every evaluation to the region step.
 AUTO_SPLIT_THRESHOLD = 200
@@ -207,7 +208,8 @@ class TrackerConfig(JsonConfig):
     @classmethod
     def paper(cls, **changes) -> "TrackerConfig":
         """The paper's method: one hypothesis, no recovery, re-acquisition, jumps, proposals, prior
-        or keypoints.
+        or keypoints (the weights of the score's terms beyond the paper,
+        :data:`~mocap.track.score.BEYOND_PAPER_FIELDS`, at 0).
 
         Parameters
         ----------
@@ -216,7 +218,7 @@ class TrackerConfig(JsonConfig):
             unknown names raise TypeError.
         """
         return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0, gradient_step=False,
-                           prior_weight=0.0, keypoint_weight=0.0, lifter_weight=0.0),
+                           **{name: 0.0 for name in BEYOND_PAPER_FIELDS}),
                        **changes)
 
     @property

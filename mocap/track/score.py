@@ -48,21 +48,25 @@ class Term:
         The unit of its value.
     pairwise : bool
         Between consecutive frames' hypotheses (the motion term), not of one candidate.
+    beyond_paper : bool
+        Added by this toolkit: :meth:`~mocap.track.config.TrackerConfig.paper` sets its weight to
+        0 (the motion term is kept: with the paper's single hypothesis it changes nothing).
     """
 
     name: str
     weight_field: str | None
     unit: str
     pairwise: bool = False
+    beyond_paper: bool = False
 
 
 #: The score's terms, in the order of every weight vector and feature column.
 TERMS: tuple[Term, ...] = (
     Term("region", None, "F, in [0, 1]"),                   # the region residual (eq. 1)
     Term("edge", "edge_weight", "pixels"),                  # mean edge distance (eq. 2)
-    Term("keypoint", "keypoint_weight", "pixels"),          # keypoint distance D_k
-    Term("prior", "prior_weight", "nats"),                  # the pose prior's energy
-    Term("lifter", "lifter_weight", "nats"),                # the lifter's energy at the joints
+    Term("keypoint", "keypoint_weight", "pixels", beyond_paper=True),     # keypoint distance D_k
+    Term("prior", "prior_weight", "nats", beyond_paper=True),             # the pose prior's energy
+    Term("lifter", "lifter_weight", "nats", beyond_paper=True),           # the lifter's energy at the joints
     Term("motion", "motion_weight", "truncated quadratic", pairwise=True),
 )
 #: The terms' names, :data:`TERMS` order.
@@ -73,6 +77,8 @@ UNARY_TERMS: tuple[Term, ...] = tuple(t for t in TERMS if not t.pairwise)
 WEIGHT_FIELDS: tuple[str, ...] = tuple(t.weight_field for t in TERMS if t.weight_field is not None)
 #: Column of the motion term.
 MOTION = TERM_NAMES.index("motion")
+#: The config's fields of the weights the paper's method sets to 0 (the terms beyond the paper).
+BEYOND_PAPER_FIELDS: tuple[str, ...] = tuple(t.weight_field for t in TERMS if t.beyond_paper)
 
 if TERMS[: len(UNARY_TERMS)] != UNARY_TERMS:          # the unary terms' vector is a prefix of the weights'
     raise ImportError("the motion term must come after every unary term")

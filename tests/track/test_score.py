@@ -82,3 +82,11 @@ def test_the_motion_term_is_half_the_mean_squared_displacement_truncated():
     assert motion_term(a, b, cap=1e9)[1, 0] == pytest.approx(0.5 * 3 * 0.4 ** 2 / MOTION_SIGMA_M ** 2)
     with pytest.raises(ValueError):
         motion_term(a, b[:, :5])
+
+
+def test_the_papers_method_switches_off_the_terms_beyond_the_paper():
+    paper = TrackerConfig.paper()
+    assert (paper.keypoint_weight, paper.prior_weight, paper.lifter_weight) == (0.0, 0.0, 0.0)
+    assert (paper.edge_weight, paper.motion_weight) == (TrackerConfig().edge_weight, TrackerConfig().motion_weight)
+    assert paper == TrackerConfig(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
+                                  gradient_step=False, prior_weight=0.0, keypoint_weight=0.0, lifter_weight=0.0)
