@@ -36,8 +36,8 @@ from experiments.fit_score.candidates import (K_SAVED, MIN_SPREAD_MM, TERMS, Can
 from experiments.fit_score.decode import decode_offline
 from experiments.fit_score.decompose import Remains, decompose, score_miss_frames
 from experiments.fit_score.depth import smooth_depth
-from experiments.fit_score.fit import (RIDGE, TEMPERATURE_MM, _frames_held_out, fit_weights, in_tracker_units,
-                                       keep_unseen, tracker_config)
+from experiments.fit_score.fit import (RIDGE, TEMPERATURE_MM, fit_weights, in_tracker_units, keep_unseen,
+                                       tracker_config)
 from experiments.fit_score.record import record_sequence
 
 __all__ = ["K_SAVED", "MIN_SPREAD_MM", "RIDGE", "TEMPERATURE_MM", "TERMS", "Candidates", "Choice", "Remains",

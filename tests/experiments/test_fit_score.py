@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 from experiments.fit_score import (TERMS, Candidates, choose, default_weights, fit_weights, in_tracker_units,
-                                   informative, tracker_config, _frames_held_out)
+                                   informative, tracker_config)
+from experiments.fit_score.fit import _frames_held_out
 from mocap.track import TrackerConfig
 from mocap.track.score import REGION_WEIGHT
 
