@@ -21,7 +21,7 @@ import collections
 import json
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -44,6 +44,7 @@ from mocap.run import files
 from mocap.run.colours import learn_colours
 from mocap.run.journal import Journal, People, Resumed, previous_run
 from mocap.run.outputs import FinishedRun, RunSummary, finish_run, frame_row
+from mocap.run.options import OwnVideoOptions, RunChoices
 from mocap.run.overlay import OverlayGeometry, OverlayWriter, redraw_overlay
 from mocap.run.setup import RunSetup
 from mocap.track import FrameResult, Tracker, TrackerConfig
@@ -58,57 +59,91 @@ READ_AHEAD = 4
 
 @dataclass(frozen=True, eq=False, kw_only=True)
 class RunParams:
-    """How to run (:func:`track_frames`).
+    """How to run (:func:`track_frames`): the :class:`~mocap.run.options.OwnVideoOptions` and
+    :class:`~mocap.run.options.RunChoices` the run was made from, as they are (the properties
+    below read them), and what the input or the caller adds.
 
     Attributes
     ----------
-    config : TrackerConfig
+    options : OwnVideoOptions
+        The tracker's configuration (``tracker``), ``start``, ``max_frames``, ``overwrite``,
+        ``overlay``, ``show``, ``allow_damaged``.
+    choices : RunChoices or None
+        What the options mean here (the keypoint source); None: :meth:`RunChoices.of`
+        ``options``.
     ground_truth : str, Path or None
-        ``ground_truth.csv``: adds the ``metrics`` object to ``run.json``.
+        ``ground_truth.csv``: adds the ``metrics`` object to ``run.json`` (the options' or a
+        sequence folder's: :class:`mocap.run.tracking.RunInput`).
     fps : float, frames per second
         Frame rate of the output video and BVH.
-    max_frames : int or None
-        Track only the first ``max_frames`` frames (from ``start_frame``).
-    overwrite : bool
-        Start afresh even if the folder holds a run.
     progress : bool
         Show a progress bar.
-    write_overlay : bool
-        Also write ``overlay.mp4``.
-    allow_damaged : bool
-        Track a video whose frames do not all decode (:func:`mocap.io.video_check.check_video`)
-        instead of refusing it; the damaged frame numbers go to ``run.json``.
-    start_frame : int
-        First frame to track (0-based); the calibration's initial pose is the pose there.
-    show : bool
-        Show the overlay live in a window (needs a display).
     newcomer : callable or None
         People change (:class:`mocap.run.person.NewcomerFinder`): once nobody has been in view
         for :data:`mocap.run.journal.PERSON_GONE_FRAMES` frames, it is called with ``(index,
         input-size frame)`` of every third frame that shows someone until it returns a set-up,
         which starts a new segment with a fresh tracker. The same frame must give the same answer.
-    keypoints : KeypointSource or None
-        2D keypoints of each frame (:mod:`mocap.io.keypoints`), asked on the input-size frame
-        and given to the tracker in working pixels.
     detect_ahead : int
         Frames the keypoint source may work ahead on a thread of its own
         (:class:`~mocap.io.keypoint_pipeline.KeypointPipeline`); 0 asks it on the reader thread,
         frame by frame. The outputs are the same either way (timings aside).
     """
 
-    config: TrackerConfig
+    options: OwnVideoOptions = field(default_factory=OwnVideoOptions)
+    choices: RunChoices | None = None
     ground_truth: str | Path | None = None
     fps: float = 25.0
-    max_frames: int | None = None
-    overwrite: bool = False
     progress: bool = True
-    write_overlay: bool = True
-    allow_damaged: bool = False
-    start_frame: int = 0
-    show: bool = False
     newcomer: Callable[[int, np.ndarray], RunSetup | None] | None = None
-    keypoints: KeypointSource | None = None
     detect_ahead: int = DETECT_AHEAD
+
+    def __post_init__(self) -> None:
+        if self.choices is None:
+            object.__setattr__(self, "choices", RunChoices.of(self.options))
+
+    @property
+    def config(self) -> TrackerConfig:
+        """``options.tracker``."""
+        return self.options.tracker
+
+    @property
+    def start_frame(self) -> int:
+        """``options.start``: the first frame to track (0-based); the calibration's initial pose
+        is the pose there."""
+        return self.options.start
+
+    @property
+    def max_frames(self) -> int | None:
+        """``options.max_frames``: track only this many frames (from :attr:`start_frame`)."""
+        return self.options.max_frames
+
+    @property
+    def overwrite(self) -> bool:
+        """``options.overwrite``: start afresh even if the folder holds a run."""
+        return self.options.overwrite
+
+    @property
+    def write_overlay(self) -> bool:
+        """``options.overlay``: also write ``overlay.mp4``."""
+        return self.options.overlay
+
+    @property
+    def show(self) -> bool:
+        """``options.show``: show the overlay live in a window (needs a display)."""
+        return self.options.show
+
+    @property
+    def allow_damaged(self) -> bool:
+        """``options.allow_damaged``: track a video whose frames do not all decode
+        (:func:`mocap.io.video_check.check_video`) instead of refusing it; the damaged frame
+        numbers go to ``run.json``."""
+        return self.options.allow_damaged
+
+    @property
+    def keypoints(self) -> KeypointSource | None:
+        """``choices.keypoint_source``: 2D keypoints of each frame (:mod:`mocap.io.keypoints`),
+        asked on the input-size frame and given to the tracker in working pixels."""
+        return self.choices.keypoint_source
 
 
 @dataclass(frozen=True, eq=False)
@@ -315,7 +350,7 @@ def run_settings(frames_in, setup: RunSetup, params: RunParams, resolution: int)
     source = frames_in.name
     source = str(Path(source).resolve()) if Path(source).exists() else source
     camera, background = setup.calibration.camera, setup.background_file
-    settings = {"source": source, "background": str(background.resolve()) if background else None,
+    settings = {"format": journalling.SETTINGS_FORMAT, "source": source, "background": str(background.resolve()) if background else None,
                 "calibration": setup.calibration.to_dict(), "tracker": params.config.to_dict(),
                 "imaging": setup.imaging.to_dict(), "colour_model_from": setup.colour_from,
                 "mesh_resolution": resolution,
@@ -476,7 +511,7 @@ class RunLoop:
         self.emit(self.tracker.finish())
         self.person = Person.of_setup(found, self.resolution)
         self.people.begin(index, self.person.calibration, self.person.colour_model,
-                          None if found.record is None else found.record.to_dict(source=False))
+                          None if found.record is None else found.record.calibration.to_dict(source=False))
         reader.colours = Colours(self.people.segment, self.person.colour_model, self.person.scene)
         self.tracker = Tracker(self.person.model, self.camera, self.config, self.person.calibration.initial_pose)
         if self.overlay is not None:
