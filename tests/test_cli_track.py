@@ -13,6 +13,8 @@ from mocap.io.pose_table import PoseTable
 from mocap.io.video import count_frames
 from mocap.metrics import mpjpe
 
+from tests.conftest import need_mediapipe
+
 #: Mean joint error bound on the short test sequence with the true calibration, millimetres.
 SEQUENCE_MPJPE_BOUND_MM = 110.0
 N_FRAMES = 16
@@ -195,7 +197,7 @@ def test_keypoints_auto_without_the_extra_tracks_as_before_and_says_so(sequence,
 
 @pytest.mark.mediapipe
 def test_keypoints_auto_with_the_extra_uses_mediapipe(sequence, tmp_path, capsys, monkeypatch):
-    pytest.importorskip("mediapipe", reason="the optional extra 'keypoints' (MediaPipe Pose) is not installed")
+    need_mediapipe()
     from mocap.run import advice
 
     monkeypatch.setattr(advice, "MOSTLY_FAILED", -1.0)     # every run ends with its advice

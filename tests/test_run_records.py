@@ -93,3 +93,23 @@ def test_a_run_s_summary_is_what_its_run_json_reads_back_as_and_its_files_are_th
     assert RunSummary.read(out) is None
     (out / files.RUN_JSON).write_text("{")
     assert RunSummary.read(out) is None and RunSummary.read(tmp_path / "nowhere") is None
+
+
+def test_a_folder_of_the_earlier_run_json_layout_is_refused_in_one_line(tmp_path):
+    """A run folder written before ``settings.format`` (``own_video`` repeating the keypoints
+    and the working factor) does not resume: one line says why and what to do."""
+    from mocap.run.journal import Journal, previous_run
+
+    wanted = {"format": SETTINGS_FORMAT, "source": "clip.mp4", "own_video": {"hfov_deg": 60.0}, "keypoints": "none"}
+    earlier = {"source": "clip.mp4", "own_video": {"hfov_deg": 60.0, "working_factor": 4, "keypoints": "none"},
+               "keypoints": "none"}
+    journal = Journal.in_folder(tmp_path)
+    journal.path.write_text("frame\n0\n")
+    (tmp_path / files.RUN_JSON).write_text(json.dumps({"status": "running", "settings": earlier}))
+    with pytest.raises(ValueError) as refused:
+        previous_run(journal, tmp_path / files.RUN_JSON, wanted, overwrite=False)
+    line = str(refused.value)
+    assert "\n" not in line and "holds a run of an earlier mocap" in line and "mocap-run-2" in line
+    assert "--overwrite" in line and journal.path.read_text() == "frame\n0\n"      # nothing removed
+    assert previous_run(journal, tmp_path / files.RUN_JSON, wanted, overwrite=True) is None
+    assert not journal.path.exists()

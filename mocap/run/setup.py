@@ -38,7 +38,6 @@ from mocap.imaging.background import estimate_background, person_against_backgro
 from mocap.imaging.resample import downscale, working_factor
 from mocap.imaging.scene import SceneColours
 from mocap.io.keypoints import KeypointSource
-from mocap.io.video import read_image
 from mocap.render.camera import DEFAULT_HFOV_DEG, Camera
 from mocap.run.accounts import BackgroundAccount, CalibrationAccount, SetupAccount
 from mocap.run.colours import ColourRecipe, learn_colours
