@@ -219,3 +219,11 @@ def test_the_keypoints_extra_installs_mediapipe_where_its_wheel_exists_and_its_t
     assert "mocap[keypoints]" in extras["test"]
     fit, = (Requirement(r) for r in extras["test"] if r.startswith("mocap[fit]"))
     assert fit.marker == Marker("python_version < '3.12'")
+
+
+def test_hung_after_has_its_default_in_the_parser():
+    from mocap.cli import build_parser
+    from mocap.run.many import HUNG_AFTER_S
+
+    assert build_parser().parse_args(["track-many", "clip.mp4", "--out", "o"]).hung_after == HUNG_AFTER_S
+    assert build_parser().parse_args(["track-many", "clip.mp4", "--out", "o", "--hung-after", "5"]).hung_after == 5.0

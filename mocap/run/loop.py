@@ -47,7 +47,7 @@ from mocap.run.outputs import FinishedRun, RunSummary, finish_run, frame_row
 from mocap.run.options import OwnVideoOptions, RunChoices
 from mocap.run.overlay import OverlayGeometry, OverlayWriter, redraw_overlay
 from mocap.run.setup import RunSetup
-from mocap.track import FrameResult, Tracker, TrackerConfig
+from mocap.track import FrameResult, Tracker
 
 __all__ = ["DARK_MEAN", "READ_AHEAD", "RunParams", "track_frames"]
 
@@ -60,14 +60,15 @@ READ_AHEAD = 4
 @dataclass(frozen=True, eq=False, kw_only=True)
 class RunParams:
     """How to run (:func:`track_frames`): the :class:`~mocap.run.options.OwnVideoOptions` and
-    :class:`~mocap.run.options.RunChoices` the run was made from, as they are (the properties
-    below read them), and what the input or the caller adds.
+    :class:`~mocap.run.options.RunChoices` the run was made from, as they are, and what the
+    input or the caller adds.
 
     Attributes
     ----------
     options : OwnVideoOptions
-        The tracker's configuration (``tracker``), ``start``, ``max_frames``, ``overwrite``,
-        ``overlay``, ``show``, ``allow_damaged``.
+        Read as they are: ``tracker``, ``start`` (the calibration's initial pose is the pose
+        there), ``max_frames``, ``overwrite``, ``overlay``, ``show``, ``allow_damaged`` (a
+        damaged video's frame numbers go to ``run.json``).
     choices : RunChoices or None
         What the options mean here (the keypoint source); None: :meth:`RunChoices.of`
         ``options``.
@@ -100,44 +101,6 @@ class RunParams:
     def __post_init__(self) -> None:
         if self.choices is None:
             object.__setattr__(self, "choices", RunChoices.of(self.options))
-
-    @property
-    def config(self) -> TrackerConfig:
-        """``options.tracker``."""
-        return self.options.tracker
-
-    @property
-    def start_frame(self) -> int:
-        """``options.start``: the first frame to track (0-based); the calibration's initial pose
-        is the pose there."""
-        return self.options.start
-
-    @property
-    def max_frames(self) -> int | None:
-        """``options.max_frames``: track only this many frames (from :attr:`start_frame`)."""
-        return self.options.max_frames
-
-    @property
-    def overwrite(self) -> bool:
-        """``options.overwrite``: start afresh even if the folder holds a run."""
-        return self.options.overwrite
-
-    @property
-    def write_overlay(self) -> bool:
-        """``options.overlay``: also write ``overlay.mp4``."""
-        return self.options.overlay
-
-    @property
-    def show(self) -> bool:
-        """``options.show``: show the overlay live in a window (needs a display)."""
-        return self.options.show
-
-    @property
-    def allow_damaged(self) -> bool:
-        """``options.allow_damaged``: track a video whose frames do not all decode
-        (:func:`mocap.io.video_check.check_video`) instead of refusing it; the damaged frame
-        numbers go to ``run.json``."""
-        return self.options.allow_damaged
 
     @property
     def keypoints(self) -> KeypointSource | None:
@@ -320,7 +283,7 @@ class DamageCheck:
 
 def _span(frames_in, params: RunParams) -> tuple[int | None, int | None]:
     """The last frame (exclusive) to track and the progress bar's expected end, or None."""
-    start_frame, max_frames = params.start_frame, params.max_frames
+    start_frame, max_frames = params.options.start, params.options.max_frames
     total = frames_in.count if frames_in.live or frames_in.checked else None
     if not frames_in.live and start_frame >= frames_in.count_hint and start_frame >= frames_in.count:
         raise ValueError(f"start frame {start_frame} is past the end of {frames_in.name} "
@@ -351,14 +314,14 @@ def run_settings(frames_in, setup: RunSetup, params: RunParams, resolution: int)
     source = str(Path(source).resolve()) if Path(source).exists() else source
     camera, background = setup.calibration.camera, setup.background_file
     settings = {"format": journalling.SETTINGS_FORMAT, "source": source, "background": str(background.resolve()) if background else None,
-                "calibration": setup.calibration.to_dict(), "tracker": params.config.to_dict(),
+                "calibration": setup.calibration.to_dict(), "tracker": params.options.tracker.to_dict(),
                 "imaging": setup.imaging.to_dict(), "colour_model_from": setup.colour_from,
                 "mesh_resolution": resolution,
                 "working_resolution": {"factor": setup.factor, "width": camera.width, "height": camera.height,
                                        "input_width": frames_in.width, "input_height": frames_in.height}}
     if setup.record is not None:
         settings["own_video"] = setup.record.to_dict()
-    settings["start_frame"] = params.start_frame
+    settings["start_frame"] = params.options.start
     settings["keypoints"] = "none" if params.keypoints is None else getattr(params.keypoints, "description",
                                                                             type(params.keypoints).__name__)
     return settings
@@ -393,7 +356,7 @@ class RunLoop:
 
     def __init__(self, frames_in, setup: RunSetup, out_dir: Path, params: RunParams) -> None:
         self.frames_in, self.setup, self.out_dir, self.params = frames_in, setup, out_dir, params
-        self.config = params.config
+        self.config = params.options.tracker
         self.camera = setup.calibration.camera
         self.journal = Journal.in_folder(out_dir)
         self.run_json = out_dir / files.RUN_JSON
@@ -414,19 +377,19 @@ class RunLoop:
         from mocap.body.mesh import resolution_for_image
 
         loop = cls(frames_in, setup, out_dir, params)
-        start_frame = params.start_frame
+        start_frame = params.options.start
         if isinstance(start_frame, bool) or not isinstance(start_frame, int) or start_frame < 0:
             raise ValueError(f"the start frame must be a non-negative integer, got {start_frame!r}")
-        loop.damage = DamageCheck(frames_in, params.allow_damaged, [])
+        loop.damage = DamageCheck(frames_in, params.options.allow_damaged, [])
         stop, expected = _span(frames_in, params)
         _check_sizes(frames_in, setup)
         loop.truth = PoseTable.read(params.ground_truth) if params.ground_truth is not None else None
         camera = loop.camera
-        loop.resolution = params.config.mesh_resolution or resolution_for_image(camera.width, camera.height)
+        loop.resolution = params.options.tracker.mesh_resolution or resolution_for_image(camera.width, camera.height)
         model = setup.calibration.body_model(loop.resolution)
         loop.settings = run_settings(frames_in, setup, params, loop.resolution)
         out_dir.mkdir(parents=True, exist_ok=True)
-        checkpoint = previous_run(loop.journal, loop.run_json, loop.settings, params.overwrite)
+        checkpoint = previous_run(loop.journal, loop.run_json, loop.settings, params.options.overwrite)
         colour_model = setup.colour_model
         if colour_model is None:
             if frames_in.live:
@@ -475,12 +438,12 @@ class RunLoop:
         """The overlay drawn as frames come (no second decoding pass) unless an earlier session's
         frames must be in it too (a resumed file run redraws it whole at the end)."""
         params, frames_in = self.params, self.frames_in
-        self.overlay_now = frames_in.live or (params.write_overlay and self.span.start == self.span.first)
+        self.overlay_now = frames_in.live or (params.options.overlay and self.span.start == self.span.first)
         self.geometry = OverlayGeometry.of(self.camera, self.setup.factor, frames_in.width, frames_in.height)
-        if not (self.overlay_now or params.show):
+        if not (self.overlay_now or params.options.show):
             return None
         self.overlay = OverlayWriter(self.out_dir, params.fps, self.person.model, self.geometry.camera,
-                                     show=params.show, write=self.overlay_now)
+                                     show=params.options.show, write=self.overlay_now)
         self.damage.overlay = self.overlay
         return self.geometry
 
@@ -604,7 +567,7 @@ class RunLoop:
             raise ValueError(f"no frame was tracked from {self.frames_in.name}")
         table = PoseTable.read(self.journal.path)     # (not rewritten: the checkpoint records its length)
         self.people.close()
-        if self.params.write_overlay and not self.overlay_now:
+        if self.params.options.overlay and not self.overlay_now:
             models = [Calibration.from_dict(seg["calibration"]).body_model(self.resolution)
                       .with_class_names(tuple(seg["colour_classes"])) for seg in self.people.segments]
             frames = enumerate(self.frames_in.frames(0, int(table.frames.max()) + 1))
