@@ -227,8 +227,9 @@ def other_settings(folder: Path, held: dict | None, wanted: dict) -> str:
         return (f"{folder} holds a run of an earlier mocap (its run.json has no settings.keypoints), which cannot be "
                 f"resumed exactly: {what}")
     if held.get("format") != wanted.get("format"):
-        return (f"{folder} holds a run of an earlier mocap (its run.json settings have format "
-                f"{held.get('format')!r}, this mocap writes {wanted.get('format')!r}), which cannot be resumed: {what}")
+        laid = "no settings.format" if held.get("format") is None else f"settings.format {held['format']!r}"
+        return (f"{folder} holds a run of an earlier mocap (its run.json has {laid}, this mocap writes "
+                f"{wanted.get('format')!r}), which cannot be resumed: {what}")
     if held["keypoints"] != wanted.get("keypoints"):
         return (f"{folder} holds a run tracked with keypoints from {held['keypoints']!r}, this run's would come from "
                 f"{wanted.get('keypoints')!r} (--keypoints changed, or the optional extra 'keypoints' was installed or "
