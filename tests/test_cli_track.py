@@ -1,5 +1,4 @@
 """End to end through the CLI: a short synthetic sequence tracked, outputs checked, resumed."""
-import importlib.util
 import json
 import shutil
 
@@ -242,12 +241,12 @@ def test_an_old_run_folder_is_refused_with_why_and_what_to_do(sequence, tmp_path
     (old / "run.json").write_text(json.dumps(run))
     refused(old, "holds a run of an earlier mocap (its run.json has no settings.keypoints)")
 
+    need_mediapipe()            # "installed since" makes the detector (without MediaPipe: refused for that)
     bare = tmp_path / "bare"                          # --keypoints auto without the extra: none
     assert main(["track", str(sequence), "--out", str(bare), *args]) == 0
     monkeypatch.setattr(mediapipe_keypoints, "available", lambda: True)       # the extra installed since
     refused(bare, "the optional extra 'keypoints' was installed or removed")
-    if importlib.util.find_spec("mediapipe") is not None:
-        extra = tmp_path / "extra"                    # --keypoints auto with the extra: MediaPipe
-        assert main(["track", str(sequence), "--out", str(extra), *args]) == 0
-        monkeypatch.setattr(mediapipe_keypoints, "available", lambda: False)  # the extra removed since
-        refused(extra, "the optional extra 'keypoints' was installed or removed")
+    extra = tmp_path / "extra"                        # --keypoints auto with the extra: MediaPipe
+    assert main(["track", str(sequence), "--out", str(extra), *args]) == 0
+    monkeypatch.setattr(mediapipe_keypoints, "available", lambda: False)      # the extra removed since
+    refused(extra, "the optional extra 'keypoints' was installed or removed")
