@@ -341,17 +341,11 @@ def _edge_scan(part_buf, depth_buf, width, height, bbox, min_gap, distance, mark
                 d_below = w ^ words[np.uint64(k + row_words)] if has_below else np.uint64(0)
                 if (d_right | d_below) == 0:
                     continue
-                # the top bit of each byte that differs, bytes outside xa..xb dropped; then visit
-                # only those bytes, lowest first (the order of a byte-by-byte loop)
+                # the top bit of each byte that differs; then visit only those bytes, lowest
+                # first (the order of a byte-by-byte loop). Bytes outside xa..xb never differ:
+                # they and their neighbours lie outside the box, where nothing was drawn.
                 r_bits = _nonzero_bytes(d_right)
                 b_bits = _nonzero_bytes(d_below)
-                keep = _BYTE_TOPS
-                if x0 < xa:
-                    keep &= _BYTE_TOPS << np.uint64(8 * (xa - x0))
-                if x0 + 7 > xb:
-                    keep &= _BYTE_TOPS >> np.uint64(8 * (x0 + 7 - xb))
-                r_bits &= keep
-                b_bits &= keep
                 pending = r_bits | b_bits
                 while pending != 0:
                     top = trailing_zeros(pending)
