@@ -17,9 +17,10 @@ those poses, each adding one stage of an evaluation:
 - ``loop_region`` / ``loop_edge``: the real compiled simplex loop (:func:`mocap.optimize.minimize_cost`)
   from the same start, per evaluation.
 
-Differences between consecutive rows are the stages' costs. Times are CPU time of this thread (a loaded machine preempts, it does not bill), the fastest of
-``repeats`` interleaved passes (each pass: every recorded pose once; the fastest is the one
-least disturbed by other processes), then the median over frames, µs per evaluation, one core.
+Differences between consecutive rows are the stages' costs. Times are CPU time of this thread
+(a loaded machine preempts, it does not bill), the fastest of ``repeats`` interleaved passes
+(each pass: every recorded pose once; the fastest is the one least disturbed by other
+processes), then the median over frames, µs per evaluation, one core.
 Also printed: triangles drawn, pixels written (with overdraw) and the model's box per pose.
 """
 from __future__ import annotations
@@ -144,7 +145,6 @@ def _record(size, frames, seed=0):
 def profile(size, frames, repeats):
     from mocap.optimize import minimize_cost
     from mocap.body.pose import JOINT_LIMITS
-    from mocap.render import rasterize_mesh  # noqa: F401  (compiled kernels loaded)
     from mocap.render.rasterize import render
 
     loop = _stage_loops()
