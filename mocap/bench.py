@@ -13,7 +13,9 @@ model: one render each, the occluding-contour samples and, for eq. 1, the seams)
 ``bench`` extra is installed), ``prepare_frame`` and its parts ``prepare_background``,
 ``prepare_colour``, ``prepare_edges``, ``prepare_distance``, ``frame_100`` / ``frame_500`` (a
 whole frame of the paper's method, image side included, at that many cost evaluations),
-``frame_beam`` (a whole frame of the default tracker), ``frame_beam_keypoints`` (the same given
+``evaluation_in_loop`` (one cost evaluation inside the compiled simplex loop, from
+``frame_500``'s region and edge steps: what the tracker pays, against the Python calls of the
+``cost_*`` rows), ``frame_beam`` (a whole frame of the default tracker), ``frame_beam_keypoints`` (the same given
 the true joints projected as 2D keypoints: the keypoint cue, the learned lifter's proposals
 and its score), ``lifter`` (one frame's 2D keypoints lifted to the K hypotheses of
 :mod:`mocap.track.lifter`, group ``lifter``), and
@@ -199,7 +201,9 @@ def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, mi
     evaluations, auto split; :meth:`~mocap.track.TrackerConfig.paper`) for each N of ``budgets``,
     and ``frame_beam`` the default tracker (beam, proposals and decoding; its evaluations vary
     from frame to frame), ``frame_beam_keypoints`` the same given the ground truth's joints
-    projected as 2D keypoints (the keypoint cue with the default configuration's sources)."""
+    projected as 2D keypoints (the keypoint cue with the default configuration's sources).
+
+    With 500 among ``budgets``, also ``evaluation_in_loop`` (:func:`_evaluations_in_loop`)."""
     import tempfile
 
     from mocap.body.mesh import resolution_for_image
@@ -238,7 +242,45 @@ def frame_rows(size: tuple[int, int], budgets: Sequence[int], *, frames: int, mi
                     tracker.push(i, prepare_frame(frame, background, colour), given[i])
                     times.append((time.perf_counter_ns() - t0) / 1000.0)
             rows.append(_row(name, size, model.mesh.n_triangles, np.asarray(times[1:])))
+            if name == "frame_500":
+                rows.append(_row("evaluation_in_loop", size, model.mesh.n_triangles,
+                                 _evaluations_in_loop(images, background, colour, model, camera,
+                                                      PoseTable.read(seq.ground_truth).poses, min_runs)))
     return rows
+
+
+def _evaluations_in_loop(images, background, colour, model, camera, truth, min_runs: int) -> np.ndarray:
+    """What one cost evaluation costs inside the compiled simplex loop, µs: on each frame but the
+    first, the paper's registration at 500 evaluations (:func:`mocap.optimize.minimize_cost`: the
+    region step from the previous frame's true pose, then the edge step from its simplex, 250
+    evaluations each) timed per call and divided by the call's evaluations; one value per call,
+    over the frames until ``min_runs`` values. Timed in CPU time of the calling thread: the loop
+    is compiled code on one thread, so on a quiet core this is its wall time, and on a loaded
+    machine the time other processes take is not billed to it."""
+    from mocap.body.pose import JOINT_LIMITS
+    from mocap.cost import EdgeCost, RegionCost
+    from mocap.imaging import prepare_frame
+    from mocap.optimize import initial_simplex, minimize_cost
+    from mocap.track import TrackerConfig
+
+    config = TrackerConfig.paper(evaluations=500)
+    lower, upper = JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1]
+    costs = []
+    for k in range(1, len(images)):
+        prepared = prepare_frame(images[k], background, colour)
+        costs.append((RegionCost(prepared.labels, model, camera), EdgeCost(prepared.distance, model, camera),
+                      initial_simplex(truth[k - 1], config.steps(), lower, upper)))
+    minimize_cost(costs[0][0], costs[0][2], lower, upper, budget=2)            # warm-up
+    out = []
+    while len(out) < min_runs:
+        for region, edge, start in costs:
+            t0 = time.thread_time_ns()
+            r = minimize_cost(region, start, lower, upper, budget=250, ftol=config.ftol)
+            t1 = time.thread_time_ns()
+            e = minimize_cost(edge, r.simplex, lower, upper, budget=250, ftol=config.ftol)
+            t2 = time.thread_time_ns()
+            out += [(t1 - t0) / 1000.0 / max(r.evaluations, 1), (t2 - t1) / 1000.0 / max(e.evaluations, 1)]
+    return np.asarray(out)
 
 
 def lifter_rows(size: tuple[int, int], *, min_runs: int, min_seconds: float) -> list[BenchRow]:

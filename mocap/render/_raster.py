@@ -13,6 +13,7 @@ a crack nor both cover a pixel centre on it.
 from __future__ import annotations
 
 import numpy as np
+from numba.cpython.unsafe.numbers import trailing_zeros
 
 from mocap._numba import jit
 
@@ -340,12 +341,19 @@ def _edge_scan(part_buf, depth_buf, width, height, bbox, min_gap, distance, mark
                 d_below = w ^ words[np.uint64(k + row_words)] if has_below else np.uint64(0)
                 if (d_right | d_below) == 0:
                     continue
-                for i in range(max(xa - x0, 0), min(xb - x0, 7) + 1):
-                    sh = np.uint64(8 * i)
-                    r_diff = ((d_right >> sh) & np.uint64(255)) != 0
-                    b_diff = ((d_below >> sh) & np.uint64(255)) != 0
-                    if not (r_diff or b_diff):
-                        continue
+                # the top bit of each byte that differs; then visit only those bytes, lowest
+                # first (the order of a byte-by-byte loop). Bytes outside xa..xb never differ:
+                # they and their neighbours lie outside the box, where nothing was drawn.
+                r_bits = _nonzero_bytes(d_right)
+                b_bits = _nonzero_bytes(d_below)
+                pending = r_bits | b_bits
+                while pending != 0:
+                    top = trailing_zeros(pending)
+                    pending &= pending - np.uint64(1)
+                    bit = np.uint64(1) << top
+                    r_diff = (r_bits & bit) != 0
+                    b_diff = (b_bits & bit) != 0
+                    i = np.int64(top) >> 3
                     a = row + x0 + i
                     pa = part_buf[np.uint64(a)]
                     if r_diff and x0 + i < xb:
@@ -372,6 +380,17 @@ def _edge_scan(part_buf, depth_buf, width, height, bbox, min_gap, distance, mark
         if clear:
             _clear_row(part_buf, depth_buf, mark_buf, row, xa, xb)
     return total, n
+
+
+#: The top bit of each byte of a 64-bit word.
+_BYTE_TOPS = np.uint64(0x8080808080808080)
+_LOW_SEVEN = np.uint64(0x7F7F7F7F7F7F7F7F)
+
+
+@jit
+def _nonzero_bytes(word):
+    """The top bit of every byte of the uint64 ``word`` that is not 0 (others 0)."""
+    return (((word & _LOW_SEVEN) + _LOW_SEVEN) | word) & _BYTE_TOPS
 
 
 @jit

@@ -49,6 +49,21 @@ def test_occluding_edges_follow_their_definition(seed):
     np.testing.assert_array_equal(got.edges, reference_occluding_edges(got.parts, inv, 0.03))
 
 
+@pytest.mark.parametrize("root_x", [-0.9, -0.55, 0.55, 0.9])
+@pytest.mark.parametrize("width", [160, 168, 163])
+def test_occluding_edges_at_the_image_border_and_inside_a_word(root_x, width):
+    # the model cut by the left or right border, at widths that are and are not a multiple of
+    # 8 (the scan's 8-pixel words, whose first and last are partly outside the model's box)
+    cam = Camera.default(width, 120)
+    q = neutral_pose()
+    q[:3] = [root_x, 0.1, 2.0]
+    q[P["l_shoulder_abd"]] = 1.2
+    got = render(q, MODEL, cam, edge_gap=0.03)
+    assert got.edges.any()
+    inv = np.where(np.isfinite(got.depth), 1.0 / got.depth.astype(np.float64), 0.0)
+    np.testing.assert_array_equal(got.edges, reference_occluding_edges(got.parts, inv, 0.03))
+
+
 def test_sphere_area_matches_analytic_at_640x480():
     cam = Camera.default(640, 480)
     r, d = 0.25, 2.0
