@@ -13,8 +13,7 @@ import numpy as np
 
 from mocap.calibrate import Calibration, colour_model_from_pose
 from mocap.imaging import prepare_frame
-from mocap.imaging.visual import colour_distance, colour_labels
-from mocap.run.overlay import draw_model
+from mocap.imaging.visual import colour_distance, colour_labels, draw_model
 from mocap.io.sequence import find_sequence
 from mocap.io.video import iter_frames, read_image
 from mocap.render import render
