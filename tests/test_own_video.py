@@ -197,11 +197,10 @@ def test_compiled_overlay_drawer_equals_numpy_on_the_render():
     """ModelDrawer (render, blend and depth insets compiled, in the model's box, buffers reused)
     draws the picture of the NumPy twins — the model blended on render()'s labels and edges, then
     the insets of the skeleton from an independent forward kinematics — bit for bit, for varied
-    poses, a pose out of view and three sizes, and leaves its buffers clean; draw_pose is the
-    same."""
+    poses, a pose out of view and three sizes, and leaves its buffers clean."""
     from mocap.bench import _poses
     from mocap.body import BodyModel
-    from mocap.imaging.visual import ModelDrawer, draw_pose
+    from mocap.imaging.visual import ModelDrawer
     from mocap.render import Camera, render
     from tests.naive import naive_depth_insets, naive_draw_model, naive_inset_points
 
@@ -223,7 +222,6 @@ def test_compiled_overlay_drawer_equals_numpy_on_the_render():
                 naive_draw_model(frame, r.labels, r.edges, model.n_classes, class_names=model.class_names),
                 naive_inset_points(pose, model.skeleton), drawer.insets)
             np.testing.assert_array_equal(drawer.draw(frame, pose), expected)
-            np.testing.assert_array_equal(draw_pose(frame, pose, model, camera), expected)
             assert not drawer.buffers.part_ids.any() and not drawer.buffers.inverse_depth.any()
             assert not drawer.marks.any()
         np.testing.assert_array_equal(frame, kept)

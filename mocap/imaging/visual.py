@@ -25,7 +25,7 @@ from mocap.render.rasterize import (EDGE_DEPTH_GAP_M, Buffers, Scene, clear_rend
 
 __all__ = ["EDGE_COLOUR", "INSET_BONES", "INSET_COLOURS", "INSET_FRACTION", "INSET_SPAN_M", "INSET_TICK_M",
            "DepthInsets", "ModelDrawer", "blend_into_box", "blend_table", "colour_distance", "colour_labels",
-           "draw_depth_insets", "draw_model", "draw_model_box", "draw_overlay", "draw_pose", "label_palette",
+           "draw_depth_insets", "draw_model", "draw_model_box", "draw_overlay", "label_palette",
            "overlay_edges", "tile"]
 
 #: Colours of the named classes (others: tab10).
@@ -427,10 +427,3 @@ class ModelDrawer:
                      self.palette, self.table, EDGE_COLOUR, self.insets)
         return out
 
-
-def draw_pose(frame: np.ndarray, pose: np.ndarray, model, camera: Camera) -> np.ndarray:
-    """The overlay picture: ``frame`` (uint8 RGB, shape (h, w, 3), ``camera``'s size) with the
-    model in ``pose`` (shape (23,), radians and metres) rendered by ``camera`` blended in, its
-    classes in their named colours, and the depth insets (:class:`ModelDrawer`; a writer keeps
-    one per model)."""
-    return ModelDrawer(model, camera).draw(frame, pose)
