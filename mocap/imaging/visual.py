@@ -166,7 +166,7 @@ INSET_SPAN_M = 1.6
 #: Distance between the dots on the line of sight, metres from the camera.
 INSET_TICK_M = 0.5
 #: Opacity of the black laid over the frame behind an inset.
-INSET_SHADE = 0.6
+INSET_SHADE = 0.75
 #: RGB colours of the insets, by row: spine and head, right arm, left arm, line of sight and its
 #: dots, the camera.
 INSET_COLOURS = np.array([(235, 235, 235), (255, 140, 40), (70, 170, 255), (150, 150, 150), (255, 255, 0)], np.uint8)
@@ -243,7 +243,7 @@ class DepthInsets(NamedTuple):
                 y0 = margin + view * (side + margin)
                 boxes[view] = (x0, y0, x0 + side - 1, y0 + side - 1)
         return cls(skeleton.joint_segment, skeleton.joint_local, boxes, side / INSET_SPAN_M,
-                   np.int64(max(1, round(side / 60))), np.ascontiguousarray(blend_table(INSET_SHADE)[:, 0]),
+                   np.int64(max(1, round(side / 45))), np.ascontiguousarray(blend_table(INSET_SHADE)[:, 0]),
                    INSET_COLOURS, INSET_BONES, np.zeros((len(INSET_POINT_NAMES), 3)))
 
 
