@@ -266,6 +266,53 @@ def test_depth_insets_show_depth_at_a_fixed_scale_with_the_camera_marked():
     assert not tiny.any()
 
 
+def test_overlay_writer_draws_beside_the_caller_and_writes_in_order(tmp_path):
+    """Without a window the writer draws on its own thread, a few pictures behind: the video
+    gets every picture of ModelDrawer in frame order (frames without a pose as they are, a new
+    person's model from its frame on), whatever the drawing's pace, and the frames given are
+    not changed."""
+    from mocap.bench import _poses
+    from mocap.body import BodyModel
+    from mocap.imaging.visual import ModelDrawer
+    from mocap.render import Camera
+    from mocap.run.overlay import OverlayWriter
+
+    class Recorder:                      # stands in for the H.264 writer, keeping the pictures
+        frames = 0
+
+        def __init__(self):
+            self.pictures = []
+
+        def write(self, picture):
+            self.pictures.append(np.array(picture))
+
+        def close(self):
+            pass
+
+    rng = np.random.default_rng(3)
+    camera = Camera.default(160, 120)
+    first, second = BodyModel.build(), BodyModel.build().with_class_names(("skin", "clothes"))
+    frames = [rng.integers(0, 256, (120, 160, 3), dtype=np.uint8) for _ in range(9)]
+    kept = [f.copy() for f in frames]
+    poses = _poses(9, seed=7)
+    poses[3] = None
+    models = [None] * 5 + [second] + [None] * 3
+    writer = OverlayWriter(tmp_path, 25.0, first, camera)
+    assert writer.drawing is not None
+    writer.video = recorder = Recorder()
+    for frame, pose, model in zip(frames, poses, models):
+        writer.update(frame, pose, model)
+    writer.close()
+    expected = [frame if pose is None else ModelDrawer(first if i < 5 else second, camera).draw(frame, pose)
+                for i, (frame, pose) in enumerate(zip(kept, poses))]
+    assert len(recorder.pictures) == len(expected)
+    for picture, want in zip(recorder.pictures, expected):
+        np.testing.assert_array_equal(picture, want)
+    for frame, original in zip(frames, kept):
+        np.testing.assert_array_equal(frame, original)
+    assert writer.drawing is None and not writer.pending
+
+
 def test_blend_table_is_numpys_float32_blend():
     from mocap.imaging.visual import blend_table
     f, c = np.meshgrid(np.arange(256), np.arange(256), indexing="ij")

@@ -16,6 +16,8 @@ from __future__ import annotations
 import math
 import os
 import platform
+from collections import deque
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -73,7 +75,15 @@ class OverlayGeometry:
 
 class OverlayWriter:
     """The overlay as frames come: written to ``overlay.mp4`` (``write``; moved into place by
-    :meth:`close`), and shown in a window when asked and a display exists."""
+    :meth:`close`), and shown in a window when asked and a display exists.
+
+    Written without a window, each picture is drawn on a thread of its own (the compiled drawer
+    lets go of the interpreter lock), at most :data:`DRAWS_AHEAD` pictures behind the caller,
+    and the pictures go to the video in order: the tracker's thread does not wait for the
+    drawing. With a window, a picture is drawn and shown at once."""
+
+    #: Pictures that may wait for the drawing thread before :meth:`update` waits.
+    DRAWS_AHEAD = 2
 
     def __init__(self, out_dir: Path, fps: float, model, camera: Camera, *, show: bool = False,
                  write: bool = True) -> None:
@@ -84,6 +94,8 @@ class OverlayWriter:
         self.path, self.tmp = Path(out_dir) / files.OVERLAY_MP4, Path(out_dir) / files.OVERLAY_TMP
         self.video = VideoWriter(self.tmp, fps, preset=OVERLAY_PRESET) if write else None
         self.figure = self.image = None
+        self.pending: deque[Future | np.ndarray] = deque()      # pictures (or their drawing) in frame order
+        self.drawing: ThreadPoolExecutor | None = None
         if show and (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") or platform.system() != "Linux"):
             import matplotlib.pyplot as plt
             plt.ion()
@@ -92,18 +104,24 @@ class OverlayWriter:
             self.plt = plt
         elif show:
             print("no display: the live view is not shown (overlay.mp4 is written)")
+        if self.video is not None and self.figure is None:
+            self.drawing = ThreadPoolExecutor(max_workers=1, thread_name_prefix="overlay-draw")
 
     def update(self, frame: np.ndarray, pose: np.ndarray | None, model=None) -> None:
-        """Add a frame at the overlay's size (``camera``'s), with the model in ``pose`` drawn (the
-        frame alone for None); ``model`` replaces the body model from now on (a new person's)."""
+        """Add a frame at the overlay's size (``camera``'s; not changed, and not to be changed
+        by the caller after), with the model in ``pose`` drawn (the frame alone for None);
+        ``model`` replaces the body model from now on (a new person's)."""
         if model is not None:
             self.model = model
-        if pose is None:
-            picture = frame
-        else:
-            if self.drawer is None or self.drawer.model is not self.model:
-                self.drawer = ModelDrawer(self.model, self.camera)
-            picture = self.drawer.draw(frame, pose)
+        if pose is not None and (self.drawer is None or self.drawer.model is not self.model):
+            self.drawer = ModelDrawer(self.model, self.camera)
+        if self.drawing is not None:
+            self.pending.append(frame if pose is None else self.drawing.submit(self.drawer.draw, frame, pose))
+            self._write_drawn(self.DRAWS_AHEAD)
+            return
+        if self.video is None and self.figure is None:
+            return
+        picture = frame if pose is None else self.drawer.draw(frame, pose)
         if self.video is not None:
             self.video.write(picture)
         if self.figure is not None:
@@ -113,15 +131,32 @@ class OverlayWriter:
                 self.image.set_data(picture)
             self.plt.pause(0.001)
 
+    def _write_drawn(self, ahead: int) -> None:
+        """Pictures to the video in order: those drawn, and the oldest until at most ``ahead``
+        wait (a drawing's error is raised here)."""
+        while self.pending and (len(self.pending) > ahead or not isinstance(self.pending[0], Future)
+                                or self.pending[0].done()):
+            item = self.pending.popleft()
+            self.video.write(item.result() if isinstance(item, Future) else item)
+
     def close(self) -> None:
-        """Finish the video (moved into place when it has frames) and the window."""
-        if self.video is not None:
-            self.video.close()
-            if self.video.frames:
-                os.replace(self.tmp, self.path)
-            self.video = None
-        if self.figure is not None:
-            self.plt.close(self.figure)
+        """Finish the video (the pictures still drawn first; moved into place when it has
+        frames) and the window."""
+        try:
+            if self.drawing is not None and self.video is not None:
+                self._write_drawn(0)
+        finally:
+            if self.drawing is not None:
+                self.drawing.shutdown(wait=True, cancel_futures=True)
+                self.drawing = None
+            self.pending.clear()
+            if self.video is not None:
+                self.video.close()
+                if self.video.frames:
+                    os.replace(self.tmp, self.path)
+                self.video = None
+            if self.figure is not None:
+                self.plt.close(self.figure)
 
 
 def redraw_overlay(out_dir: Path, frames, table: PoseTable, models: list, geometry: OverlayGeometry,
