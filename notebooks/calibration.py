@@ -38,7 +38,7 @@ from IPython.display import display
 from mocap.body import ANGLE_NAMES, JOINT_LIMITS, PARAMETER_INDEX, BodyDimensions
 from mocap.body.dimensions import SIZED_PART_NAMES
 from mocap.calibrate import Calibration, auto_calibrate
-from mocap.run.overlay import draw_model
+from mocap.imaging.visual import draw_model
 from mocap.io.sequence import find_sequence
 from mocap.io.video import iter_frames, read_image
 from mocap.render import render

@@ -40,8 +40,7 @@ from mocap.body import PARAMETER_INDEX, clamp_to_limits
 from mocap.calibrate import Calibration, colour_model_from_pose
 from mocap.cost import EdgeCost, RegionCost
 from mocap.imaging import prepare_frame
-from mocap.imaging.visual import colour_distance, colour_labels
-from mocap.run.overlay import draw_model
+from mocap.imaging.visual import colour_distance, colour_labels, draw_model
 from mocap.io.pose_table import PoseTable
 from mocap.io.sequence import find_sequence
 from mocap.io.video import iter_frames, read_image

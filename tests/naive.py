@@ -19,6 +19,7 @@ compiled kernel                                            twin                 
 ``imaging.background`` (change mask)                       :func:`naive_change_mask`         ``tests/imaging/test_background.py``
 ``imaging.background`` (densest sample)                    :func:`naive_densest_sample`      ``tests/imaging/test_background.py``
 ``imaging.visual`` (the overlay, in the model's box)       :func:`naive_draw_model`          ``tests/test_own_video.py``
+``imaging.visual`` (the overlay's depth insets)            :func:`naive_depth_insets`        ``tests/test_own_video.py``
 ``imaging.colour`` (HSV, classification)                   :func:`naive_hsv`,                ``tests/imaging/test_colour.py``
                                                            :func:`naive_classify`
 ``imaging.edges`` (Deriche recursion)                      :func:`naive_deriche_1d`          ``tests/imaging/test_edges.py``
@@ -695,7 +696,7 @@ def naive_draw_model(frame, labels, edges, n_classes=2, alpha=0.35, class_names=
     :class:`mocap.run.overlay.ModelDrawer`, and :func:`mocap.run.overlay.draw_model`, which look at
     the model's box only): the whole frame blended in float32 where labelled, the edges drawn."""
     from mocap.imaging.visual import label_palette
-    from mocap.run.overlay import EDGE_COLOUR
+    from mocap.imaging.visual import EDGE_COLOUR
 
     out = frame.copy()
     model = np.nonzero(labels)
@@ -703,4 +704,78 @@ def naive_draw_model(frame, labels, edges, n_classes=2, alpha=0.35, class_names=
     blended = (1 - alpha) * frame[model].astype(np.float32) + alpha * colours
     out[model] = np.clip(blended, 0, 255).astype(np.uint8)
     out[edges] = EDGE_COLOUR
+    return out
+
+
+def naive_inset_points(pose, skeleton):
+    """The points the depth insets draw (:data:`mocap.imaging.visual.INSET_POINT_NAMES`: the named
+    joints, then the chest's base), from :func:`naive_segment_transforms`: shape (11, 3), metres."""
+    from mocap.body.skeleton import SEGMENT_NAMES
+
+    transforms = naive_segment_transforms(pose, skeleton.offsets)
+    joints = [transforms[SEGMENT_NAMES[s]][0] @ local + transforms[SEGMENT_NAMES[s]][1]
+              for s, local in zip(skeleton.joint_segment, skeleton.joint_local)]
+    return np.array(joints + [transforms["chest"][1]])
+
+
+def naive_depth_insets(picture, points, insets):
+    """Twin of the overlay's depth insets (:func:`mocap.imaging.visual.draw_inset_points`, through
+    :func:`~mocap.imaging.visual.draw_depth_insets` and :class:`~mocap.imaging.visual.ModelDrawer`),
+    written from :class:`~mocap.imaging.visual.DepthInsets`' description with whole-array steps:
+    the ``points`` (shape (11, 3), metres) drawn in the layout of ``insets`` (boxes, scale,
+    thickness) on a copy of ``picture``."""
+    from mocap.imaging.visual import (INSET_BONES, INSET_COLOURS, INSET_POINT_NAMES, INSET_SHADE, INSET_SPAN_M,
+                                      INSET_TICK_M)
+
+    out = picture.copy()
+    neck, head = points[INSET_POINT_NAMES.index("neck")], points[INSET_POINT_NAMES.index("head")]
+    t = int(insets.thickness)
+    lo, hi = -(t // 2), (t - 1) // 2
+
+    def pixel(view, box, rel):
+        """Pixels (x, y) of points ``rel`` metres from the neck: side view z right, y down; top view x right, z up."""
+        cx, cy = (box[0] + box[2]) // 2, (box[1] + box[3]) // 2
+        a = np.floor(np.asarray(rel, float) * insets.scale + 0.5).astype(np.int64)
+        return (cx + a[..., 2], cy + a[..., 1]) if view == 0 else (cx + a[..., 0], cy - a[..., 2])
+
+    def inside(box, x, y):
+        return (box[0] <= x) & (x <= box[2]) & (box[1] <= y) & (y <= box[3])
+
+    def squares(box, x, y, low, high, colour):
+        x, y = np.atleast_1d(x), np.atleast_1d(y)
+        for dy in range(low, high + 1):
+            for dx in range(low, high + 1):
+                keep = inside(box, x + dx, y + dy)
+                out[y[keep] + dy, x[keep] + dx] = colour
+
+    def line(box, start, end, low, high, colour):
+        """The line's steps squared; returns its last step inside the box."""
+        (x0, y0), (x1, y1) = start, end
+        n = max(abs(x1 - x0), abs(y1 - y0))
+        k = np.arange(n + 1)
+        x = x0 + (2 * (x1 - x0) * k + n) // (2 * n) if n else np.array([x0])
+        y = y0 + (2 * (y1 - y0) * k + n) // (2 * n) if n else np.array([y0])
+        squares(box, x, y, low, high, colour)
+        steps = np.flatnonzero(inside(box, x, y))
+        return (x[steps[-1]], y[steps[-1]]) if steps.size else (x0, y0)
+
+    distance = np.linalg.norm(neck)
+    for view, box in enumerate(insets.boxes):
+        if box[0] > box[2]:
+            continue
+        region = out[box[1]:box[3] + 1, box[0]:box[2] + 1]
+        region[:] = np.clip((1 - INSET_SHADE) * region.astype(np.float32) + INSET_SHADE * np.float32(0), 0,
+                            255).astype(np.uint8)
+        if distance > 0:
+            u = neck / distance
+            camera = line(box, pixel(view, box, u * INSET_SPAN_M), pixel(view, box, -(u * INSET_SPAN_M)), 0, 0,
+                          INSET_COLOURS[3])
+            ticks = np.arange(1, int((distance + INSET_SPAN_M) / INSET_TICK_M) + 1) * INSET_TICK_M
+            ticks = ticks[ticks >= distance - INSET_SPAN_M]
+            squares(box, *pixel(view, box, (ticks - distance)[:, None] * u), lo - 1, hi + 1, INSET_COLOURS[3])
+            squares(box, *camera, -t, t, INSET_COLOURS[4])
+        for i, j, colour in INSET_BONES:
+            line(box, pixel(view, box, points[i] - neck), pixel(view, box, points[j] - neck), lo, hi,
+                 INSET_COLOURS[colour])
+        squares(box, *pixel(view, box, head - neck), -t, t, INSET_COLOURS[0])
     return out

@@ -195,31 +195,123 @@ def test_bench_video_stage_runs_the_whole_path_on_a_640x480_clip():
 
 
 def test_compiled_overlay_drawer_equals_numpy_on_the_render():
-    """ModelDrawer (render and blend compiled, in the model's box, buffers reused) draws the
-    picture of the NumPy twin on render()'s labels and edges, bit for bit, for varied poses, a
-    pose out of view and two sizes, and leaves its buffers clean."""
+    """ModelDrawer (render, blend and depth insets compiled, in the model's box, buffers reused)
+    draws the picture of the NumPy twins — the model blended on render()'s labels and edges, then
+    the insets of the skeleton from an independent forward kinematics — bit for bit, for varied
+    poses, a pose out of view and three sizes, and leaves its buffers clean."""
     from mocap.bench import _poses
     from mocap.body import BodyModel
+    from mocap.imaging.visual import ModelDrawer
     from mocap.render import Camera, render
-    from mocap.run.overlay import ModelDrawer
-    from tests.naive import naive_draw_model
+    from tests.naive import naive_depth_insets, naive_draw_model, naive_inset_points
 
     rng = np.random.default_rng(5)
     model = BodyModel.build()
     away = _poses(1, seed=9)[0].copy()
-    away[:3] = (5.0, 0.0, -3.0)                      # behind the camera: nothing drawn
-    for size in ((160, 120), (320, 240)):
+    away[:3] = (5.0, 0.0, -3.0)                      # behind the camera: nothing drawn but the insets
+    near = _poses(1, seed=4)[0].copy()
+    near[:3] = (0.1, 0.2, 0.9)                       # nearer than an inset's reach: the camera inside it
+    for size in ((160, 120), (320, 240), (640, 480)):
         camera = Camera.default(*size)
         frame = rng.integers(0, 256, (size[1], size[0], 3), dtype=np.uint8)
         kept = frame.copy()
         drawer = ModelDrawer(model, camera)
-        for pose in [*_poses(6, seed=3), away]:
+        assert (drawer.insets.boxes[:, 2] >= drawer.insets.boxes[:, 0]).all()
+        for pose in [*_poses(6, seed=3), away, near]:
             r = render(pose, model, camera)
-            expected = naive_draw_model(frame, r.labels, r.edges, model.n_classes, class_names=model.class_names)
+            expected = naive_depth_insets(
+                naive_draw_model(frame, r.labels, r.edges, model.n_classes, class_names=model.class_names),
+                naive_inset_points(pose, model.skeleton), drawer.insets)
             np.testing.assert_array_equal(drawer.draw(frame, pose), expected)
             assert not drawer.buffers.part_ids.any() and not drawer.buffers.inverse_depth.any()
             assert not drawer.marks.any()
         np.testing.assert_array_equal(frame, kept)
+
+
+def test_depth_insets_show_depth_at_a_fixed_scale_with_the_camera_marked():
+    """The insets' geometry from its description, on a black picture: two 120-pixel squares at the
+    right edge of a 640x480 picture, 75 pixels a metre; a hand 0.4 m nearer the camera than the
+    neck lands 30 pixels towards the camera in both views (left in the side view, down in the
+    top view); the camera is marked where the line of sight leaves each inset; a dot every
+    0.5 m from the camera; nothing drawn outside the insets; a picture too small has none."""
+    from mocap.body import BodyModel
+    from mocap.imaging.visual import INSET_COLOURS, INSET_POINT_NAMES, DepthInsets, draw_inset_points
+
+    model = BodyModel.build()
+    insets = DepthInsets.of(model.skeleton, 640, 480)
+    np.testing.assert_array_equal(insets.boxes, [(516, 4, 635, 123), (516, 128, 635, 247)])
+    assert insets.scale == 75.0
+    points = np.zeros((len(INSET_POINT_NAMES), 3))
+    points[:] = (0.0, 0.0, 3.0)                   # every point at the neck, on the optical axis, 3 m away
+    hand = INSET_POINT_NAMES.index("r_hand")
+    points[hand] = (0.0, 0.0, 2.6)
+    picture = np.zeros((480, 640, 3), np.uint8)
+    draw_inset_points(picture, insets._replace(points=points))
+    assert not picture[:, :516].any() and not picture[250:].any()
+    camera, right, sight = INSET_COLOURS[4], INSET_COLOURS[1], INSET_COLOURS[3]
+    (sx0, sy0, sx1, sy1), (tx0, ty0, tx1, ty1) = insets.boxes
+    scx, scy, tcx, tcy = (sx0 + sx1) // 2, (sy0 + sy1) // 2, (tx0 + tx1) // 2, (ty0 + ty1) // 2
+    np.testing.assert_array_equal(picture[scy, sx0], camera)          # side view: the camera on the left
+    np.testing.assert_array_equal(picture[ty1, tcx], camera)          # top view: at the bottom
+    np.testing.assert_array_equal(picture[scy, scx - 30], right)      # the hand, 0.4 m nearer the camera
+    np.testing.assert_array_equal(picture[tcy + 30, tcx], right)
+    np.testing.assert_array_equal(picture[scy, scx + 50], sight)      # the line of sight through the neck
+    for metres in (-0.5, 0.5):                                         # dots 2.5 and 3.5 m from the camera
+        x = scx + int(np.floor(metres * 75 + 0.5))
+        np.testing.assert_array_equal(picture[scy - 2, x], sight)     # a dot stands above the one-pixel line
+        assert not picture[scy - 2, x + 3 * int(np.sign(metres))].any()
+    small = DepthInsets.of(model.skeleton, 40, 30)
+    assert (small.boxes[:, 0] > small.boxes[:, 2]).all()
+    tiny = np.zeros((30, 40, 3), np.uint8)
+    draw_inset_points(tiny, small._replace(points=points))
+    assert not tiny.any()
+
+
+def test_overlay_writer_draws_beside_the_caller_and_writes_in_order(tmp_path):
+    """Without a window the writer draws on its own thread, a few pictures behind: the video
+    gets every picture of ModelDrawer in frame order (frames without a pose as they are, a new
+    person's model from its frame on), whatever the drawing's pace, and the frames given are
+    not changed."""
+    from mocap.bench import _poses
+    from mocap.body import BodyModel
+    from mocap.imaging.visual import ModelDrawer
+    from mocap.render import Camera
+    from mocap.run.overlay import OverlayWriter
+
+    class Recorder:                      # stands in for the H.264 writer, keeping the pictures
+        frames = 0
+
+        def __init__(self):
+            self.pictures = []
+
+        def write(self, picture):
+            self.pictures.append(np.array(picture))
+
+        def close(self):
+            pass
+
+    rng = np.random.default_rng(3)
+    camera = Camera.default(160, 120)
+    first, second = BodyModel.build(), BodyModel.build().with_class_names(("skin", "clothes"))
+    frames = [rng.integers(0, 256, (120, 160, 3), dtype=np.uint8) for _ in range(9)]
+    kept = [f.copy() for f in frames]
+    poses = _poses(9, seed=7)
+    poses[3] = None
+    models = [None] * 5 + [second] + [None] * 3
+    writer = OverlayWriter(tmp_path, 25.0, first, camera)
+    assert writer.drawing is not None
+    writer.video = recorder = Recorder()
+    for frame, pose, model in zip(frames, poses, models):
+        writer.update(frame, pose, model)
+    writer.close()
+    expected = [frame if pose is None else ModelDrawer(first if i < 5 else second, camera).draw(frame, pose)
+                for i, (frame, pose) in enumerate(zip(kept, poses))]
+    assert len(recorder.pictures) == len(expected)
+    for picture, want in zip(recorder.pictures, expected):
+        np.testing.assert_array_equal(picture, want)
+    for frame, original in zip(frames, kept):
+        np.testing.assert_array_equal(frame, original)
+    assert writer.drawing is None and not writer.pending
 
 
 def test_blend_table_is_numpys_float32_blend():
@@ -235,7 +327,7 @@ def test_blend_table_is_numpys_float32_blend():
 def test_overlay_drawn_in_the_model_box_equals_the_whole_frame():
     """draw_model looks at the model's box only: the same picture as blending the whole frame
     (tests/naive.py), with edges beyond the silhouette and with nothing drawn."""
-    from mocap.run.overlay import draw_model
+    from mocap.imaging.visual import draw_model
     from tests.naive import naive_draw_model
     rng = np.random.default_rng(2)
     frame = rng.integers(0, 256, (48, 64, 3), dtype=np.uint8)
