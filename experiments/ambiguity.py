@@ -70,7 +70,8 @@ from experiments.units import (EXTENSIONS, PREPARED_FILE, PREPARED_FILE_PAPER, D
                                prepare_data, prepared_file)
 from mocap.body import JOINT_NAMES
 from mocap.io.files import read_json, write_json
-from mocap.metrics import DEFAULT_FAILURE_MM, failure_rate, mpjpe, pa_mpjpe, reprojection_error, root_relative_mpjpe
+from mocap.metrics import (DEFAULT_FAILURE_MM, acceleration_error, failure_rate, mpjpe, pa_mpjpe, reprojection_error,
+                           root_relative_mpjpe)
 from mocap.synth import SEQUENCE_NAMES, SEQUENCES
 from mocap.track import Tracker, TrackerConfig, register, track_prepared
 
@@ -247,6 +248,7 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
         results = lower_region_cost(results, [replace(r, frame=n - 1 - r.frame) for r in backward[::-1]])
     joints = np.array([r.joints for r in results])
     truth = loaded.ground_truth.joints[: len(joints)]
+    decoded = np.array([loaded.model.joint_positions(r.decoded_pose) for r in results])
     oracle = flip_oracle(joints, truth)
     proposed = bool(np.isfinite(proposal_best).any())      # a source that never proposed (no keypoints) is no stage
     lifted_any = bool(np.isfinite(lifter_best).any())
@@ -264,6 +266,7 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
             "lifter_oracle_failure_rate": lifter_missing if lifted_any else None,
             "branch_miss_rate": branch_missed if lifted_any else None,
             "frame_mpjpe_mm": mpjpe(joints, truth, per_frame=True).tolist(),
+            "frame_root_relative_mm": root_relative_mpjpe(joints, truth, per_frame=True).tolist(),
             "beam_oracle_mpjpe_mm": float(np.mean(beam_best)),
             "beam_oracle_failure_rate": float(np.mean(np.array(beam_best) > DEFAULT_FAILURE_MM)),
             # the proposal stage: its best refined proposal per frame, and the frames on which every
@@ -281,7 +284,34 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
             "reprojection_px": reprojection_error(joints, truth, camera),
             "flip_oracle_mpjpe_mm": mpjpe(oracle, truth), "flip_oracle_failure_rate": failure_rate(oracle, truth),
             "flip_oracle_reprojection_px": reprojection_error(oracle, truth, camera),
-            "cost_equivalent_failure_rate": equivalent, "cost_equivalent_both_rate": equivalent_both}
+            "cost_equivalent_failure_rate": equivalent, "cost_equivalent_both_rate": equivalent_both,
+            **jitter(joints, decoded, truth),
+            "decoded_poses": np.array([r.decoded_pose for r in results]).tolist()}
+
+
+#: Arm joints of the acceleration error after Procrustes alignment (the peers' arms).
+ARM_JOINTS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
+#: Half-width (frames) of the naive baseline's centred mean (issue 39).
+NAIVE_HALF_WIDTH = 4
+
+
+def jitter(joints: np.ndarray, decoded: np.ndarray, truth: np.ndarray) -> dict:
+    """Acceleration errors (:func:`mocap.metrics.acceleration_error`, mm/frame^2) and median
+    per-frame errors (mm) of the written joints, of the decoded ones (before the smoother) and of
+    the naive baseline: a centred mean over +-:data:`NAIVE_HALF_WIDTH` frames of the decoded joints
+    (ends: the nearest frame repeated). All arrays (N, 10, 3), metres."""
+    from scipy.ndimage import uniform_filter1d
+
+    naive = uniform_filter1d(decoded, size=2 * NAIVE_HALF_WIDTH + 1, axis=0, mode="nearest")
+    arms = [JOINT_NAMES.index(j) for j in ARM_JOINTS]
+    row = {}
+    for name, x in (("", joints), ("decoded_", decoded), ("naive_", naive)):
+        if len(x) >= 3:
+            row[f"{name}accel_mm"] = acceleration_error(x, truth)
+            row[f"{name}accel_arms_pa_mm"] = acceleration_error(x[:, arms], truth[:, arms], align="procrustes")
+        row[f"{name}median_frame_mm"] = float(np.median(mpjpe(x, truth, per_frame=True)))
+        row[f"{name}median_frame_root_relative_mm"] = float(np.median(root_relative_mpjpe(x, truth, per_frame=True)))
+    return row
 
 
 def register_from_truth(prepared, model, camera, true_poses: np.ndarray, config: TrackerConfig, lag: int,

@@ -15,6 +15,7 @@ import numpy as np
 
 from mocap.body.pose import N_PARAMETERS
 from mocap.config import JsonConfig
+from mocap.track.smooth import SmootherConfig
 
 #: Total budget below which the ``auto`` policy gives every evaluation to the region step.
 AUTO_SPLIT_THRESHOLD = 200
@@ -157,6 +158,9 @@ class TrackerConfig(JsonConfig):
         Beyond the paper (its future work): after the edge step, a bounded Gauss–Newton descent
         of eq. (2) on its analytic gradient (:func:`mocap.optimize.minimize_edge_gauss_newton`),
         with :data:`GRADIENT_SHARE` of the edge step's evaluations.
+    smoothing : SmootherConfig
+        The written poses' fixed-lag smoother over the decoding's ``lag`` (the whole clip
+        offline): :mod:`mocap.track.smooth`; off in :meth:`paper`.
     """
 
     evaluations: int = 500
@@ -186,6 +190,7 @@ class TrackerConfig(JsonConfig):
     proposals_refined: int = 2
     proposal_evaluations: int = 100
     gradient_step: bool = False
+    smoothing: SmootherConfig = SmootherConfig()
 
     def __post_init__(self) -> None:
         for name in ("beam",):
@@ -200,6 +205,10 @@ class TrackerConfig(JsonConfig):
         for name in ("recovery", "hand_reacquisition", "jumps", "offline", "gradient_step"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
+        if isinstance(self.smoothing, dict):         # TrackerConfig(**config.to_dict()) gives its dict
+            object.__setattr__(self, "smoothing", SmootherConfig.from_dict(self.smoothing))
+        if not isinstance(self.smoothing, SmootherConfig):
+            raise ValueError(f"smoothing must be a SmootherConfig, got {self.smoothing!r}")
         if self.lifter_file is not None and (not isinstance(self.lifter_file, str) or not self.lifter_file):
             raise ValueError(f"lifter_file must be a file name or None, got {self.lifter_file!r}")
         split_budget(self.evaluations, self.split)          # validates the split
@@ -227,7 +236,8 @@ class TrackerConfig(JsonConfig):
             unknown names raise TypeError.
         """
         return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0, gradient_step=False,
-                           prior_weight=0.0, keypoint_weight=0.0, lifter_weight=0.0, silhouette_prior_weight=0.0),
+                           prior_weight=0.0, keypoint_weight=0.0, lifter_weight=0.0, silhouette_prior_weight=0.0,
+                           smoothing=SmootherConfig(on=False)),
                        **changes)
 
     @property
