@@ -222,6 +222,9 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     loaded, prepared = benchmark_sequence(sequence, root, seed, without)
     camera = loaded.calibration.camera
     tracker = Tracker(loaded.model, camera, config, loaded.calibration.initial_pose)
+    calls = None
+    if tracker.smoother is not None:        # every window the smoother is given, to replay it with other settings
+        tracker.smoother = calls = SmootherCalls(tracker.smoother)
     truth_joints = loaded.ground_truth.joints
     keypoints = ([None] * len(prepared) if oracle_sigma_px is None
                  else oracle_keypoints(truth_joints[: len(prepared)], camera, oracle_sigma_px, seed))
@@ -246,6 +249,9 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
         backward = track_prepared(prepared[::-1], Tracker(loaded.model, camera, config, results[-1].pose))
         n = len(prepared)
         results = lower_region_cost(results, [replace(r, frame=n - 1 - r.frame) for r in backward[::-1]])
+    if calls is not None:
+        keypoints_tag = "" if oracle_sigma_px is None else f"-oracle{oracle_sigma_px:g}px"
+        calls.save(root / "smoother_calls" / f"{sequence}-s{seed}-{config_key(config)}{keypoints_tag}.npz")
     joints = np.array([r.joints for r in results])
     truth = loaded.ground_truth.joints[: len(joints)]
     decoded = np.array([loaded.model.joint_positions(r.decoded_pose) for r in results])
@@ -289,8 +295,33 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
             "decoded_poses": np.array([r.decoded_pose for r in results]).tolist()}
 
 
+class SmootherCalls:
+    """A :class:`mocap.track.smooth.Smoother` that keeps every window it is given (the decoded
+    path's tentative poses, joints and weights, and how many frames were written): replayed
+    through a smoother of other settings, they give exactly the poses it would have written
+    (the decoding does not depend on the smoother)."""
+
+    def __init__(self, smoother) -> None:
+        self.smoother, self.calls = smoother, []
+
+    def weights(self, confidence):
+        return self.smoother.weights(confidence)
+
+    def smooth(self, poses, joints, weights, count: int = 1):
+        self.calls.append((np.array(poses), np.array(joints), np.array(weights), count))
+        return self.smoother.smooth(poses, joints, weights, count)
+
+    def save(self, path: Path) -> None:
+        """All windows, concatenated, with each one's length and count (``np.savez``)."""
+        path.parent.mkdir(parents=True, exist_ok=True)
+        np.savez(path, poses=np.concatenate([c[0] for c in self.calls]),
+                 joints=np.concatenate([c[1] for c in self.calls]),
+                 weights=np.concatenate([c[2] for c in self.calls]),
+                 lengths=np.array([len(c[0]) for c in self.calls]), counts=np.array([c[3] for c in self.calls]))
+
+
 #: Arm joints of the acceleration error after Procrustes alignment (the peers' arms).
-ARM_JOINTS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
+JITTER_ARM_JOINTS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
 #: Half-width (frames) of the naive baseline's centred mean (issue 39).
 NAIVE_HALF_WIDTH = 4
 
@@ -303,7 +334,7 @@ def jitter(joints: np.ndarray, decoded: np.ndarray, truth: np.ndarray) -> dict:
     from scipy.ndimage import uniform_filter1d
 
     naive = uniform_filter1d(decoded, size=2 * NAIVE_HALF_WIDTH + 1, axis=0, mode="nearest")
-    arms = [JOINT_NAMES.index(j) for j in ARM_JOINTS]
+    arms = [JOINT_NAMES.index(j) for j in JITTER_ARM_JOINTS]
     row = {}
     for name, x in (("", joints), ("decoded_", decoded), ("naive_", naive)):
         if len(x) >= 3:

@@ -86,7 +86,7 @@ class SmootherConfig(JsonConfig):
     angle_noise_deg: float = 5.0
     position_acceleration_m: float = 0.003
     angle_acceleration_deg: float = 1.0
-    break_m: float = 0.15
+    break_m: float = 0.3
     min_weight: float = 0.1
 
     def __post_init__(self) -> None:

@@ -76,9 +76,9 @@ def test_a_step_settles_within_the_lag():
 
 
 def test_a_branch_switch_is_never_blended():
-    """A jump of 1 rad (the wrist moves 30 cm, more than ``break_m``): every written pose is one
+    """A jump of 1.5 rad (the wrist moves 45 cm, more than ``break_m``): every written pose is one
     branch or the other, none in between, online and offline."""
-    values = np.where(np.arange(60) < 30, 0.3, 1.3)
+    values = np.where(np.arange(60) < 30, 0.3, 1.8)
     poses, joints = elbow_trajectory(values)
     online = fixed_lag(Smoother(SmootherConfig()), poses, joints)[:, ELBOW]
     offline = Smoother(SmootherConfig()).smooth(poses, joints, np.ones((60, N_PARAMETERS)), 60)[:, ELBOW]
