@@ -155,7 +155,7 @@ def table(summaries: dict[str, dict]) -> str:
                      f"{100 * s['beam_oracle_failure_rate']:.1f} % | {_percent(s['proposal_oracle_failure_rate'])} | "
                      f"{_percent(s['proposal_catches_rate'])} | {_percent(s['lifter_oracle_failure_rate'])} | "
                      f"{_percent(s['branch_miss_rate'])} | {100 * s['cost_equivalent_both_rate']:.1f} % | "
-                     f"{s['median_accel_mm']:.1f} ({s['median_decoded_accel_mm']:.1f}, {s['median_naive_accel_mm']:.1f}) | "
+                     f"{_accel(s)} | "
                      f"{s['ms_per_frame']:.1f} "
                      f"({1e3 / s['ms_per_frame']:.0f}) |")
     return "\n".join(lines)
@@ -178,6 +178,13 @@ def jitter_table(rows: dict[str, list[dict]]) -> str:
 
 def _unseen_heading(seeds: list[int]) -> str:
     return f"seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}, never used for tuning"
+
+
+def _accel(s: dict) -> str:
+    """The written, decoded and naive acceleration errors of a summary, or a dash where not measured."""
+    if not math.isfinite(s["median_accel_mm"]):
+        return "-"
+    return f"{s['median_accel_mm']:.1f} ({s['median_decoded_accel_mm']:.1f}, {s['median_naive_accel_mm']:.1f})"
 
 
 def _percent(rate: float) -> str:
