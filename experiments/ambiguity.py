@@ -70,7 +70,8 @@ from experiments.units import (EXTENSIONS, PREPARED_FILE, PREPARED_FILE_PAPER, D
                                prepare_data, prepared_file)
 from mocap.body import JOINT_NAMES
 from mocap.io.files import read_json, write_json
-from mocap.metrics import DEFAULT_FAILURE_MM, failure_rate, mpjpe, pa_mpjpe, reprojection_error, root_relative_mpjpe
+from mocap.metrics import (DEFAULT_FAILURE_MM, acceleration_error, failure_rate, mpjpe, pa_mpjpe, reprojection_error,
+                           root_relative_mpjpe)
 from mocap.synth import SEQUENCE_NAMES, SEQUENCES
 from mocap.track import Tracker, TrackerConfig, register, track_prepared
 
@@ -221,6 +222,9 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     loaded, prepared = benchmark_sequence(sequence, root, seed, without)
     camera = loaded.calibration.camera
     tracker = Tracker(loaded.model, camera, config, loaded.calibration.initial_pose)
+    calls = None
+    if tracker.smoother is not None:        # every window the smoother is given, to replay it with other settings
+        tracker.smoother = calls = SmootherCalls(tracker.smoother)
     truth_joints = loaded.ground_truth.joints
     keypoints = ([None] * len(prepared) if oracle_sigma_px is None
                  else oracle_keypoints(truth_joints[: len(prepared)], camera, oracle_sigma_px, seed))
@@ -245,8 +249,12 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
         backward = track_prepared(prepared[::-1], Tracker(loaded.model, camera, config, results[-1].pose))
         n = len(prepared)
         results = lower_region_cost(results, [replace(r, frame=n - 1 - r.frame) for r in backward[::-1]])
+    if calls is not None:
+        keypoints_tag = "" if oracle_sigma_px is None else f"-oracle{oracle_sigma_px:g}px"
+        calls.save(root / "smoother_calls" / f"{sequence}-s{seed}-{config_key(config)}{keypoints_tag}.npz")
     joints = np.array([r.joints for r in results])
     truth = loaded.ground_truth.joints[: len(joints)]
+    decoded = np.array([loaded.model.joint_positions(r.decoded_pose) for r in results])
     oracle = flip_oracle(joints, truth)
     proposed = bool(np.isfinite(proposal_best).any())      # a source that never proposed (no keypoints) is no stage
     lifted_any = bool(np.isfinite(lifter_best).any())
@@ -264,6 +272,7 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
             "lifter_oracle_failure_rate": lifter_missing if lifted_any else None,
             "branch_miss_rate": branch_missed if lifted_any else None,
             "frame_mpjpe_mm": mpjpe(joints, truth, per_frame=True).tolist(),
+            "frame_root_relative_mm": root_relative_mpjpe(joints, truth, per_frame=True).tolist(),
             "beam_oracle_mpjpe_mm": float(np.mean(beam_best)),
             "beam_oracle_failure_rate": float(np.mean(np.array(beam_best) > DEFAULT_FAILURE_MM)),
             # the proposal stage: its best refined proposal per frame, and the frames on which every
@@ -281,7 +290,59 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
             "reprojection_px": reprojection_error(joints, truth, camera),
             "flip_oracle_mpjpe_mm": mpjpe(oracle, truth), "flip_oracle_failure_rate": failure_rate(oracle, truth),
             "flip_oracle_reprojection_px": reprojection_error(oracle, truth, camera),
-            "cost_equivalent_failure_rate": equivalent, "cost_equivalent_both_rate": equivalent_both}
+            "cost_equivalent_failure_rate": equivalent, "cost_equivalent_both_rate": equivalent_both,
+            **jitter(joints, decoded, truth),
+            "decoded_poses": np.array([r.decoded_pose for r in results]).tolist()}
+
+
+class SmootherCalls:
+    """A :class:`mocap.track.smooth.Smoother` that keeps every window it is given (the decoded
+    path's tentative poses, joints and weights, and how many frames were written): replayed
+    through a smoother of other settings, they give exactly the poses it would have written
+    (the decoding does not depend on the smoother)."""
+
+    def __init__(self, smoother) -> None:
+        self.smoother, self.calls = smoother, []
+
+    def weights(self, confidence):
+        return self.smoother.weights(confidence)
+
+    def smooth(self, poses, joints, weights, count: int = 1):
+        self.calls.append((np.array(poses), np.array(joints), np.array(weights), count))
+        return self.smoother.smooth(poses, joints, weights, count)
+
+    def save(self, path: Path) -> None:
+        """All windows, concatenated, with each one's length and count (``np.savez``)."""
+        path.parent.mkdir(parents=True, exist_ok=True)
+        np.savez(path, poses=np.concatenate([c[0] for c in self.calls]),
+                 joints=np.concatenate([c[1] for c in self.calls]),
+                 weights=np.concatenate([c[2] for c in self.calls]),
+                 lengths=np.array([len(c[0]) for c in self.calls]), counts=np.array([c[3] for c in self.calls]))
+
+
+#: Arm joints of the acceleration error after Procrustes alignment (the peers' arms).
+JITTER_ARM_JOINTS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
+#: Half-width (frames) of the naive baseline's centred mean (issue 39).
+NAIVE_HALF_WIDTH = 4
+
+
+def jitter(joints: np.ndarray, decoded: np.ndarray, truth: np.ndarray) -> dict:
+    """Acceleration errors (:func:`mocap.metrics.acceleration_error`, mm/frame^2) and median
+    per-frame errors (mm) of the written joints, of the decoded ones (before the smoother) and of
+    the naive baseline: a centred mean over +-:data:`NAIVE_HALF_WIDTH` frames of the decoded joints
+    (ends: the nearest frame repeated). All arrays (N, 10, 3), metres."""
+    from scipy.ndimage import uniform_filter1d
+
+    naive = uniform_filter1d(decoded, size=2 * NAIVE_HALF_WIDTH + 1, axis=0, mode="nearest")
+    arms = [JOINT_NAMES.index(j) for j in JITTER_ARM_JOINTS]
+    row = {}
+    for name, x in (("", joints), ("decoded_", decoded), ("naive_", naive)):
+        if len(x) >= 3:
+            row[f"{name}accel_mm"] = acceleration_error(x, truth)
+            row[f"{name}accel_arms_pa_mm"] = acceleration_error(x[:, arms], truth[:, arms], align="procrustes")
+        row[f"{name}median_frame_mm"] = float(np.median(mpjpe(x, truth, per_frame=True)))
+        row[f"{name}median_frame_root_relative_mm"] = float(np.median(root_relative_mpjpe(x, truth, per_frame=True)))
+    return row
 
 
 def register_from_truth(prepared, model, camera, true_poses: np.ndarray, config: TrackerConfig, lag: int,

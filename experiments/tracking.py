@@ -5,7 +5,10 @@ beam width K, the decoding lag L, the pose prior, the kinematic jumps, online ag
 decoding) tracks each synthetic sequence (full length, 160x120, true calibration) for each
 generator seed, through :func:`experiments.ambiguity.measure`: MPJPE, root-relative MPJPE
 (about the neck), PA-MPJPE, frames over 100 mm, the flip-oracle and cost-equivalence shares,
-and the tracking time per frame on one core.
+the acceleration error of the written poses (about the neck; issue 39) beside the decoded
+poses' (before the smoother) and the naive baseline's (a centred mean over +-4 frames of the
+decoded joints), and the tracking time per frame on one core. A second table gives each
+sequence's acceleration errors and per-frame median errors, written / decoded / naive.
 
 One JSON file per (configuration, sequence, seed) under ``--out`` (written atomically: an
 interrupted run resumes where it stopped). Prints the Markdown table (medians over sequences,
@@ -53,6 +56,11 @@ CONFIGS = MappingProxyType({
     # the keypoint term alone; issue 34)
     "oracle-keypoints": {},
     "oracle-no-lifter": {"lifter_weight": 0.0},
+    # the written poses' smoother (issue 39): live (lag 0), offline, and off
+    "oracle-L0": {"lag": 0},
+    "oracle-offline": {"offline": True},
+    "oracle-unsmoothed": {"smoothing": {"on": False}},
+    "unsmoothed": {"smoothing": {"on": False}},
     # the score's weights fitted by experiments.fit_score (conditional logit, temperature 10 mm) on the
     # candidates recorded with oracle keypoints on seeds 0-1 (docs/research-log.md, issue 34)
     "oracle-fitted": {"edge_weight": 0.9433, "keypoint_weight": 6.353, "prior_weight": 0.2899,
@@ -73,7 +81,8 @@ CONFIGS = MappingProxyType({
 TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
 #: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
 ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter", "oracle-fitted",
-                                                              "oracle-fitted-silhouette")})
+                                                              "oracle-fitted-silhouette", "oracle-L0", "oracle-offline",
+                                                              "oracle-unsmoothed")})
 
 
 def config_of(name: str) -> TrackerConfig:
@@ -123,6 +132,8 @@ def summarise(rows: list[dict]) -> dict:
                                      weights=[r["frames"] for r in rows]))
                for key in ("proposal_oracle_failure_rate", "proposal_catches_rate", "others_miss_rate",
                            "root_relative_failure_rate", "lifter_oracle_failure_rate", "branch_miss_rate")},
+            **{f"median_{key}": float(np.median([r.get(key, math.nan) for r in rows]))
+               for key in ("accel_mm", "decoded_accel_mm", "naive_accel_mm", "accel_arms_pa_mm")},
             "ms_per_frame": float(np.average([r["tracking_ms_per_frame"] + r["prepare_ms_per_frame"] for r in rows],
                                              weights=[r["frames"] for r in rows])),
             "evaluations_per_frame": float(np.average([r.get("evaluations_per_frame", math.nan) for r in rows],
@@ -134,7 +145,8 @@ def table(summaries: dict[str, dict]) -> str:
     head = ("configuration", "median MPJPE mm", "median root-rel. mm", "median PA-MPJPE mm",
             f"frames > {DEFAULT_FAILURE_MM:g} mm", f"root-rel. > {DEFAULT_FAILURE_MM:g} mm", "worst sequence mm", "beam oracle > 100 mm",
             "proposal oracle > 100 mm", "caught by a proposal alone", "lifter's best of K > 100 mm root-rel.",
-            "branch missed (root-rel.)", "failing, costs <= truth's", "ms / frame (fps)")
+            "branch missed (root-rel.)", "failing, costs <= truth's",
+            "accel mm/frame² (decoded, naive)", "ms / frame (fps)")
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for name, s in summaries.items():
         lines.append(f"| {name} | {s['median_mpjpe_mm']:.0f} | {s['median_root_relative_mm']:.0f} | "
@@ -143,13 +155,36 @@ def table(summaries: dict[str, dict]) -> str:
                      f"{100 * s['beam_oracle_failure_rate']:.1f} % | {_percent(s['proposal_oracle_failure_rate'])} | "
                      f"{_percent(s['proposal_catches_rate'])} | {_percent(s['lifter_oracle_failure_rate'])} | "
                      f"{_percent(s['branch_miss_rate'])} | {100 * s['cost_equivalent_both_rate']:.1f} % | "
+                     f"{_accel(s)} | "
                      f"{s['ms_per_frame']:.1f} "
                      f"({1e3 / s['ms_per_frame']:.0f}) |")
     return "\n".join(lines)
 
 
+def jitter_table(rows: dict[str, list[dict]]) -> str:
+    """Markdown table of each (configuration, sequence, seed)'s acceleration errors about the neck
+    and of the PA-aligned arms (mm/frame^2) and median per-frame errors about the neck and in the
+    camera (mm): written (smoothed) / decoded (before the smoother) / naive baseline."""
+    lines = ["| configuration | sequence | seed | accel about the neck | accel arms (PA) | median about the neck | "
+             "median in the camera |", "|---|---|---|---|---|---|---|"]
+    three = lambda r, key: " / ".join(f"{r.get(p + key, math.nan):.1f}" for p in ("", "decoded_", "naive_"))
+    for name, rs in rows.items():
+        for r in rs:
+            lines.append(f"| {name} | {r['sequence']} | {r.get('seed', '')} | {three(r, 'accel_mm')} | "
+                         f"{three(r, 'accel_arms_pa_mm')} | {three(r, 'median_frame_root_relative_mm')} | "
+                         f"{three(r, 'median_frame_mm')} |")
+    return "\n".join(lines)
+
+
 def _unseen_heading(seeds: list[int]) -> str:
     return f"seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}, never used for tuning"
+
+
+def _accel(s: dict) -> str:
+    """The written, decoded and naive acceleration errors of a summary, or a dash where not measured."""
+    if not math.isfinite(s["median_accel_mm"]):
+        return "-"
+    return f"{s['median_accel_mm']:.1f} ({s['median_decoded_accel_mm']:.1f}, {s['median_naive_accel_mm']:.1f})"
 
 
 def _percent(rate: float) -> str:
@@ -186,6 +221,10 @@ def main(argv=None) -> int:
     units = [(n, s, q) for n in names for s in seeds + unseen for q in sequences]
     rows: dict[str, list[dict]] = {n: [] for n in names}
     unseen_rows: dict[str, list[dict]] = {n: [] for n in names}
+    units_of: dict[str, list[tuple[int, str]]] = {n: [] for n in names}      # seeds, then unseen seeds
+    for name, seed, sequence in units:
+        units_of[name].append((seed, sequence))
+    units_of = {n: sorted(u, key=lambda su: su[0] not in seeds) for n, u in units_of.items()}
     for name, seed, sequence in tqdm(units, desc="ablation", unit="sequence"):
         (rows if seed in seeds else unseen_rows)[name].append(run_unit(args.out, name, sequence, seed))
     summaries = {n: summarise(r) for n, r in rows.items()}
@@ -202,6 +241,9 @@ def main(argv=None) -> int:
         apart = (unseen, {n: summarise(r) for n, r in unseen_rows.items()})
         print(f"\n{_unseen_heading(unseen)}\n")
         print(table(apart[1]))
+    print("\nwritten / decoded / naive (mm/frame² and mm):\n")
+    print(jitter_table({n: [{**r, "seed": s} for r, (s, _) in zip(rows[n] + unseen_rows[n], units_of[n])]
+                        for n in names}))
     if args.report:
         write_report_section(rows, summaries, heading, apart)
     return 0

@@ -19,6 +19,10 @@ function               definition
                        wrap-around aware (179 vs -179 degrees is 2 degrees apart)
 :func:`reprojection_error` mean 2D distance between the projected joints, pixels
 :func:`failure_rate`   fraction of frames whose MPJPE exceeds a threshold (100 mm)
+:func:`acceleration_error`  "Accel" of the video-pose papers: mean over frames and joints of
+                       the distance between the predicted and the true acceleration
+                       a_t = x_{t+1} - 2 x_t + x_{t-1}, mm per frame squared (about the neck,
+                       after Procrustes alignment of each frame, or as is)
 :func:`pck_2d`         share of 2D joints within a fraction of the reference's shoulder
                        width of the reference (another tool's keypoints), in [0, 1]
 :func:`summary`        all of the above as the ``metrics`` object of ``run.json``
@@ -35,7 +39,8 @@ from mocap.body.pose import ANGLE_NAMES, N_PARAMETERS, PARAMETER_INDEX
 from mocap.body.skeleton import JOINT_NAMES
 from mocap.render.camera import Camera
 
-__all__ = ["DEFAULT_FAILURE_MM", "ROOT_JOINT", "SUMMARY_KEYS", "failure_rate", "joint_angle_error", "mpjpe",
+__all__ = ["ACCELERATION_ALIGNMENTS", "DEFAULT_FAILURE_MM", "ROOT_JOINT", "SUMMARY_KEYS", "acceleration_error",
+           "failure_rate", "joint_angle_error", "mpjpe",
            "pa_mpjpe", "pck_2d", "reprojection_error", "root_relative_mpjpe", "summary"]
 
 #: Frames whose MPJPE exceeds this many millimetres count as failures (docs/design.md section 5).
@@ -45,6 +50,8 @@ SUMMARY_KEYS: tuple[str, ...] = ("mpjpe_mm", "root_relative_mpjpe_mm", "pa_mpjpe
                                  "failure_rate")
 #: Joint that root-relative errors are taken about (its row in the joint arrays).
 ROOT_JOINT: str = "neck"
+#: How :func:`acceleration_error` aligns each frame before differencing.
+ACCELERATION_ALIGNMENTS: tuple[str, ...] = ("neck", "procrustes", "none")
 _ANGLE_COLUMNS = np.array([PARAMETER_INDEX[name] for name in ANGLE_NAMES])
 _ANGLE_COLUMNS.setflags(write=False)
 
@@ -162,6 +169,44 @@ def pa_mpjpe(pred, true, *, per_frame: bool = False):
     p, t = _joint_pair(pred, true, min_joints=3)
     aligned = np.stack([_procrustes_align(p[i], t[i]) for i in range(p.shape[0])])
     return mpjpe(aligned, t, per_frame=per_frame)
+
+
+def acceleration_error(pred, true, *, align: str = "neck", per_frame: bool = False):
+    """Acceleration error ("Accel"): how much more (or less) the prediction shakes than the truth.
+
+    With ``a_t = x_{t+1} - 2 x_t + x_{t-1}`` of each joint over consecutive frames, the mean over
+    the frames ``1 .. N-2`` and the joints of ``|a_pred - a_true|``.
+
+    Parameters
+    ----------
+    pred, true : array_like, shape (N, J, 3), metres
+        Consecutive frames, N >= 3.
+    align : str
+        ``"neck"``: both skeletons moved to put :data:`ROOT_JOINT` at 0 first (J must be the
+        named joints); ``"procrustes"``: each predicted frame aligned to the true one as in
+        :func:`pa_mpjpe` (J >= 3; e.g. the arm joints alone); ``"none"``: as given.
+    per_frame : bool
+        Return the error of each inner frame (shape (N-2,)) instead of the mean.
+
+    Returns
+    -------
+    float, or ndarray of shape (N-2,), millimetres per frame squared
+    """
+    if align not in ACCELERATION_ALIGNMENTS:
+        raise ValueError(f"align must be one of {ACCELERATION_ALIGNMENTS}, got {align!r}")
+    p, t = _joint_pair(pred, true, min_joints=3 if align == "procrustes" else 1)
+    if p.shape[0] < 3:
+        raise ValueError(f"the acceleration needs at least 3 frames, got {p.shape[0]}")
+    if align == "neck":
+        if p.shape[1] != len(JOINT_NAMES):
+            raise ValueError(f"errors about the neck need the {len(JOINT_NAMES)} named joints, got {p.shape[1]}")
+        r = JOINT_NAMES.index(ROOT_JOINT)
+        p, t = p - p[:, r:r + 1], t - t[:, r:r + 1]
+    elif align == "procrustes":
+        p = np.stack([_procrustes_align(p[i], t[i]) for i in range(p.shape[0])])
+    accel = lambda x: x[2:] - 2.0 * x[1:-1] + x[:-2]
+    errors = 1e3 * np.linalg.norm(accel(p) - accel(t), axis=2).mean(axis=1)
+    return errors if per_frame else float(errors.mean())
 
 
 def _pose_pair(pred, true) -> tuple[np.ndarray, np.ndarray]:

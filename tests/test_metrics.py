@@ -7,7 +7,7 @@ from scipy.spatial.transform import Rotation
 
 from mocap.body.pose import PARAMETER_INDEX, neutral_pose
 from mocap.body.skeleton import JOINT_NAMES
-from mocap.metrics import (SUMMARY_KEYS, failure_rate, joint_angle_error, mpjpe, pa_mpjpe,
+from mocap.metrics import (SUMMARY_KEYS, acceleration_error, failure_rate, joint_angle_error, mpjpe, pa_mpjpe,
                            reprojection_error, root_relative_mpjpe, summary)
 from mocap.render.camera import Camera
 
@@ -108,6 +108,30 @@ def test_root_relative_error_removes_the_neck_offset_only():
         root_relative_mpjpe(np.zeros((1, 3, 3)), np.zeros((1, 3, 3)))
 
 
+def test_acceleration_error_hand_computed():
+    # truth still; one joint of the prediction at x = (0, 0, 3, 0) mm over four frames:
+    # a_1 = x2 - 2 x1 + x0 = 3, a_2 = x3 - 2 x2 + x1 = -6: |3| and |6| over 10 joints
+    true = np.zeros((4, 10, 3))
+    true[:, :, 2] = 3.0
+    pred = true.copy()
+    wrist = JOINT_NAMES.index("r_wrist")
+    pred[2, wrist, 0] += 0.003
+    per_frame = acceleration_error(pred, true, align="none", per_frame=True)
+    assert per_frame == pytest.approx([3.0 / 10, 6.0 / 10])
+    assert acceleration_error(pred, true, align="none") == pytest.approx(0.45)
+    # about the neck: moving the whole skeleton (neck included) by the same shake changes nothing
+    shaken = true + np.array([0.0, 0.0, 0.003, 0.0])[:, None, None]
+    assert acceleration_error(shaken, true, align="neck") == pytest.approx(0.0, abs=1e-9)
+    # (every joint shaken by (3, 3, 3) mm on frame 2: |a| = 3 sqrt(3) and 6 sqrt(3))
+    assert acceleration_error(shaken, true, align="none") == pytest.approx(4.5 * math.sqrt(3))
+    # after Procrustes alignment a rigid motion of the prediction is no error either
+    rng = np.random.default_rng(1)
+    true = rng.normal(size=(5, 6, 3)) * 0.3 + [0, 0, 3]
+    moved = np.stack([Rotation.from_rotvec([0, 0.1 * i, 0]).apply(f) + [0.01 * i ** 2, 0, 0] for i, f in enumerate(true)])
+    assert acceleration_error(moved, true, align="procrustes") == pytest.approx(0.0, abs=1e-6)
+    assert acceleration_error(moved, true, align="none") > 5.0
+
+
 def test_summary_has_exactly_the_run_json_keys():
     pred, true = _frames_with_errors([10.0, 20.0], n_joints=len(JOINT_NAMES))
     poses = np.tile(neutral_pose(), (2, 1))
@@ -130,6 +154,9 @@ def test_summary_has_exactly_the_run_json_keys():
     lambda: reprojection_error(np.zeros((1, 2, 3)), np.zeros((1, 2, 3)), Camera.default()),
     lambda: reprojection_error(np.ones((1, 2, 3)), np.ones((1, 2, 3)), "camera"),
     lambda: failure_rate(np.ones((1, 2, 3)), np.ones((1, 2, 3)), threshold_mm=-1.0),
+    lambda: acceleration_error(np.ones((2, 10, 3)), np.ones((2, 10, 3))),
+    lambda: acceleration_error(np.ones((3, 4, 3)), np.ones((3, 4, 3))),
+    lambda: acceleration_error(np.ones((3, 10, 3)), np.ones((3, 10, 3)), align="hips"),
     lambda: summary(np.zeros((2, 23)), np.zeros((2, 23)), np.ones((3, 4, 3)), np.ones((3, 4, 3)),
                     Camera.default()),
 ])

@@ -33,7 +33,8 @@ __all__ = ["EXTRA_COLUMNS", "PIXEL_COLUMNS", "FinishedRun", "RunSummary", "finis
            "joint_pixels", "versions"]
 
 #: Per-frame columns of ``poses.csv`` after the pose and joint columns.
-EXTRA_COLUMNS = ("region_residual", "edge_residual", "edge_residual_after_region", "failed", "empty", "hypothesis",
+EXTRA_COLUMNS = ("region_residual", "edge_residual", "keypoint_residual", "edge_residual_after_region", "smoothed_mm",
+                 "failed", "empty", "hypothesis",
                  "score", "origin", "evaluations", "region_iterations",
                  "edge_iterations", "ms_prepare", "ms_region", "ms_edge", "ms_beam", "ms_proposals", "ms_total")
 #: Names of the 2D keypoint columns of ``poses.csv`` (input-video pixels).
@@ -143,7 +144,8 @@ def frame_row(result, camera=None, work_factor: int = 1, dark: bool | None = Non
         uv = joint_pixels(result.joints, camera, work_factor).reshape(-1)
         extra.update({name: [value] for name, value in zip(PIXEL_COLUMNS, uv)})
     extra |= {"region_residual": [result.region_residual], "edge_residual": [result.edge_residual],
-              "edge_residual_after_region": [result.edge_residual_after_region],
+              "keypoint_residual": [result.keypoint_residual],
+              "edge_residual_after_region": [result.edge_residual_after_region], "smoothed_mm": [result.smoothed_mm],
               "failed": np.array([int(result.failed)]), "empty": np.array([int(result.empty)]),
               "hypothesis": np.array([result.hypothesis]), "score": [result.score],
               "origin": np.array([result.origin]),

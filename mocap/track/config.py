@@ -17,6 +17,7 @@ from mocap.body.pose import N_PARAMETERS
 from mocap.config import JsonConfig
 from mocap.track.score import BEYOND_PAPER_FIELDS, WEIGHT_FIELDS
 from mocap.track.score import MOTION_CAP, MOTION_SIGMA_M, REGION_WEIGHT  # noqa: F401 (re-exported: the score's constants)
+from mocap.track.smooth import SmootherConfig
 
 #: Total budget below which the ``auto`` policy gives every evaluation to the region step.
 AUTO_SPLIT_THRESHOLD = 200
@@ -151,6 +152,9 @@ class TrackerConfig(JsonConfig):
         Beyond the paper (its future work): after the edge step, a bounded Gauss–Newton descent
         of eq. (2) on its analytic gradient (:func:`mocap.optimize.minimize_edge_gauss_newton`),
         with :data:`GRADIENT_SHARE` of the edge step's evaluations.
+    smoothing : SmootherConfig
+        The written poses' fixed-lag smoother over the decoding's ``lag`` (the whole clip
+        offline): :mod:`mocap.track.smooth`; off in :meth:`paper`.
     """
 
     evaluations: int = 500
@@ -177,6 +181,7 @@ class TrackerConfig(JsonConfig):
     proposals_refined: int = 2
     proposal_evaluations: int = 100
     gradient_step: bool = False
+    smoothing: SmootherConfig = SmootherConfig()
 
     def __post_init__(self) -> None:
         for name in ("beam",):
@@ -191,6 +196,10 @@ class TrackerConfig(JsonConfig):
         for name in ("recovery", "hand_reacquisition", "jumps", "offline", "gradient_step"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
+        if isinstance(self.smoothing, dict):         # TrackerConfig(**config.to_dict()) gives its dict
+            object.__setattr__(self, "smoothing", SmootherConfig.from_dict(self.smoothing))
+        if not isinstance(self.smoothing, SmootherConfig):
+            raise ValueError(f"smoothing must be a SmootherConfig, got {self.smoothing!r}")
         if self.lifter_file is not None and (not isinstance(self.lifter_file, str) or not self.lifter_file):
             raise ValueError(f"lifter_file must be a file name or None, got {self.lifter_file!r}")
         split_budget(self.evaluations, self.split)          # validates the split
@@ -218,7 +227,7 @@ class TrackerConfig(JsonConfig):
             unknown names raise TypeError.
         """
         return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0, gradient_step=False,
-                           **{name: 0.0 for name in BEYOND_PAPER_FIELDS}),
+                           smoothing=SmootherConfig(on=False), **{name: 0.0 for name in BEYOND_PAPER_FIELDS}),
                        **changes)
 
     @property

@@ -75,12 +75,18 @@ class Registration:
         :data:`~mocap.track.config.KEYPOINT_FAILURE_THRESHOLD_PX`, or F and the edge distance at
         the pose (whether or not the edge step ran) both above theirs: a segmentation that gets
         the colours wrong no longer fails a pose that the keypoints and the edges place."""
-        region_peak = self.region_residual > REGION_FAILURE_THRESHOLD
-        if math.isnan(self.keypoint_residual):
-            edge_checked = self.edge is not None and self.edge.evaluations > 0
-            return bool(region_peak or (edge_checked and self.edge_residual > EDGE_FAILURE_THRESHOLD_PX))
-        return bool(self.keypoint_residual > KEYPOINT_FAILURE_THRESHOLD_PX
-                    or (region_peak and self.edge_residual > EDGE_FAILURE_THRESHOLD_PX))
+        edge_checked = self.edge is not None and self.edge.evaluations > 0
+        return failed_residuals(self.region_residual, self.edge_residual, self.keypoint_residual, edge_checked)
+
+
+def failed_residuals(region: float, edge: float, keypoint: float, edge_checked: bool) -> bool:
+    """The failure rule of :meth:`Registration.failed` on a pose's residuals: F (in [0, 1]), the
+    edge distance and the keypoint distance (pixels; NaN without keypoints); ``edge_checked``:
+    the edge step had a budget (without keypoints the edge distance counts only then)."""
+    region_peak = region > REGION_FAILURE_THRESHOLD
+    if math.isnan(keypoint):
+        return bool(region_peak or (edge_checked and edge > EDGE_FAILURE_THRESHOLD_PX))
+    return bool(keypoint > KEYPOINT_FAILURE_THRESHOLD_PX or (region_peak and edge > EDGE_FAILURE_THRESHOLD_PX))
 
 
 def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: TrackerConfig, *,

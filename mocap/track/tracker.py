@@ -21,6 +21,11 @@ the best path to it; near-duplicates are merged and the ``beam`` cheapest surviv
 A frame's pose is decided ``lag`` frames later by backtracking the best path from the newest
 frame (online), or at the end of the sequence through all frames (``offline``). With
 ``beam=1``, ``lag=0`` and every proposal off this is the paper's single-hypothesis tracker.
+The pose written is then smoothed (``config.smoothing``, :mod:`mocap.track.smooth`): the
+fixed-lag smoother reads the best path's tentative poses of the frames not yet decided, and
+the frame's residuals (region, edge, keypoint distance, the failure flag) are those of the
+smoothed pose, evaluated on the frame's image then (the window keeps each frame's label image,
+distance map and keypoints for that).
 
 The tracker streams: :meth:`Tracker.push` takes a prepared frame and returns the frames whose
 pose is now final, :meth:`Tracker.finish` the rest; :meth:`Tracker.state` and
@@ -44,13 +49,14 @@ from mocap.body.pose import check_pose, clamp_to_limits
 from mocap.body.prior import PosePrior, default_prior
 from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.render.camera import Camera
-from mocap.track.config import JUMPS_REFINED, MERGE_DISTANCE_M, RECOVERY_STEP_SCALE, TrackerConfig
+from mocap.track.config import JUMPS_REFINED, MERGE_DISTANCE_M, RECOVERY_STEP_SCALE, TrackerConfig, split_budget
 from mocap.track.decode import backtrack, viterbi_step
 from mocap.track.lifter import LiftedHypotheses, Lifter
 from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, jump_proposals, reach_proposals,
                                    unexplained_hands)
-from mocap.track.registration import Registration, register
+from mocap.track.registration import Registration, failed_residuals, register
 from mocap.track.score import MOTION, UNARY_TERMS, ScoredCandidate, motion_term, weighted_sum, weights
+from mocap.track.smooth import Smoother
 
 @dataclass(kw_only=True)
 class FrameResult:
@@ -63,7 +69,12 @@ class FrameResult:
     ``hypothesis`` is the chosen hypothesis's rank in its frame's beam when that frame was
     tracked (0: it led), ``score`` its unary score and ``origin`` what produced it in that
     frame (``tracked``, ``recovery``, ``reacquisition``, ``jump``, a proposal source's ``origin``,
-    ``empty`` or ``initial``).
+    ``empty`` or ``initial``). ``pose`` and ``joints`` are the smoothed ones when
+    ``config.smoothing`` is on, and ``region_residual``, ``edge_residual``,
+    ``keypoint_residual`` (NaN without keypoints) and ``failed`` are theirs; ``score`` and
+    ``edge_residual_after_region`` stay the decoded hypothesis's, and ``smoothed_mm`` is the
+    mean joint distance from the decoded pose (``decoded_pose``) to the written one
+    (millimetres; 0 unsmoothed).
     """
 
     frame: int
@@ -81,6 +92,9 @@ class FrameResult:
     timings_ms: dict[str, float] = field(default_factory=dict)
     hypothesis: int = 0
     score: float = math.nan
+    keypoint_residual: float = math.nan
+    smoothed_mm: float = 0.0
+    decoded_pose: np.ndarray | None = None
 
 
 @dataclass
@@ -98,6 +112,15 @@ class _Hypothesis:
 
 
 @dataclass
+class _Evidence:
+    """What a frame's residuals are evaluated on when its pose is written (smoothing on)."""
+
+    labels: np.ndarray                  # (H, W) uint8: PreparedFrame.labels
+    distance: np.ndarray                # (H, W) float32: PreparedFrame.distance
+    keypoints: np.ndarray | None        # (10, 3): u, v (working pixels, NaN absent), confidence
+
+
+@dataclass
 class _Frame:
     index: int
     empty: bool
@@ -106,6 +129,7 @@ class _Frame:
     back: np.ndarray            # its predecessor among the previous frame's hypotheses
     evaluations: int
     timings: dict[str, float]
+    evidence: _Evidence | None = None   # smoothing on: the frame's images and keypoints (None when empty)
 
 
 class Tracker:
@@ -157,6 +181,8 @@ class Tracker:
         self._cost = np.zeros(1)
         self._window: deque[_Frame] = deque()
         self.last_good = q
+        #: The written poses' smoother (None when ``config.smoothing`` is off).
+        self.smoother: Smoother | None = Smoother(config.smoothing) if config.smoothing.on else None
 
     # -- streaming ---------------------------------------------------------------------------
     def push(self, frame_index: int, prepared, keypoints=None) -> list[FrameResult]:
@@ -169,6 +195,9 @@ class Tracker:
         in order.
         """
         frame = self._track(int(frame_index), prepared, keypoints)
+        if self.smoother is not None and not frame.empty:
+            frame.evidence = _Evidence(prepared.labels, prepared.distance, None if keypoints is None else
+                                       np.column_stack([keypoints.uv, keypoints.confidence]))
         self._window.append(frame)
         self._beam, self._cost = frame.hypotheses, frame.cost
         leader = frame.hypotheses[0]
@@ -178,20 +207,46 @@ class Tracker:
             return []
         out = []
         while len(self._window) > self.config.lag:
-            out.append(self._decide_oldest())
+            out += self._decide(1)
         return out
 
     def finish(self) -> list[FrameResult]:
-        """The frames still undecided at the end of the video, decided by the best path."""
-        out = []
-        while self._window:
-            out.append(self._decide_oldest())
-        return out
+        """The frames still undecided at the end of the video, decided by the best path (one
+        smoother pass: the same poses as deciding them one by one)."""
+        return self._decide(len(self._window)) if self._window else []
 
-    def _decide_oldest(self) -> FrameResult:
-        frames = self._window
-        path = backtrack([f.back for f in list(frames)[1:]], int(np.argmin(frames[-1].cost)))
-        return _result(frames.popleft(), path[0])
+    def _decide(self, count: int) -> list[FrameResult]:
+        """The ``count`` oldest frames of the window decided by the best path, smoothed, written."""
+        frames = list(self._window)
+        path = backtrack([f.back for f in frames[1:]], int(np.argmin(frames[-1].cost)))
+        chosen = [f.hypotheses[k] for f, k in zip(frames, path)]
+        if self.smoother is None:
+            return [_result(self._window.popleft(), int(path[i])) for i in range(count)]
+        weights = np.array([self.smoother.weights(None if f.evidence is None or f.evidence.keypoints is None
+                                                  else f.evidence.keypoints[:, 2]) for f in frames])
+        poses = self.smoother.smooth(np.array([h.pose for h in chosen]), np.array([h.joints for h in chosen]),
+                                     weights, count)
+        return [self._written(self._window.popleft(), int(path[i]), poses[i]) for i in range(count)]
+
+    def _written(self, frame: _Frame, k: int, pose: np.ndarray) -> FrameResult:
+        """Frame ``frame``'s result with the smoothed ``pose`` and the residuals there."""
+        result = _result(frame, k)
+        joints = self.model.joint_positions(pose)
+        result.pose, result.joints = pose, joints
+        result.smoothed_mm = 1e3 * float(np.linalg.norm(joints - frame.hypotheses[k].joints, axis=1).mean())
+        evidence = frame.evidence
+        if evidence is None:            # an empty frame: nothing to evaluate
+            return result
+        region = RegionCost(evidence.labels, self.model, self.camera)(pose)
+        edge = EdgeCost(evidence.distance, self.model, self.camera)(pose)
+        keypoint_cost = None
+        if evidence.keypoints is not None and self.config.keypoint_weight != 0:
+            keypoint_cost = KeypointCost(evidence.keypoints[:, :2], evidence.keypoints[:, 2], self.model, self.camera)
+        keypoint = math.nan if keypoint_cost is None or keypoint_cost.empty else keypoint_cost(pose)
+        result.region_residual, result.edge_residual, result.keypoint_residual = region, edge, keypoint
+        result.failed = failed_residuals(region, edge, keypoint,
+                                         edge_checked=split_budget(self.config.evaluations, self.config.split)[1] > 0)
+        return result
 
     @property
     def pending(self) -> int:
@@ -369,13 +424,27 @@ class Tracker:
 
         Restoring it with :meth:`restore` on a tracker built with the same model, camera and
         config makes the following calls give bit-identical results (floats are stored exactly).
+        With smoothing on it holds the smoother's filtered state and, for each frame of the
+        window, its label image, distance map and keypoints (``window_labels_<i>``,
+        ``window_distance_<i>``, ``window_keypoints_<i>``: what the written pose's residuals are
+        evaluated on; about 100 kB a frame at 160x120, so an offline run's state grows with the
+        clip).
         """
         doc = {"beam": [_hyp_to_dict(h) for h in self._beam], "cost": self._cost.tolist(),
                "last_good": self.last_good.tolist(),
+               "smoother": None if self.smoother is None else self.smoother.state(),
                "window": [{"index": f.index, "empty": f.empty, "hypotheses": [_hyp_to_dict(h) for h in f.hypotheses],
                            "cost": f.cost.tolist(), "back": f.back.tolist(), "evaluations": f.evaluations,
-                           "timings": f.timings} for f in self._window]}
-        return {"tracker_json": np.array(json.dumps(doc))}
+                           "timings": f.timings, "evidence": f.evidence is not None,
+                           "keypoints": f.evidence is not None and f.evidence.keypoints is not None}
+                          for f in self._window]}
+        arrays = {"tracker_json": np.array(json.dumps(doc))}
+        for i, f in enumerate(self._window):
+            if f.evidence is not None:
+                arrays[f"window_labels_{i}"], arrays[f"window_distance_{i}"] = f.evidence.labels, f.evidence.distance
+                if f.evidence.keypoints is not None:
+                    arrays[f"window_keypoints_{i}"] = f.evidence.keypoints
+        return arrays
 
     def restore(self, state: dict[str, np.ndarray]) -> None:
         """Continue from a :meth:`state` (see there)."""
@@ -384,12 +453,26 @@ class Tracker:
             beam = [_hyp_from_dict(h) for h in doc["beam"]]
             window = deque(_Frame(int(f["index"]), bool(f["empty"]), [_hyp_from_dict(h) for h in f["hypotheses"]],
                                   np.array(f["cost"], dtype=np.float64), np.array(f["back"], dtype=np.int64),
-                                  int(f["evaluations"]), {k: float(v) for k, v in f["timings"].items()})
-                           for f in doc["window"])
+                                  int(f["evaluations"]), {k: float(v) for k, v in f["timings"].items()},
+                                  _evidence_from(state, i, f))
+                           for i, f in enumerate(doc["window"]))
             cost, last_good = np.array(doc["cost"], dtype=np.float64), check_pose(doc["last_good"])
+            if (doc["smoother"] is None) != (self.smoother is None):
+                raise ValueError("smoothing on in one, off in the other")
+            if self.smoother is not None:
+                self.smoother.restore(doc["smoother"])
         except (KeyError, TypeError, ValueError) as err:
             raise ValueError(f"not a tracker state of this version: {err}") from None
         self._beam, self._cost, self._window, self.last_good = beam, cost, window, last_good
+
+
+def _evidence_from(state: dict[str, np.ndarray], i: int, frame: dict) -> _Evidence | None:
+    """Window frame ``i``'s evidence from a :meth:`Tracker.state` (None where it has none)."""
+    if not frame["evidence"]:
+        return None
+    keypoints = np.array(state[f"window_keypoints_{i}"], dtype=np.float64) if frame["keypoints"] else None
+    return _Evidence(np.array(state[f"window_labels_{i}"], dtype=np.uint8),
+                     np.array(state[f"window_distance_{i}"], dtype=np.float32), keypoints)
 
 
 def _hyp_to_dict(h: _Hypothesis) -> dict:
@@ -411,7 +494,8 @@ def _result(frame: _Frame, k: int) -> FrameResult:
                        region_residual=h.region_residual, edge_residual=h.edge_residual,
                        edge_residual_after_region=h.edge_residual_after_region, failed=h.failed, empty=frame.empty,
                        origin=h.origin, evaluations=frame.evaluations, region_iterations=h.region_iterations,
-                       edge_iterations=h.edge_iterations, timings_ms=dict(frame.timings), hypothesis=k, score=h.unary)
+                       edge_iterations=h.edge_iterations, timings_ms=dict(frame.timings), hypothesis=k, score=h.unary,
+                       decoded_pose=h.pose.copy())
 
 
 def proposal_sources(config: TrackerConfig, lifting: LifterSource | None = None) -> list[ProposalSource]:

@@ -23,8 +23,17 @@ def test_summary_pools_frames_and_takes_medians_over_sequences():
     assert s["worst_mpjpe_mm"] == pytest.approx(110.0)
     assert s["ms_per_frame"] == pytest.approx(25.0)
     text = table({"default": s})
-    assert "| default | 60 | 30 | 20 | 22.2 % | - | 110 | 0.0 % | - | - | - | - | 0.0 % | 25.0 (40) |" in text
+    assert "| default | 60 | 30 | 20 | 22.2 % | - | 110 | 0.0 % | - | - | - | - | 0.0 % | - | 25.0 (40) |" in text
     assert all(line.count("|") == text.splitlines()[0].count("|") for line in text.splitlines())
+
+
+def test_summary_takes_the_median_acceleration_error_over_sequences():
+    accel = lambda a, d, n: {"accel_mm": a, "decoded_accel_mm": d, "naive_accel_mm": n, "accel_arms_pa_mm": a / 2}
+    rows = [row("a", [10]) | accel(3.0, 40.0, 5.0), row("b", [20]) | accel(9.0, 50.0, 6.0),
+            row("c", [30]) | accel(5.0, 60.0, 4.0)]
+    s = summarise(rows)
+    assert (s["median_accel_mm"], s["median_decoded_accel_mm"], s["median_naive_accel_mm"]) == (5.0, 50.0, 5.0)
+    assert "| 5.0 (50.0, 5.0) |" in table({"default": s})
 
 
 def test_summary_of_the_proposal_stage_weights_rates_by_frames():
