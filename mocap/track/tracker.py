@@ -45,6 +45,7 @@ from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.render.camera import Camera
 from mocap.track.config import (JUMPS_REFINED, MERGE_DISTANCE_M, MOTION_CAP, MOTION_SIGMA_M,
                                 RECOVERY_STEP_SCALE, REGION_WEIGHT, TrackerConfig)
+from mocap.track.branches import depth_alternatives
 from mocap.track.decode import backtrack, viterbi_step
 from mocap.track.lifter import LiftedHypotheses, Lifter
 from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, jump_proposals, reach_proposals,
@@ -302,7 +303,7 @@ class Tracker:
         candidates: list[tuple[Registration, str]] = []
         evaluations = 0
         t1 = time.perf_counter()
-        for rank, h in enumerate(self._beam):
+        for rank, h in enumerate(self._beam[:cfg.beam]):      # past the beam: last frame's mirrors
             budget = cfg.evaluations if rank == 0 else cfg.hypothesis_evaluations
             if budget > 0 or rank == 0:                 # the leader always (0: its pose kept)
                 reg = fit(h.pose, evaluations=budget)
@@ -323,6 +324,8 @@ class Tracker:
             evaluations += self._reacquire(prepared, region_cost, fit, leader, candidates)
         if cfg.jumps:
             evaluations += self._jump(region_cost, fit, leader, candidates)
+        if cfg.mirrors and keypoint_cost is not None:
+            evaluations += self._mirror(fit, leader, candidates)
         t3 = time.perf_counter()
         if self.sources and cfg.proposals_refined > 0:
             context = ProposalContext(lifted=lifted)
@@ -406,16 +409,25 @@ class Tracker:
         return np.minimum(0.5 * squared / MOTION_SIGMA_M ** 2, MOTION_CAP)
 
     def _select(self, hypotheses: list[_Hypothesis], cost: np.ndarray) -> list[int]:
-        """Indices of the survivors: cheapest path first, near-duplicates merged, at most ``beam``."""
+        """Indices of the survivors: cheapest path first, near-duplicates merged, at most ``beam``;
+        then the frame's mirrors not merged into them (the decoder's states of the mirrored
+        branches, which the next frame does not register)."""
         keep: list[int] = []
-        for i in np.argsort(cost, kind="stable"):
+
+        def merged(i) -> bool:
             joints = hypotheses[i].joints
-            if any(np.linalg.norm(joints - hypotheses[k].joints, axis=1).mean() < MERGE_DISTANCE_M
-                   for k in keep):
+            return any(np.linalg.norm(joints - hypotheses[k].joints, axis=1).mean() < MERGE_DISTANCE_M for k in keep)
+
+        order = np.argsort(cost, kind="stable")
+        for i in order:
+            if merged(i):
                 continue
             keep.append(int(i))
             if len(keep) == self.config.beam:
                 break
+        for i in order:
+            if hypotheses[i].origin == "mirror" and int(i) not in keep and not merged(i):
+                keep.append(int(i))
         return keep
 
     def _reacquire(self, prepared, region_cost, fit, leader: Registration, candidates: list) -> int:
@@ -442,6 +454,16 @@ class Tracker:
             reg = fit(q, evaluations=self.config.jump_evaluations)
             used += reg.evaluations
             candidates.append((reg, "jump"))
+        return used
+
+    def _mirror(self, fit, leader: Registration, candidates: list) -> int:
+        """The converged leader's depth alternatives (:mod:`mocap.track.branches`), each registered
+        with ``mirror_evaluations`` (0: its residuals where it stands); returns evaluations used."""
+        used = 0
+        for alternative in depth_alternatives(leader.pose, self.model, self.camera):
+            reg = fit(alternative.pose, evaluations=self.config.mirror_evaluations)
+            used += reg.evaluations
+            candidates.append((reg, "mirror"))
         return used
 
     def _propose(self, source: ProposalSource, prepared, context: ProposalContext, rough, fit,
