@@ -4,7 +4,9 @@ Every frame, each hypothesis kept from the previous frame is extended by the two
 registration (:func:`~mocap.track.registration.register`; the leading one with the full
 budget, the others with ``hypothesis_evaluations``). Proposals compete with them: a recovery
 from the last good pose when the leader fails, hand re-acquisition when a skin region is left
-unexplained, the leader's kinematic jumps (:mod:`mocap.body.jumps`), and the proposal stage's
+unexplained, the leader's kinematic jumps (:mod:`mocap.body.jumps`), on frames with keypoints the
+converged leader's exact depth alternatives (:mod:`mocap.track.branches`, origin ``mirror``: the
+same projections, scored where they stand), and the proposal stage's
 poses read from the current image (:class:`~mocap.track.proposals.ProposalSource`: from 2D
 keypoints, the learned lifter's whole-body hypotheses), each refined by a short registration. Every
 candidate gets a **unary score** (``REGION_WEIGHT * F + edge_weight * edge distance +
@@ -15,7 +17,10 @@ times the lifter's negative log-density at the candidate's joints); between cons
 them. Each frame's candidates and their terms before the weights stay readable in :attr:`Tracker.scored`
 (:class:`ScoredCandidate`; ``experiments.fit_score`` fits the weights on them). The forward
 Viterbi recursion (:func:`~mocap.track.decode.viterbi_step`) gives each candidate the cost of
-the best path to it; near-duplicates are merged and the ``beam`` cheapest survive.
+the best path to it; near-duplicates are merged and the ``beam`` cheapest survive, and beside them
+the frame's mirrors: decoder states that the next frame does not register, so that a mirrored
+branch's path runs through the previous frame's same mirror (a small motion term) and a switch of
+branch is decided by the evidence summed over the lag rather than by one frame's margin.
 
 A frame's pose is decided ``lag`` frames later by backtracking the best path from the newest
 frame (online), or at the end of the sequence through all frames (``offline``). With
@@ -265,7 +270,8 @@ class Tracker:
 
     @property
     def hypotheses(self) -> list[np.ndarray]:
-        """Poses of the current beam, best path cost first (metres, radians)."""
+        """Poses of the current beam, best path cost first (metres, radians); after a frame with
+        mirrors, its mirrors past the ``beam`` registered ones."""
         return [h.pose.copy() for h in self._beam]
 
     # -- one frame ---------------------------------------------------------------------------
