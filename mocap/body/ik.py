@@ -283,7 +283,8 @@ def _arm_angles(q: np.ndarray, skeleton: Skeleton, side: str, targets: np.ndarra
 
 
 def place_arm(pose, skeleton: Skeleton, side: str, targets, *, regularization: float = PLACE_REGULARIZATION,
-              iterations: int = REACH_ITERATIONS, limits: np.ndarray = JOINT_LIMITS) -> ArmPlacement:
+              iterations: int = REACH_ITERATIONS, limits: np.ndarray = JOINT_LIMITS,
+              polish_within_m: float = np.inf) -> ArmPlacement:
     """Pose with one arm's seven angles moved so that its elbow, wrist and hand lie on ``targets``.
 
     First in closed form (each bone's direction gives its angles, clipped to the limits); when that
@@ -308,6 +309,9 @@ def place_arm(pose, skeleton: Skeleton, side: str, targets, *, regularization: f
         Levenberg–Marquardt iterations per start at most.
     limits : ndarray, shape (23, 2)
         Joint limits (radians); the result stays within them.
+    polish_within_m : float, metres
+        The Levenberg–Marquardt polish runs only when the closed form misses by at most this
+        (a caller that prunes farther misses anyway saves its time).
 
     Returns
     -------
@@ -329,7 +333,7 @@ def place_arm(pose, skeleton: Skeleton, side: str, targets, *, regularization: f
     closed[active] = _arm_angles(q, skeleton, side, t, limits)
     best = closed
     best_miss = float(np.max(np.linalg.norm(joint_positions(closed, skeleton)[rows] - t, axis=1)))
-    if best_miss <= PLACE_TOLERANCE_M:
+    if best_miss <= PLACE_TOLERANCE_M or best_miss > polish_within_m:
         return ArmPlacement(pose=best, miss_m=best_miss)
     out = _reach(closed, skeleton.offsets, segments, local, active, lower, upper, t, REACH_SCALE_M,
                  float(regularization), int(iterations))
