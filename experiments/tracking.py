@@ -45,7 +45,7 @@ CONFIGS = MappingProxyType({
     "L0": {"lag": 0},
     "L16": {"lag": 16},
     "offline": {"offline": True},
-    "no-prior": {"prior_weight": 0.0, "silhouette_prior_weight": 0.0},
+    "no-prior": {"prior_weight": 0.0},
     "no-jumps": {"jumps": False},
     "two-class": {},
     # given the oracle's 2D keypoints (ORACLE_KEYPOINTS): the default tracker (the learned lifter's
@@ -58,10 +58,11 @@ CONFIGS = MappingProxyType({
     "oracle-fitted": {"edge_weight": 0.9433, "keypoint_weight": 6.353, "prior_weight": 0.2899,
                       "lifter_weight": 2.315, "motion_weight": 0.8179},
     # without keypoints, the weights fitted by experiments.fit_score on candidates recorded without
-    # keypoints (seeds 0-1); and the same with the motion term kept (not shipped: docs/research-log.md)
-    "fitted-silhouette": {"silhouette_edge_weight": 0.01516, "silhouette_prior_weight": 0.00708,
-                          "silhouette_motion_weight": 0.0},
-    "silhouette-motion": {"silhouette_edge_weight": 0.01516, "silhouette_prior_weight": 0.00708},
+    # keypoints (seeds 0-1); and the same with the motion term kept (not shipped: docs/research-log.md).
+    # Tracked without keypoints, so every frame is scored by them (the silhouette_* twins that held
+    # them for such frames alone were removed in issue 39)
+    "fitted-silhouette": {"edge_weight": 0.01516, "prior_weight": 0.00708, "motion_weight": 0.0},
+    "silhouette-motion": {"edge_weight": 0.01516, "prior_weight": 0.00708},
     # the weights fitted without keypoints given to the frames with the oracle's keypoints too (did not pay)
     "oracle-fitted-silhouette": {"edge_weight": 0.01516, "prior_weight": 0.00708, "motion_weight": 0.0},
     # the default tracker with the gradient step (issue 30; off by default: docs/research-log.md)

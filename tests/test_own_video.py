@@ -196,11 +196,11 @@ def test_bench_video_stage_runs_the_whole_path_on_a_640x480_clip():
 def test_compiled_overlay_drawer_equals_numpy_on_the_render():
     """ModelDrawer (render and blend compiled, in the model's box, buffers reused) draws the
     picture of the NumPy twin on render()'s labels and edges, bit for bit, for varied poses, a
-    pose out of view and two sizes, and leaves its buffers clean; draw_pose is the same."""
+    pose out of view and two sizes, and leaves its buffers clean."""
     from mocap.bench import _poses
     from mocap.body import BodyModel
     from mocap.render import Camera, render
-    from mocap.run.overlay import ModelDrawer, draw_pose
+    from mocap.run.overlay import ModelDrawer
     from tests.naive import naive_draw_model
 
     rng = np.random.default_rng(5)
@@ -216,7 +216,6 @@ def test_compiled_overlay_drawer_equals_numpy_on_the_render():
             r = render(pose, model, camera)
             expected = naive_draw_model(frame, r.labels, r.edges, model.n_classes, class_names=model.class_names)
             np.testing.assert_array_equal(drawer.draw(frame, pose), expected)
-            np.testing.assert_array_equal(draw_pose(frame, pose, model, camera), expected)
             assert not drawer.buffers.part_ids.any() and not drawer.buffers.inverse_depth.any()
             assert not drawer.marks.any()
         np.testing.assert_array_equal(frame, kept)

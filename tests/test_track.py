@@ -167,8 +167,7 @@ def test_hand_reacquisition_refinds_a_lost_arm():
     truth, lost, frame = lost_arm_frame()
     errors = {}
     for on in (False, True):
-        config = TrackerConfig(hand_reacquisition=on, beam=1, jumps=False, lag=0, prior_weight=0.0,
-                               silhouette_prior_weight=0.0)
+        config = TrackerConfig(hand_reacquisition=on, beam=1, jumps=False, lag=0, prior_weight=0.0)
         tracker = Tracker(MODEL, CAMERA, config, lost)
         result, = tracker.push(0, frame)
         errors[on] = joint_error(result.pose, truth)

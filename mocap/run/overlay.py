@@ -2,7 +2,7 @@
 input's resolution up to :data:`OVERLAY_MAX_WIDTH` pixels wide (a wider input is reduced by the
 integer factor that brings it under: :func:`overlay_factor`).
 
-The overlay has one drawer, :func:`draw_pose`, whether it is written as frames come
+The overlay has one drawer, :class:`ModelDrawer`, whether it is written as frames come
 (:class:`OverlayWriter`, a fresh run) or redrawn at the end from ``poses.csv``
 (:func:`redraw_overlay`, a resumed run): both look the same.
 
@@ -26,7 +26,7 @@ from mocap.render.camera import Camera
 from mocap.run import files
 
 __all__ = ["EDGE_COLOUR", "OVERLAY_MAX_WIDTH", "ModelDrawer", "OverlayGeometry", "OverlayWriter", "draw_model",
-           "draw_pose", "redraw_overlay"]
+           "redraw_overlay"]
 
 #: RGB colour of the model's occluding edges.
 EDGE_COLOUR = np.array([255, 255, 0], np.uint8)
@@ -117,13 +117,6 @@ class ModelDrawer:
         draw_model_box(out, check_pose(pose), self.scene, self.buffers, self.marks, self.lut, EDGE_DEPTH_GAP_M,
                        self.palette, self.table, EDGE_COLOUR)
         return out
-
-
-def draw_pose(frame: np.ndarray, pose: np.ndarray, model, camera: Camera) -> np.ndarray:
-    """The overlay picture: ``frame`` (uint8 RGB, shape (h, w, 3), ``camera``'s size) with the
-    model in ``pose`` (shape (23,), radians and metres) rendered by ``camera`` blended in, its
-    classes in their named colours (:class:`ModelDrawer`; a writer keeps one per model)."""
-    return ModelDrawer(model, camera).draw(frame, pose)
 
 
 def overlay_factor(width: int) -> int:

@@ -15,6 +15,8 @@ import numpy as np
 
 from mocap.body.pose import N_PARAMETERS
 from mocap.config import JsonConfig
+from mocap.track.score import BEYOND_PAPER_FIELDS, WEIGHT_FIELDS
+from mocap.track.score import MOTION_CAP, MOTION_SIGMA_M, REGION_WEIGHT  # noqa: F401 (re-exported: the score's constants)
 
 #: Total budget below which the ``auto`` policy gives every evaluation to the region step.
 AUTO_SPLIT_THRESHOLD = 200
@@ -51,17 +53,9 @@ EDGE_FAILURE_THRESHOLD_PX = 4.0
 #: thresholds (a silhouette neither explains). Without keypoints F or the edge distance alone
 #: flags it, as in the paper.
 KEYPOINT_FAILURE_THRESHOLD_PX = 6.0
-#: Score of a hypothesis per unit of F (the region residual).
-REGION_WEIGHT = 50.0
 #: Pixels of mean edge distance per unit of F in the registration's steps with keypoints
 #: (:meth:`TrackerConfig.keypoint_step_weights`); the score's own is ``TrackerConfig.edge_weight``.
 EDGE_WEIGHT = 2.0
-#: Motion term between hypotheses of consecutive frames: half the mean squared joint
-#: displacement over ``MOTION_SIGMA_M**2`` (metres)...
-MOTION_SIGMA_M = 0.05
-#: ...at most this much (a truncated quadratic): a jump between branches or to a re-acquired arm
-#: costs a fixed price that a clearly better fit pays.
-MOTION_CAP = 8.0
 
 
 @dataclass(frozen=True)
@@ -138,17 +132,17 @@ class TrackerConfig(JsonConfig):
         Score per pixel of mean edge distance (the region's is :data:`REGION_WEIGHT` per unit of F,
         the unit of the score). The registration's steps keep their own balance (:data:`EDGE_WEIGHT`).
     motion_weight : float
-        Multiplies the motion term between consecutive frames' hypotheses (:data:`MOTION_SIGMA_M`,
-        :data:`MOTION_CAP`); 0: the decoder takes each frame's best unary score.
-        ``edge_weight``, ``prior_weight`` and ``motion_weight`` score the frames with keypoints (or
-        lifted); the frames without keypoints have their own three:
-    silhouette_edge_weight, silhouette_prior_weight, silhouette_motion_weight : float
-        The score's weights on frames without keypoints (the silhouette alone); by default the
-        same hand-chosen 2 / 0.05 / 1. Weights fitted on data (``python -m experiments.fit_score``
-        on candidates recorded without keypoints, seeds 0-1: 0.01516 / 0.00708 / 0) improved the
-        unseen seeds 41 and 43 (141 / 125 -> 116 / 119 mm median) but failed the end-to-end check
-        of a 16-frame clip at 300 evaluations (165 mm against a bound of 110), and with the motion
-        term kept they lost on seed 43: not shipped (docs/research-log.md, issue 34).
+        Multiplies the motion term between consecutive frames' hypotheses
+        (:func:`mocap.track.score.motion_term`: :data:`MOTION_SIGMA_M`, :data:`MOTION_CAP`); 0: the
+        decoder takes each frame's best unary score. The score's weights (``edge_weight``,
+        ``keypoint_weight``, ``prior_weight``, ``lifter_weight``, ``motion_weight``: the table
+        :data:`mocap.track.score.TERMS`) score every frame, with keypoints or without. Weights of
+        their own for frames without keypoints, fitted on data (``python -m experiments.fit_score``
+        on candidates recorded without keypoints, seeds 0-1: edge 0.01516, prior 0.00708, motion 0),
+        improved the unseen seeds 41 and 43 (141 / 125 -> 116 / 119 mm median) but failed the
+        end-to-end check of a 16-frame clip at 300 evaluations (165 mm against a bound of 110), and
+        with the motion term kept they lost on seed 43: not shipped, and the ``silhouette_*`` twins
+        that held them removed (docs/research-log.md, issues 34 and 39).
     proposals_refined : int
         Proposals of each source refined per frame: the lowest-F ones (0: the stage is off).
     proposal_evaluations : int
@@ -190,9 +184,6 @@ class TrackerConfig(JsonConfig):
     prior_weight: float = 0.05
     edge_weight: float = 2.0
     motion_weight: float = 1.0
-    silhouette_edge_weight: float = 2.0
-    silhouette_prior_weight: float = 0.05
-    silhouette_motion_weight: float = 1.0
     proposals_refined: int = 2
     proposal_evaluations: int = 100
     mirrors: bool = True
@@ -221,8 +212,7 @@ class TrackerConfig(JsonConfig):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise ValueError(f"{name} must be a finite positive number, got {v!r}")
-        for name in ("ftol", "keypoint_weight", "lifter_weight", "prior_weight", "edge_weight", "motion_weight",
-                     "silhouette_edge_weight", "silhouette_prior_weight", "silhouette_motion_weight"):
+        for name in ("ftol",) + WEIGHT_FIELDS:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
                 raise ValueError(f"{name} must be finite and non-negative, got {v!r}")
@@ -230,7 +220,8 @@ class TrackerConfig(JsonConfig):
     @classmethod
     def paper(cls, **changes) -> "TrackerConfig":
         """The paper's method: one hypothesis, no recovery, re-acquisition, jumps, proposals, prior
-        or keypoints.
+        or keypoints (the weights of the score's terms beyond the paper,
+        :data:`~mocap.track.score.BEYOND_PAPER_FIELDS`, at 0).
 
         Parameters
         ----------
@@ -238,8 +229,9 @@ class TrackerConfig(JsonConfig):
             Fields to set as well (the budget, split and edge start the experiments sweep);
             unknown names raise TypeError.
         """
-        return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0, gradient_step=False, mirrors=False,
-                           prior_weight=0.0, keypoint_weight=0.0, lifter_weight=0.0, silhouette_prior_weight=0.0),
+        return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0, gradient_step=False,
+                           mirrors=False,
+                           **{name: 0.0 for name in BEYOND_PAPER_FIELDS}),
                        **changes)
 
     @property

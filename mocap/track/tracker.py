@@ -14,7 +14,8 @@ prior_weight * pose-prior energy``; on frames with 2D keypoints plus ``keypoint_
 keypoint distance``, which every registration of the frame then also adds, and ``lifter_weight``
 times the lifter's negative log-density at the candidate's joints); between consecutive frames a **motion term**
 (``motion_weight`` times half the mean squared joint displacement over ``MOTION_SIGMA_M**2``, capped) links
-them. Each frame's candidates and their terms before the weights stay readable in :attr:`Tracker.scored`
+them. The terms, their weights and the motion term are :mod:`mocap.track.score`'s table. Each frame's
+candidates and their terms before the weights stay readable in :attr:`Tracker.scored`
 (:class:`ScoredCandidate`; ``experiments.fit_score`` fits the weights on them). The forward
 Viterbi recursion (:func:`~mocap.track.decode.viterbi_step`) gives each candidate the cost of
 the best path to it; near-duplicates are merged and the ``beam`` cheapest survive, and beside them
@@ -48,14 +49,14 @@ from mocap.body.pose import check_pose, clamp_to_limits
 from mocap.body.prior import PosePrior, default_prior
 from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.render.camera import Camera
-from mocap.track.config import (JUMPS_REFINED, MERGE_DISTANCE_M, MOTION_CAP, MOTION_SIGMA_M,
-                                RECOVERY_STEP_SCALE, REGION_WEIGHT, TrackerConfig)
+from mocap.track.config import JUMPS_REFINED, MERGE_DISTANCE_M, RECOVERY_STEP_SCALE, TrackerConfig
 from mocap.track.branches import depth_alternatives
 from mocap.track.decode import backtrack, viterbi_step
 from mocap.track.lifter import LiftedHypotheses, Lifter
 from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, jump_proposals, reach_proposals,
                                    unexplained_hands)
 from mocap.track.registration import Registration, register
+from mocap.track.score import MOTION, UNARY_TERMS, ScoredCandidate, motion_term, weighted_sum, weights
 
 @dataclass(kw_only=True)
 class FrameResult:
@@ -86,71 +87,6 @@ class FrameResult:
     timings_ms: dict[str, float] = field(default_factory=dict)
     hypothesis: int = 0
     score: float = math.nan
-
-
-@dataclass(frozen=True, kw_only=True)
-class ScoredCandidate:
-    """One candidate of a frame with every term of its score before the weights.
-
-    What :attr:`Tracker.scored` holds for the frame just tracked (``experiments.fit_score``
-    records it to fit the weights). The unary score is ``REGION_WEIGHT * region + edge_weight *
-    edge + keypoint_weight * keypoint + prior_weight * prior + lifter_weight * lifter`` (the terms
-    that are NaN left out), and the motion term from the previous frame's hypothesis ``k`` is
-    ``motion_weight * motion[k]``.
-
-    Attributes
-    ----------
-    origin : str
-        What produced it (``tracked``, ``recovery``, ``reacquisition``, ``jump``, ``lifter``).
-    pose : ndarray, shape (23,), float64
-        Metres and radians.
-    joints : ndarray, shape (10, 3), float64, metres
-        Camera coordinates.
-    region : float
-        F, the region residual (in [0, 1]).
-    edge : float, pixels
-        Mean edge distance.
-    keypoint : float, pixels
-        Keypoint distance D_k; NaN on frames without keypoints or with ``keypoint_weight`` 0.
-    prior : float, nats
-        The pose prior's energy; NaN without a prior.
-    lifter : float, nats
-        The lifter term (:meth:`~mocap.track.proposals.LifterSource.energy`); NaN on frames not lifted.
-    motion : ndarray, shape (K_prev,), float64
-        The motion term (truncated quadratic, :data:`~mocap.track.config.MOTION_SIGMA_M`,
-        :data:`~mocap.track.config.MOTION_CAP`) from each hypothesis of the previous frame's beam.
-    unary : float
-        The weighted sum the tracker scored it with.
-    """
-
-    origin: str
-    pose: np.ndarray
-    joints: np.ndarray
-    region: float
-    edge: float
-    keypoint: float
-    prior: float
-    lifter: float
-    motion: np.ndarray
-    unary: float
-
-
-@dataclass(frozen=True)
-class _Weights:
-    """The score's weights of one frame (with keypoints or without: :meth:`Tracker._weights`)."""
-
-    edge: float
-    prior: float
-    motion: float
-
-
-@dataclass(frozen=True)
-class _Terms:
-    region: float
-    edge: float
-    keypoint: float
-    prior: float
-    lifter: float
 
 
 @dataclass
@@ -208,9 +144,9 @@ class Tracker:
         if config.mesh_resolution and model.mesh.resolution != config.mesh_resolution:
             model = model.with_resolution(config.mesh_resolution)
         self.model, self.camera, self.config = model, camera, config
-        self.prior = prior if prior is not None else (default_prior() if max(config.prior_weight,
-                                                                              config.silhouette_prior_weight) > 0
-                                                      else None)
+        self.prior = prior if prior is not None else (default_prior() if config.prior_weight > 0 else None)
+        #: The score's weights (:func:`mocap.track.score.weights`, every frame's).
+        self.weights: np.ndarray = weights(config)
         #: The lifting (None when ``config`` does not use the lifter); also the default keypoint source.
         self.lifting: LifterSource | None = LifterSource(lifter, config.lifter_file) if config.uses_lifter else None
         self.sources: tuple[ProposalSource, ...] = tuple(proposal_sources(config, self.lifting) if sources is None
@@ -305,7 +241,6 @@ class Tracker:
         keypoint_cost = self.keypoint_cost(keypoints)
         fit = functools.partial(register, region_cost, edge_cost, config=cfg, keypoint_cost=keypoint_cost)
         lifted = self.lifting.lift(keypoints, self.camera, self.model) if self.lifting is not None else None
-        weights = self._weights(keypoint_cost is not None or lifted is not None)
         candidates: list[tuple[Registration, str]] = []
         evaluations = 0
         t1 = time.perf_counter()
@@ -335,22 +270,22 @@ class Tracker:
         t3 = time.perf_counter()
         if self.sources and cfg.proposals_refined > 0:
             context = ProposalContext(lifted=lifted)
-            rough = functools.partial(self._rough_unary, region_cost, edge_cost, keypoint_cost, lifted, weights)
+            rough = functools.partial(self._rough_unary, region_cost, edge_cost, keypoint_cost, lifted)
             for source in self.sources:
                 evaluations += self._propose(source, prepared, context, rough, fit, candidates)
         timings["proposals"] = 1e3 * (time.perf_counter() - t3)
         joints = [self.model.joint_positions(reg.pose) for reg, _ in candidates]
-        terms = [self._terms(reg.region_residual, reg.edge_residual, reg.keypoint_residual, reg.pose, j, lifted,
-                             weights) for (reg, _), j in zip(candidates, joints)]
-        hypotheses = [self._hypothesis(reg, origin, j, t, weights)
+        terms = [self._terms(reg.region_residual, reg.edge_residual, reg.keypoint_residual, reg.pose, j, lifted)
+                 for (reg, _), j in zip(candidates, joints)]
+        hypotheses = [self._hypothesis(reg, origin, j, t)
                       for (reg, origin), j, t in zip(candidates, joints, terms)]
         self.candidates = [(h.origin, h.pose) for h in hypotheses]
-        motion = self._motion(self._beam, hypotheses)
-        self.scored = [ScoredCandidate(origin=h.origin, pose=h.pose, joints=h.joints, region=t.region, edge=t.edge,
-                                       keypoint=t.keypoint, prior=t.prior, lifter=t.lifter, motion=motion[:, j],
-                                       unary=h.unary) for j, (h, t) in enumerate(zip(hypotheses, terms))]
+        motion = motion_term([h.joints for h in self._beam], [h.joints for h in hypotheses])
+        self.scored = [ScoredCandidate.from_terms(h.origin, h.pose, h.joints, t, motion[:, j], h.unary)
+                       for j, (h, t) in enumerate(zip(hypotheses, terms))]
         self.lifted = lifted
-        transition = motion if weights.motion == 1.0 else weights.motion * motion
+        motion_weight = self.weights[MOTION]
+        transition = motion if motion_weight == 1.0 else motion_weight * motion
         cost, back = viterbi_step(self._cost, transition, np.array([h.unary for h in hypotheses]))
         keep = self._select(hypotheses, cost)
         timings["beam"] = 1e3 * (time.perf_counter() - t2)
@@ -359,60 +294,28 @@ class Tracker:
         return _Frame(index, False, [hypotheses[k] for k in keep], kept_cost - kept_cost[0], back[keep], evaluations,
                       timings)
 
-    def _weights(self, keypoints: bool) -> _Weights:
-        """The score's weights on a frame with keypoints (``edge_weight``, ``prior_weight``,
-        ``motion_weight``) or without (their ``silhouette_`` twins)."""
-        cfg = self.config
-        if keypoints:
-            return _Weights(cfg.edge_weight, cfg.prior_weight, cfg.motion_weight)
-        return _Weights(cfg.silhouette_edge_weight, cfg.silhouette_prior_weight, cfg.silhouette_motion_weight)
-
     def _terms(self, region: float, edge: float, keypoint: float, pose: np.ndarray, joints: np.ndarray,
-               lifted: LiftedHypotheses | None, weights: _Weights) -> _Terms:
-        """The terms of a candidate's unary score before their weights (see :class:`ScoredCandidate`)."""
+               lifted: LiftedHypotheses | None) -> np.ndarray:
+        """The values of a candidate's unary terms before their weights, shape (len(UNARY_TERMS),),
+        :data:`~mocap.track.score.TERMS` order (see :class:`ScoredCandidate`; NaN: does not apply)."""
         cfg = self.config
-        prior = self.prior.energy(pose) if self.prior is not None and weights.prior > 0 else math.nan
+        prior = self.prior.energy(pose) if self.prior is not None and cfg.prior_weight > 0 else math.nan
         lifter = self.lifting.energy(lifted, joints) if lifted is not None and cfg.lifter_weight > 0 else math.nan
-        return _Terms(region, edge, keypoint, prior, lifter)
-
-    def _weighted(self, t: _Terms, weights: _Weights) -> float:
-        """The unary score of a candidate's terms (see the module)."""
-        cfg = self.config
-        unary = REGION_WEIGHT * t.region + weights.edge * t.edge
-        if not math.isnan(t.keypoint):
-            unary += cfg.keypoint_weight * t.keypoint
-        if not math.isnan(t.prior):
-            unary += weights.prior * t.prior
-        if not math.isnan(t.lifter):
-            unary += cfg.lifter_weight * t.lifter
-        return float(unary)
-
-    def _unary(self, region: float, edge: float, keypoint: float, pose: np.ndarray, joints: np.ndarray,
-               lifted: LiftedHypotheses | None, weights: _Weights) -> float:
-        """The unary score of a candidate from its residuals (see the module)."""
-        return self._weighted(self._terms(region, edge, keypoint, pose, joints, lifted, weights), weights)
+        values = {"region": region, "edge": edge, "keypoint": keypoint, "prior": prior, "lifter": lifter}
+        return np.array([values[t.name] for t in UNARY_TERMS], dtype=np.float64)
 
     def _rough_unary(self, region_cost, edge_cost, keypoint_cost, lifted: LiftedHypotheses | None,
-                     weights: _Weights, pose: np.ndarray) -> float:
+                     pose: np.ndarray) -> float:
         """The unary score of an unrefined pose (one evaluation of each cost): what ranks proposals."""
-        return self._unary(region_cost.evaluate_unchecked(pose), edge_cost(pose),
-                           math.nan if keypoint_cost is None else keypoint_cost(pose), pose,
-                           self.model.joint_positions(pose), lifted, weights)
+        return weighted_sum(self._terms(region_cost.evaluate_unchecked(pose), edge_cost(pose),
+                                        math.nan if keypoint_cost is None else keypoint_cost(pose), pose,
+                                        self.model.joint_positions(pose), lifted), self.weights)
 
-    def _hypothesis(self, reg: Registration, origin: str, joints: np.ndarray, terms: _Terms,
-                    weights: _Weights) -> _Hypothesis:
-        unary = self._weighted(terms, weights)
+    def _hypothesis(self, reg: Registration, origin: str, joints: np.ndarray, terms: np.ndarray) -> _Hypothesis:
+        unary = weighted_sum(terms, self.weights)
         return _Hypothesis(reg.pose, joints, reg.region_residual, reg.edge_residual,
                            reg.edge_residual_after_region, reg.failed(self.config), origin, unary,
                            reg.region.iterations if reg.region else 0, reg.edge.iterations if reg.edge else 0)
-
-    def _motion(self, previous: list[_Hypothesis], current: list[_Hypothesis]) -> np.ndarray:
-        """Motion term between every pair (previous, current) before ``motion_weight``, shape
-        (len(previous), len(current))."""
-        a = np.array([h.joints for h in previous])
-        b = np.array([h.joints for h in current])
-        squared = ((a[:, None] - b[None]) ** 2).sum(axis=3).mean(axis=2)
-        return np.minimum(0.5 * squared / MOTION_SIGMA_M ** 2, MOTION_CAP)
 
     def _select(self, hypotheses: list[_Hypothesis], cost: np.ndarray) -> list[int]:
         """Indices of the survivors: cheapest path first, near-duplicates merged, at most ``beam``;

@@ -3,9 +3,10 @@ import numpy as np
 import pytest
 
 from experiments.fit_score import (TERMS, Candidates, choose, default_weights, fit_weights, in_tracker_units,
-                                   informative, tracker_config, _frames_held_out)
+                                   informative, tracker_config)
+from experiments.fit_score.fit import _frames_held_out
 from mocap.track import TrackerConfig
-from mocap.track.config import REGION_WEIGHT
+from mocap.track.score import REGION_WEIGHT
 
 #: Weights that make the synthetic candidates' best by construction (one per term).
 TRUE_WEIGHTS = np.array([50.0, 2.0, 1.5, 0.05, 0.8, 1.2])
@@ -79,13 +80,9 @@ def test_weights_in_tracker_units_make_a_config():
     assert config == TrackerConfig(edge_weight=2.0, keypoint_weight=2.0, prior_weight=0.2, lifter_weight=0.5,
                                    motion_weight=1.0)
     np.testing.assert_allclose(default_weights(), [REGION_WEIGHT, 2.0, 2.0, 0.05, 0.5, 1.0])
-    # without keypoints: the silhouette's own edge, prior and motion weights
-    silhouette = tracker_config(w, silhouette=True)
-    assert silhouette == TrackerConfig(silhouette_edge_weight=2.0, silhouette_prior_weight=0.2, silhouette_motion_weight=1.0)
-    c = TrackerConfig()
-    np.testing.assert_allclose(default_weights(silhouette=True),
-                               [REGION_WEIGHT, c.silhouette_edge_weight, 2.0, c.silhouette_prior_weight, 0.5,
-                                c.silhouette_motion_weight])
+    base = TrackerConfig(beam=5)                       # the other settings of a base config are kept
+    assert tracker_config(w, base=base) == TrackerConfig(beam=5, edge_weight=2.0, keypoint_weight=2.0,
+                                                         prior_weight=0.2, lifter_weight=0.5, motion_weight=1.0)
     with pytest.raises(ValueError):
         in_tracker_units(np.zeros(6))
 
@@ -114,7 +111,7 @@ def test_offline_decoding_equals_the_best_of_every_path():
     import itertools
 
     from experiments.fit_score import decode_offline
-    from mocap.track.config import MOTION_SIGMA_M
+    from mocap.track.score import MOTION_SIGMA_M
 
     rng = np.random.default_rng(4)
     sizes = [2, 3, 2, 3]
@@ -160,3 +157,51 @@ def test_a_term_that_never_applied_keeps_its_default_weight():
     features[:, [2, 4]] = np.nan                     # no keypoints: neither keypoint nor lifter term
     w = keep_unseen(np.array([25.0, 1.0, 0.0, 0.1, 0.0, 0.5]), features)
     np.testing.assert_allclose(in_tracker_units(w), [50.0, 2.0, 2.0, 0.2, 0.5, 1.0])
+
+
+def write_record(path, frames=12, per_frame=3, seed=0):
+    """A record in :func:`experiments.fit_score.record_sequence`'s format, made up: candidates near
+    a truth walking in front of the camera, the first of each frame the decided one."""
+    import io
+
+    from mocap.io.files import write_bytes_atomic
+
+    rng = np.random.default_rng(seed)
+    truth = rng.normal(0.0, 0.2, size=(frames, 10, 3)) + [0.0, 0.0, 3.0]
+    joints = np.repeat(truth, per_frame, axis=0) + rng.normal(0.0, 0.05, size=(frames * per_frame, 10, 3))
+    error = 1e3 * np.linalg.norm((joints - joints[:, 1:2]) - np.repeat(truth - truth[:, 1:2], per_frame, axis=0),
+                                 axis=2).mean(axis=1)
+    features = rng.uniform(0.0, 1.0, size=(frames * per_frame, len(TERMS)))
+    tracked = joints[::per_frame]
+    buffer = io.BytesIO()
+    np.savez_compressed(buffer, frame=np.repeat(np.arange(frames), per_frame), features=features, error_mm=error,
+                        camera_error_mm=error + 10.0, origin=np.array(["tracked", "jump", "lifter"] * frames),
+                        lifter_best_mm=np.full(frames, 50.0), joints=joints, truth=truth,
+                        lifted_joints=rng.normal(0.0, 0.2, size=(frames, 10, 10, 3)),
+                        lifted_probabilities=np.full((frames, 10), 0.1), tracked_joints=tracked,
+                        tracked_poses=np.zeros((frames, 23)), tracked_error_mm=error[::per_frame],
+                        tracked_camera_error_mm=error[::per_frame] + 10.0, config=np.array("{}"),
+                        sigma_px=np.array(2.0))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_bytes_atomic(path, buffer.getvalue())
+
+
+def test_every_subcommand_reads_the_records_it_names(tmp_path, capsys):
+    """``python -m experiments.fit_score`` fit / decompose / decode / depth on two made-up records:
+    each runs, ``fit --write`` writes the weights fitted on every frame, a missing record is an error."""
+    from experiments.fit_score import load_records, record_path
+    from experiments.fit_score.cli import main
+
+    for i, sequence in enumerate(("gestures-2", "turning")):
+        write_record(record_path(tmp_path, sequence, 5), seed=i)
+    common = ["--seeds", "5", "--sequences", "gestures-2,turning", "--out", str(tmp_path)]
+    written = tmp_path / "fitted.json"
+    assert main(["fit", *common, "--write", str(written)]) == 0
+    every = load_records([record_path(tmp_path, q, 5) for q in ("gestures-2", "turning")])
+    assert TrackerConfig.from_json(written) == tracker_config(fit_weights(informative(every)))
+    for command in ("decompose", "decode", "depth"):
+        capsys.readouterr()
+        assert main([command, *common]) == 0
+        assert "|---" in capsys.readouterr().out
+    assert main(["decode", "--seeds", "6", "--sequences", "turning", "--out", str(tmp_path)]) == 2
+    assert "no record" in capsys.readouterr().err

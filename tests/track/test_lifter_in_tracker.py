@@ -156,15 +156,14 @@ def test_started_wrong_the_lifter_brings_the_tracker_back(lifter, wrong, weight)
 
 
 def test_each_candidates_terms_weighted_give_its_score(lifter):
-    """:attr:`Tracker.scored`: every candidate's terms, weighted by the config (on frames without
-    keypoints its ``silhouette_`` weights), sum to its unary score, and its motion term from the
-    previous beam is the tracker's."""
-    from mocap.track.config import MOTION_CAP, MOTION_SIGMA_M, REGION_WEIGHT
+    """:attr:`Tracker.scored`: every candidate's terms, weighted by the config (the same weights
+    on frames without keypoints, where the keypoint and lifter terms do not apply), sum to its
+    unary score, and its motion term from the previous beam is the tracker's."""
+    from mocap.track.score import MOTION_CAP, MOTION_SIGMA_M, REGION_WEIGHT
 
     truth = reaching_pose()
     frames, keypoints = still_clip(truth, 2)
-    config = TrackerConfig(edge_weight=3.0, keypoint_weight=1.5, prior_weight=0.1, lifter_weight=0.7,
-                           silhouette_edge_weight=0.5, silhouette_prior_weight=0.2)
+    config = TrackerConfig(edge_weight=3.0, keypoint_weight=1.5, prior_weight=0.1, lifter_weight=0.7)
     tracker = Tracker(MODEL, CAMERA, config, truth, lifter=lifter)
     tracker.push(0, frames[0], keypoints[0])
     previous = [MODEL.joint_positions(q) for q in tracker.hypotheses]
@@ -177,16 +176,16 @@ def test_each_candidates_terms_weighted_give_its_score(lifter):
                                         + 0.7 * c.lifter, rel=1e-12)
         squared = [np.mean(np.sum((p - c.joints) ** 2, axis=1)) for p in previous]
         np.testing.assert_allclose(c.motion, np.minimum(0.5 * np.array(squared) / MOTION_SIGMA_M ** 2, MOTION_CAP))
-    # without keypoints neither the keypoint nor the lifter term applies, and the silhouette's weights score
+    # without keypoints neither the keypoint nor the lifter term applies; the same weights score the rest
     tracker.push(2, frames[0], None)
     assert tracker.lifted is None and all(np.isnan(c.keypoint) and np.isnan(c.lifter) for c in tracker.scored)
     for c in tracker.scored:
-        assert c.unary == pytest.approx(REGION_WEIGHT * c.region + 0.5 * c.edge + 0.2 * c.prior, rel=1e-12)
+        assert not np.isnan([c.region, c.edge, c.prior]).any()
+        assert c.unary == pytest.approx(REGION_WEIGHT * c.region + 3.0 * c.edge + 0.1 * c.prior, rel=1e-12)
 
 
 def test_the_score_weights_are_validated():
-    for name in ("edge_weight", "motion_weight", "silhouette_edge_weight", "silhouette_prior_weight",
-                 "silhouette_motion_weight"):
+    for name in ("edge_weight", "keypoint_weight", "prior_weight", "lifter_weight", "motion_weight"):
         with pytest.raises(ValueError):
             TrackerConfig(**{name: -1.0})
         with pytest.raises(ValueError):

@@ -98,8 +98,7 @@ def test_beam_returns_to_the_true_branch_where_one_hypothesis_stays_lost():
     frames = clean_frames(truth)
     arm = [JOINT_NAMES.index(f"r_{j}") for j in ("elbow", "wrist", "hand")]
     start = arm_jumps(truth[0], MODEL.skeleton, "r")["forearm"]
-    single = TrackerConfig(beam=1, jumps=False, lag=0, hand_reacquisition=False, prior_weight=0.0,
-                           silhouette_prior_weight=0.0)
+    single = TrackerConfig(beam=1, jumps=False, lag=0, hand_reacquisition=False, prior_weight=0.0)
     errors = {}
     for name, config in (("single", single), ("beam", TrackerConfig())):
         results = track_prepared(frames, Tracker(MODEL, CAMERA, config, start))
@@ -120,8 +119,7 @@ def test_keypoints_bring_a_single_hypothesis_back_to_the_true_branch():
     frames = clean_frames(truth)
     arm = [JOINT_NAMES.index(f"r_{j}") for j in ("elbow", "wrist", "hand")]
     start = arm_jumps(truth[0], MODEL.skeleton, "r")["forearm"]
-    single = TrackerConfig(beam=1, jumps=False, lag=0, hand_reacquisition=False, prior_weight=0.0,
-                           silhouette_prior_weight=0.0)
+    single = TrackerConfig(beam=1, jumps=False, lag=0, hand_reacquisition=False, prior_weight=0.0)
     keypoints = oracle_keypoints(np.array([MODEL.joint_positions(q) for q in truth]), CAMERA, 1.0, seed=0)
     errors = {}
     for name, given in (("without", [None] * len(frames)), ("with", keypoints)):

@@ -1,0 +1,93 @@
+"""The score's table (mocap.track.score): one place for the terms, read by the tracker's record,
+the config's validation and the weights; the sums and the motion term against plain loops."""
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from mocap.track import ScoredCandidate, TrackerConfig
+from mocap.track.score import (MOTION, MOTION_CAP, MOTION_SIGMA_M, REGION_WEIGHT, TERM_NAMES, TERMS, UNARY_TERMS,
+                               WEIGHT_FIELDS, motion_term, weighted_sum, weights, with_weights)
+
+
+def test_every_term_is_an_attribute_of_a_scored_candidate_and_its_weight_a_validated_config_field():
+    fields = {f.name for f in dataclasses.fields(ScoredCandidate)}
+    assert set(TERM_NAMES) <= fields
+    # everything else a scored candidate holds is not a term
+    assert fields - set(TERM_NAMES) == {"origin", "pose", "joints", "unary"}
+    config_fields = {f.name for f in dataclasses.fields(TrackerConfig)}
+    assert set(WEIGHT_FIELDS) <= config_fields
+    assert not any(name.startswith("silhouette_") and name.endswith("_weight") for name in config_fields)
+    for name in WEIGHT_FIELDS:
+        for bad in (-1.0, math.nan, math.inf, True):
+            with pytest.raises(ValueError):
+                TrackerConfig(**{name: bad})
+    assert TERMS[MOTION].pairwise and [t.name for t in UNARY_TERMS] == list(TERM_NAMES[:len(UNARY_TERMS)])
+    assert [t.weight_field for t in TERMS].count(None) == 1                     # F's weight is the unit
+
+
+def test_the_weights_of_a_config_in_the_tables_order_and_back():
+    config = TrackerConfig(edge_weight=3.0, keypoint_weight=1.5, prior_weight=0.1, lifter_weight=0.7,
+                           motion_weight=0.25)
+    w = weights(config)
+    np.testing.assert_array_equal(w, [REGION_WEIGHT, 3.0, 1.5, 0.1, 0.7, 0.25])
+    assert with_weights(TrackerConfig(beam=4), w) == dataclasses.replace(config, beam=4)
+    with pytest.raises(ValueError):
+        with_weights(config, w[:5])
+
+
+def test_a_scored_candidates_values_follow_the_table():
+    c = ScoredCandidate.from_terms("tracked", np.zeros(23), np.zeros((10, 3)), [0.1, 2.0, math.nan, 3.0, 4.0],
+                                   np.array([5.0, 6.0]), 7.0)
+    assert (c.region, c.edge, c.prior, c.lifter, c.unary) == (0.1, 2.0, 3.0, 4.0, 7.0) and math.isnan(c.keypoint)
+    np.testing.assert_array_equal(c.values(), [0.1, 2.0, math.nan, 3.0, 4.0, 5.0])
+    np.testing.assert_array_equal(c.values(previous=1)[MOTION], 6.0)
+    assert math.isnan(c.values(previous=2)[MOTION])
+    with pytest.raises(ValueError):
+        ScoredCandidate.from_terms("tracked", np.zeros(23), np.zeros((10, 3)), [0.1, 2.0], np.zeros(1), 0.0)
+
+
+def test_the_weighted_sum_leaves_out_what_does_not_apply_and_is_the_same_float_alone_or_in_an_array():
+    rng = np.random.default_rng(5)
+    values = rng.uniform(0, 10, size=(40, len(UNARY_TERMS)))
+    values[::3, 2] = np.nan                                   # no keypoints
+    values[::4, 3:5] = np.nan                                 # no prior, not lifted
+    w = np.array([50.0, 2.0, 1.5, 0.05, 0.5, 1.0])
+    together = weighted_sum(values, w)
+    for row, total in zip(values, together):
+        expected = 0.0
+        for j in range(len(row)):                             # the loop the tracker ran, term by term
+            if not math.isnan(row[j]):
+                expected += w[j] * row[j]
+        assert weighted_sum(row, w) == expected == total      # bit for bit
+    assert isinstance(weighted_sum(values[0], w), float)
+    with pytest.raises(ValueError):
+        weighted_sum(np.ones(7), w)
+
+
+def test_the_motion_term_is_half_the_mean_squared_displacement_truncated():
+    rng = np.random.default_rng(6)
+    a = rng.normal(0, 0.05, size=(3, 10, 3))
+    b = rng.normal(0, 0.05, size=(4, 10, 3))
+    b[0] = a[1] + 0.4                                         # far: capped
+    b[1] = a[2]                                               # the same joints: 0
+    m = motion_term(a, b)
+    assert m.shape == (3, 4)
+    for i in range(3):
+        for j in range(4):
+            squared = np.mean([np.sum((a[i, k] - b[j, k]) ** 2) for k in range(10)])
+            assert m[i, j] == pytest.approx(min(0.5 * squared / MOTION_SIGMA_M ** 2, MOTION_CAP), rel=1e-12)
+    assert m[1, 0] == MOTION_CAP and m[2, 1] == 0.0
+    assert motion_term(a, b, cap=1e9)[1, 0] == pytest.approx(0.5 * 3 * 0.4 ** 2 / MOTION_SIGMA_M ** 2)
+    with pytest.raises(ValueError):
+        motion_term(a, b[:, :5])
+
+
+def test_the_papers_method_switches_off_the_terms_beyond_the_paper():
+    paper = TrackerConfig.paper()
+    assert (paper.keypoint_weight, paper.prior_weight, paper.lifter_weight) == (0.0, 0.0, 0.0)
+    assert (paper.edge_weight, paper.motion_weight) == (TrackerConfig().edge_weight, TrackerConfig().motion_weight)
+    assert paper == TrackerConfig(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
+                                  gradient_step=False, mirrors=False, prior_weight=0.0, keypoint_weight=0.0,
+                                  lifter_weight=0.0)
