@@ -109,3 +109,26 @@ def test_started_with_both_arms_mirrored_the_tracker_is_back_at_the_default_weig
     assert with_mirrors[0] > 2 * BACK_M                      # it did start lost
     assert with_mirrors[2:].max() < BACK_M
     assert without[2:5].min() > BACK_M
+
+
+def test_without_keypoints_the_mirrors_change_nothing():
+    """The stage runs on frames with keypoints only: without them the tracker's poses, scores and
+    origins are bit-identical with the stage on and off (the silhouette-only tracker is unchanged)."""
+    from mocap.body.jumps import arm_jumps
+    from mocap.track import Tracker, TrackerConfig
+    from tests.track.test_lifter_in_tracker import CAMERA as STILL_CAMERA, MODEL as STILL_MODEL, reaching_pose, still_clip
+
+    truth = reaching_pose()
+    start = arm_jumps(truth, STILL_MODEL.skeleton, "l")["both"]
+    frames, _ = still_clip(truth, 3)
+
+    def track(mirrors):
+        tracker = Tracker(STILL_MODEL, STILL_CAMERA, TrackerConfig(lag=1, mirrors=mirrors, evaluations=200), start)
+        out = [r for i, f in enumerate(frames) for r in tracker.push(i, f)] + tracker.finish()
+        return [(r.pose, r.score, r.origin) for r in out]
+
+    on, off = track(True), track(False)
+    assert len(on) == len(off) == 3
+    for (p, s, o), (q, t, u) in zip(on, off):
+        np.testing.assert_array_equal(p, q)
+        assert s == t and o == u != "mirror"
