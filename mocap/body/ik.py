@@ -261,8 +261,8 @@ def _arm_angles(q: np.ndarray, skeleton: Skeleton, side: str, targets: np.ndarra
         v = b.T @ fore
         rot = m * float(np.arctan2(-v[0], -v[2])) if np.sin(bend) > 1e-6 else float(q[base + 2])
         angles = (flex, abd, rot)
-        shoulders.append((round(_violation(angles, lo, hi), 9), float(np.sum(np.abs(np.subtract(angles, q[base:base + 3])))),
-                          angles, b))
+        change = float(np.sum(np.abs(np.subtract(angles, q[base:base + 3]))))
+        shoulders.append((round(_violation(angles, lo, hi), 9), change, angles, b))
     _, _, (flex, abd, rot), b = min(shoulders, key=lambda o: o[:2])
     c = b @ _ry(m * rot) @ _rx(-bend)
     palm = hand - wrist
