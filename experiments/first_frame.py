@@ -90,9 +90,11 @@ def time_run(package_root: Path, clip: Path, out: Path, keypoints: str | None = 
     """One ``track`` run from ``package_root`` (with ``--keypoints KEYPOINTS`` when given, else
     the command's default): seconds to the first row and to the end, the breakdown, and the
     Numba cache's loads and saves."""
+    from mocap.run import files
+
     shutil.rmtree(out, ignore_errors=True)
     env = {**os.environ, "PYTHONPATH": str(package_root), "NUMBA_DEBUG_CACHE": "1"}
-    journal = out / "poses.csv"
+    journal = out / files.POSES_CSV
     load = os.getloadavg()[0]
     start = time.perf_counter()
     command = [sys.executable, "-m", "mocap", "track", str(clip), "--max-frames", "1", "--no-overlay", "--out", str(out)]

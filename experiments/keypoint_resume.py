@@ -59,7 +59,7 @@ def tracked_with_each_mode(seq: Path, frames, work: Path) -> dict:
     """``run.json`` ``metrics`` of ``track`` on ``seq`` with each mode's keypoints (a file each)."""
     from mocap.io.keypoints import write_keypoints
     from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
-    from mocap.run import OwnVideoOptions, track
+    from mocap.run import OwnVideoOptions, files, track
 
     out = {}
     for name, image_mode in (("video", False), ("image", True)):
@@ -67,7 +67,7 @@ def tracked_with_each_mode(seq: Path, frames, work: Path) -> dict:
             write_keypoints(work / f"{name}.csv", {i: detector.keypoints(i, f) for i, f in enumerate(frames)})
         summary = track(seq, work / name, OwnVideoOptions(keypoints=str(work / f"{name}.csv"), overlay=False),
                         progress=False)
-        metrics = json.loads((work / name / "run.json").read_text())["metrics"]
+        metrics = json.loads((work / name / files.RUN_JSON).read_text())["metrics"]
         out[name] = {k: round(metrics[k], 4) for k in ("mpjpe_mm", "pa_mpjpe_mm", "failure_rate")}
         out[name]["frames"] = summary.frames
     return out

@@ -257,9 +257,17 @@ def real_row(video: Path, work: Path, out: Path) -> dict:
             "ours_keypoints_ms": float(np.median(keyed.extra["ms_total"][1:])),
             "ours_keypoints_detector_ms": keyed_run.get("keypoints_ms_per_frame", float("nan")),
             "mediapipe_found": float(np.isfinite(ref).all(axis=(1, 2)).mean()),
-            "background": run["settings"]["own_video"]["background"]["mode"],
+            "background": _background_chosen(run["settings"]["own_video"]["background"]),
             "ours_ms": float(np.median(table.extra["ms_total"][1:])), "ours_fps_run": run["fps"],
             "mediapipe_ms": float(np.median(mp["ms"][1:]))}
+
+
+def _background_chosen(account: dict) -> str:
+    """``run.json`` ``settings.own_video.background`` in a few words: its mode, and for ``auto``
+    whether the estimate was used (else the foreground is colour-only)."""
+    if account["mode"] != "auto":
+        return account["mode"]
+    return "auto: estimated" if account["used"] else "auto: colour only"
 
 
 def _still(frame: np.ndarray, ours: np.ndarray, ref: np.ndarray, path: Path) -> None:

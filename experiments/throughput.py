@@ -61,6 +61,8 @@ def pinned(cores: int):
 
 def track_run(clip: Path, out: Path, cores: int, keypoints: str, max_frames: int | None) -> dict:
     """One ``track`` run pinned to ``cores`` cores; its figures (see the module)."""
+    from mocap.run import files
+
     command = [sys.executable, "-m", "mocap", "track", str(clip), "--out", str(out), "--overwrite",
                "--keypoints", keypoints]
     if max_frames is not None:
@@ -72,7 +74,7 @@ def track_run(clip: Path, out: Path, cores: int, keypoints: str, max_frames: int
     wall = time.perf_counter() - started
     if done.returncode != 0:
         raise RuntimeError(f"`{' '.join(command)}` failed ({done.returncode}): {done.stderr[-2000:]}")
-    run = json.loads((out / "run.json").read_text())
+    run = json.loads((out / files.RUN_JSON).read_text())
     frames = int(run["frames"])
     size = run["settings"]["working_resolution"]
     return {"cores": cores, "keypoints": keypoints, "frames": frames, "fps": float(run["fps"]),

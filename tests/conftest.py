@@ -1,7 +1,9 @@
 """Shared fixtures: the real data in ``../shared/data`` and a few small helpers."""
 from __future__ import annotations
 
+import importlib.util
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -12,6 +14,27 @@ REPO_ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = REPO_ROOT.parent / "shared" / "data"
 #: Whether MediaPipe is installed, as the library asks it (kept before the session's patch).
 _REAL_AVAILABLE = mediapipe_keypoints.available
+#: Why MediaPipe cannot be installed on this Python (pyproject.toml's marker on the extra
+#: ``keypoints``), or None where it can.
+MEDIAPIPE_UNINSTALLABLE = ("MediaPipe cannot be installed on Python 3.13+: mediapipe==0.10.14, the last release "
+                           "with its pose model in the wheel, has wheels up to 3.12 (the extra 'keypoints' installs "
+                           "nothing here)") if sys.version_info >= (3, 13) else None
+
+
+def need_mediapipe() -> None:
+    """Skip the calling test unless MediaPipe imports, with the reason: it cannot be installed on
+    this Python (:data:`MEDIAPIPE_UNINSTALLABLE`), or it is not installed (CI, which installs it
+    with the test extra, fails instead)."""
+    if importlib.util.find_spec("mediapipe") is not None:
+        return
+    if MEDIAPIPE_UNINSTALLABLE is not None:
+        pytest.skip(MEDIAPIPE_UNINSTALLABLE)
+    reason = "MediaPipe is not installed (optional extra 'keypoints': pip install 'mocap[keypoints]')"
+    if os.environ.get("CI"):
+        pytest.fail(reason + "; CI installs it with the test extra")
+    pytest.skip(reason)
+
+
 #: Test files that share a session fixture costing a minute (the tiny sweep of
 #: tests/experiments/conftest.py): one pytest-xdist group, so that one worker makes it once.
 SHARED_SESSION_GROUPS = {f"tests/experiments/{name}.py": "tiny-sweep"

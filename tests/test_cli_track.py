@@ -1,5 +1,4 @@
 """End to end through the CLI: a short synthetic sequence tracked, outputs checked, resumed."""
-import importlib.util
 import json
 import shutil
 
@@ -12,6 +11,8 @@ from mocap.io.bvh import read_bvh, read_pose_bvh
 from mocap.io.pose_table import PoseTable
 from mocap.io.video import count_frames
 from mocap.metrics import mpjpe
+
+from tests.conftest import need_mediapipe
 
 #: Mean joint error bound on the short test sequence with the true calibration, millimetres.
 SEQUENCE_MPJPE_BOUND_MM = 110.0
@@ -187,15 +188,15 @@ def test_keypoints_auto_without_the_extra_tracks_as_before_and_says_so(sequence,
     assert main(["track", str(sequence), "--out", str(tmp_path / "none"), "--keypoints", "none", *args]) == 0
     runs = {name: json.loads((tmp_path / name / "run.json").read_text()) for name in ("auto", "none")}
     assert runs["auto"]["settings"]["keypoints"] == runs["none"]["settings"]["keypoints"] == "none"
-    assert runs["auto"]["settings"]["own_video"]["keypoints"].startswith("none (auto:")
-    assert runs["none"]["settings"]["own_video"]["keypoints"] == "none"
+    # said once in run.json (settings.keypoints); the why of auto is the printed line's
+    assert "keypoints" not in runs["auto"]["settings"]["own_video"]
     np.testing.assert_array_equal(PoseTable.read(tmp_path / "auto" / "poses.csv").poses,
                                   PoseTable.read(tmp_path / "none" / "poses.csv").poses)
 
 
 @pytest.mark.mediapipe
 def test_keypoints_auto_with_the_extra_uses_mediapipe(sequence, tmp_path, capsys, monkeypatch):
-    pytest.importorskip("mediapipe", reason="the optional extra 'keypoints' (MediaPipe Pose) is not installed")
+    need_mediapipe()
     from mocap.run import advice
 
     monkeypatch.setattr(advice, "MOSTLY_FAILED", -1.0)     # every run ends with its advice
@@ -240,12 +241,12 @@ def test_an_old_run_folder_is_refused_with_why_and_what_to_do(sequence, tmp_path
     (old / "run.json").write_text(json.dumps(run))
     refused(old, "holds a run of an earlier mocap (its run.json has no settings.keypoints)")
 
+    need_mediapipe()            # "installed since" makes the detector (without MediaPipe: refused for that)
     bare = tmp_path / "bare"                          # --keypoints auto without the extra: none
     assert main(["track", str(sequence), "--out", str(bare), *args]) == 0
     monkeypatch.setattr(mediapipe_keypoints, "available", lambda: True)       # the extra installed since
     refused(bare, "the optional extra 'keypoints' was installed or removed")
-    if importlib.util.find_spec("mediapipe") is not None:
-        extra = tmp_path / "extra"                    # --keypoints auto with the extra: MediaPipe
-        assert main(["track", str(sequence), "--out", str(extra), *args]) == 0
-        monkeypatch.setattr(mediapipe_keypoints, "available", lambda: False)  # the extra removed since
-        refused(extra, "the optional extra 'keypoints' was installed or removed")
+    extra = tmp_path / "extra"                        # --keypoints auto with the extra: MediaPipe
+    assert main(["track", str(sequence), "--out", str(extra), *args]) == 0
+    monkeypatch.setattr(mediapipe_keypoints, "available", lambda: False)      # the extra removed since
+    refused(extra, "the optional extra 'keypoints' was installed or removed")

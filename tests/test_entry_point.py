@@ -50,7 +50,7 @@ def test_cli_track_calls_the_library_with_its_options(recorder, tmp_path):
 
 
 @pytest.mark.parametrize("command", [["track", "clip.mp4"], ["track-many", "clip.mp4", "--out", "o"],
-                                     ["calibrate", "clip.mp4"], ["demo"]])
+                                     ["calibrate", "clip.mp4"], ["demo"], ["segment", "clip.mp4"]])
 def test_a_command_line_s_defaults_are_the_options_defaults(command):
     """One builder (``own_video_options``) turns every command's arguments into its options, and
     a command line that sets nothing gives ``OwnVideoOptions()``: the same defaults (keypoints
@@ -63,13 +63,14 @@ def test_a_command_line_s_defaults_are_the_options_defaults(command):
 
 
 def test_the_shared_options_are_declared_in_one_place():
-    """``--hfov``, ``--height``, ``--work-width``, ``--colour``, ``--start``, ``--allow-damaged``
-    and ``--keypoints`` are spelt in ``mocap/commands/_common.py`` alone."""
+    """``--hfov``, ``--height``, ``--work-width``, ``--colour``, ``--start``, ``--max-frames``,
+    ``--allow-damaged`` and ``--keypoints`` are spelt in ``mocap/commands/_common.py`` alone."""
     for path in sorted((ROOT / "mocap" / "commands").glob("*.py")):
-        if path.name in ("_common.py", "segment.py"):        # segment: its own options (SegmentOptions)
+        if path.name == "_common.py":
             continue
         text = path.read_text()
-        for option in ("--hfov", "--height", "--work-width", "--colour", "--start", "--keypoints"):
+        for option in ("--hfov", "--height", "--work-width", "--colour", "--start", "--max-frames", "--allow-damaged",
+                       "--keypoints"):
             assert f'"{option}"' not in text, f"{path.name} declares {option}"
 
 
@@ -193,3 +194,36 @@ def test_camera_working_reduces_once_with_one_size_check():
     assert work.enlarged(4, 642, 481) == Camera(642, 481, 500.0, 510.0, 321.0, 240.5)
     with pytest.raises(ValueError, match="calibrate for this video"):
         Camera(320, 240, 300.0, 300.0, 160.0, 120.0).working(642, 481, 4)
+
+
+def test_the_keypoints_extra_installs_mediapipe_where_its_wheel_exists_and_its_tests_say_why_not():
+    """``mediapipe==0.10.14`` (the last release with its pose model in the wheel) has wheels for
+    Python 3.11 and 3.12 only: the extra ``keypoints`` carries that marker, so that the default
+    install and ``.[test]`` install on 3.13 too, and the MediaPipe tests skip there with the reason."""
+    import tomllib
+
+    from packaging.markers import Marker
+    from packaging.requirements import Requirement
+
+    from tests.conftest import MEDIAPIPE_UNINSTALLABLE
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    extras = project["optional-dependencies"]
+    mediapipe, = (Requirement(r) for r in extras["keypoints"])
+    assert mediapipe.name == "mediapipe" and str(mediapipe.specifier) == "==0.10.14"
+    for version, installs in (("3.11", True), ("3.12", True), ("3.13", False), ("3.14", False)):
+        assert mediapipe.marker.evaluate({"python_version": version}) is installs
+    assert (MEDIAPIPE_UNINSTALLABLE is None) is mediapipe.marker.evaluate()
+    assert not any("mediapipe" in r for r in project["dependencies"])       # the default install has none
+    # the test extra takes the extra and, where the pinned CPU torch is held (3.11), the fitting extra
+    assert "mocap[keypoints]" in extras["test"]
+    fit, = (Requirement(r) for r in extras["test"] if r.startswith("mocap[fit]"))
+    assert fit.marker == Marker("python_version < '3.12'")
+
+
+def test_hung_after_has_its_default_in_the_parser():
+    from mocap.cli import build_parser
+    from mocap.run.many import HUNG_AFTER_S
+
+    assert build_parser().parse_args(["track-many", "clip.mp4", "--out", "o"]).hung_after == HUNG_AFTER_S
+    assert build_parser().parse_args(["track-many", "clip.mp4", "--out", "o", "--hung-after", "5"]).hung_after == 5.0

@@ -88,6 +88,7 @@ def test_uv_columns_are_the_camera_projection_in_input_pixels(sequence, tmp_path
 def test_fake_camera_gives_the_same_poses_as_the_file(sequence, tmp_path):
     from mocap.io.frames import CameraSource, VideoSource
     from mocap.io.video import VideoWriter, iter_frames, read_image
+    from mocap.run import OwnVideoOptions
     from mocap.run.loop import RunParams, track_frames
     from mocap.run.setup import SetupRequest, find_setup
     from mocap.track import TrackerConfig
@@ -106,8 +107,8 @@ def test_fake_camera_gives_the_same_poses_as_the_file(sequence, tmp_path):
         if source.live:
             assert 1 <= len(consumed) <= N_FRAMES          # read by the set-up, tracked first
             source.hold(consumed)
-        track_frames(source, setup, tmp_path / name, RunParams(config=TrackerConfig(evaluations=60), progress=False,
-                                                               write_overlay=False))
+        options = OwnVideoOptions(tracker=TrackerConfig(evaluations=60), overlay=False, keypoints="none")
+        track_frames(source, setup, tmp_path / name, RunParams(options=options, progress=False))
         poses.append(PoseTable.read(tmp_path / name / "poses.csv").poses)
     assert poses[0].shape == (N_FRAMES, 23)
     np.testing.assert_array_equal(poses[0], poses[1])
@@ -129,7 +130,7 @@ def test_track_synthetic_clip_without_background_or_calibration(tmp_path):
     assert main(["track", str(frames), "--out", str(out), "--iterations", "100", "--no-overlay"]) == 0
     run = json.loads((out / "run.json").read_text())
     own = run["settings"]["own_video"]
-    assert own["background"]["mode"] == "none"               # the actor stands still: colour-only
+    assert own["background"]["mode"] == "auto" and not own["background"]["used"]   # the actor stands still: colour-only
     assert own["calibration"]["from"] == "automatic" and own["calibration"]["face_input_px"] is not None
     table = PoseTable.read(out / "poses.csv")
     truth = PoseTable.read(seq / "ground_truth.csv")
@@ -161,7 +162,7 @@ def test_track_real_clip_with_no_options(shared_data, tmp_path, capsys):
     u, v = table.extra["r_shoulder_u"], table.extra["r_shoulder_v"]
     assert np.all((u > 0) & (u < 640) & (v > 0) & (v < 480))
     run = json.loads((out / "run.json").read_text())
-    assert run["settings"]["own_video"]["background"]["mode"] in ("estimated", "none")
+    assert run["settings"]["own_video"]["background"]["mode"] == "auto"     # estimated and used, or not
     assert run["settings"]["own_video"]["hfov_deg"] == 60.0
 
 

@@ -8,7 +8,7 @@ from mocap.run.overlay import OverlayGeometry
 
 
 def test_a_run_that_went_well_gets_no_advice():
-    assert what_to_try(RunFacts(frames=20, failures=10, keypoints_extra=False, background="estimated",
+    assert what_to_try(RunFacts(frames=20, failures=10, keypoints_extra=False, background="auto",
                                 calibration="automatic")) is None
     assert what_to_try(RunFacts(frames=0, failures=0, keypoints_extra=False)) is None
 
@@ -21,7 +21,7 @@ def test_advice_names_only_what_was_not_tried_in_one_line():
     tried = what_to_try(RunFacts(frames=20, failures=11, keypoints="mediapipe", keypoints_extra=True, background="image",
                                  height_given=True, calibration="automatic"))
     assert not any(option in tried for option in ("--keypoints", "--background", "--height", "extra"))
-    given = what_to_try(RunFacts(frames=4, failures=3, keypoints_extra=True, background="estimated",
+    given = what_to_try(RunFacts(frames=4, failures=3, keypoints_extra=True, background="auto",
                                  calibration="given"))
     assert "--height" not in given and "--keypoints mediapipe" in given
     from_file = what_to_try(RunFacts(frames=4, failures=3, keypoints="points.csv", keypoints_extra=False,
@@ -32,7 +32,7 @@ def test_advice_names_only_what_was_not_tried_in_one_line():
 def test_without_the_keypoints_extra_the_advice_names_it_first():
     """A newcomer's default install (no extra, ``--keypoints auto`` found none): the line says
     how to install the extra, before any option; with the extra installed it names the option."""
-    facts = dict(frames=65, failures=41, keypoints=None, background="estimated", calibration="automatic")
+    facts = dict(frames=65, failures=41, keypoints=None, background="auto", calibration="automatic")
     without = what_to_try(RunFacts(**facts, keypoints_extra=False))
     assert without == ('41 of 65 frames were marked failed; try the keypoints extra (python -m pip install -e '
                        '".[keypoints]": MediaPipe Pose\'s 2D keypoints as a further cue, used by default once '

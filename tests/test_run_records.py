@@ -9,8 +9,10 @@ import numpy as np
 import pytest
 
 from mocap.run import OwnVideoOptions, RunSummary, files, track
+from mocap.run.accounts import BackgroundAccount, CalibrationAccount, SetupAccount
+from mocap.run.journal import SETTINGS_FORMAT
 from mocap.run.loop import RunParams
-from mocap.run.setup import BackgroundAccount, CalibrationAccount, SetupAccount, SetupRequest
+from mocap.run.setup import SetupRequest
 from mocap.track import FrameResult, TrackerConfig
 
 
@@ -25,25 +27,46 @@ def test_records_crossing_the_run_boundary_are_keyword_only(make):
 
 
 @pytest.mark.parametrize("background, calibration", [
-    ({"mode": "image", "reason": "given"}, {"from": "given"}),
-    ({"mode": "frames", "frames": [0, 5], "reason": "median of the given empty frames"},
+    ({"mode": "image", "used": True, "reason": "given"}, {"from": "given"}),
+    ({"mode": "frames", "used": True, "frames": [0, 5], "reason": "median of the given empty frames"},
      {"from": "automatic", "frame": 3, "face_input_px": [10, 12, 30, 36], "depth_m": 2.412}),
-    ({"mode": "none", "sample_frames": 60, "evidence": {"frames_with_person": 0.1}, "reason": "hardly moves"},
+    ({"mode": "auto", "used": False, "sample_frames": 60, "evidence": {"frames_with_person": 0.1},
+      "reason": "hardly moves"},
      {"from": "automatic", "frame": 0, "face_input_px": None, "depth_m": 1.9})])
 def test_the_setup_account_is_run_json_s_own_video_record_key_for_key(background, calibration):
-    """``settings.own_video`` as written before the account was typed (keys in the same order)
-    reads into the account and back unchanged."""
-    record = {"hfov_deg": 60.0, "height_m": None, "background": background, "working_factor": 2,
-              "calibration": calibration, "keypoints": "none"}
-    account = SetupAccount.from_dict(record)
+    """``settings.own_video`` reads into the account and back unchanged (keys in the same order);
+    the working factor and the sizes are ``settings.working_resolution``'s, said there only."""
+    record = {"hfov_deg": 60.0, "height_m": None, "background": background, "calibration": calibration}
+    sizes = {"factor": 2, "width": 160, "height": 120, "input_width": 320, "input_height": 240}
+    account = SetupAccount.from_settings({"own_video": record, "working_resolution": sizes})
     assert json.dumps(account.to_dict()) == json.dumps(record)
+    assert (account.working_factor, account.input_width, account.working_height) == (2, 320, 120)
     assert account.background_mode == background["mode"] and account.calibration_from == calibration["from"]
-    without = {k: v for k, v in record.items() if k != "keypoints"}
-    assert json.dumps(dataclasses.replace(account, keypoints=None).to_dict()) == json.dumps(without)
+    assert json.dumps(dataclasses.replace(account, keypoints="mediapipe").to_dict()) == json.dumps(record)
     if calibration["from"] == "automatic":                 # a newcomer's segments[].found
         assert CalibrationAccount.from_dict(calibration).to_dict(source=False) == \
             {k: v for k, v in calibration.items() if k != "from"}
     assert BackgroundAccount.from_dict(background).to_dict() == background
+    assert SetupAccount.from_settings({"working_resolution": sizes}) is None
+
+
+@pytest.mark.parametrize("old, mode, used", [
+    ({"mode": "image", "reason": "given"}, "image", True),
+    ({"mode": "frames", "frames": [0, 5], "reason": "median"}, "frames", True),
+    ({"mode": "estimated", "sample_frames": 60, "evidence": {"frames_with_person": 0.9}, "reason": "moves"},
+     "auto", True),
+    ({"mode": "none", "sample_frames": 60, "evidence": {"frames_with_person": 0.1}, "reason": "hardly moves"},
+     "auto", False),
+    ({"mode": "none", "reason": "asked for: colour-only foreground"}, "none", False)])
+def test_a_run_json_of_the_earlier_layout_reads_in_the_options_words(old, mode, used):
+    """Before ``settings.format`` the background's outcome was its mode (``estimated``) and
+    ``own_video`` repeated the working factor and the keypoints: it still reads, the same."""
+    own = {"hfov_deg": 60.0, "height_m": 1.7, "background": old, "working_factor": 4,
+           "calibration": {"from": "given"}, "keypoints": "none"}
+    sizes = {"factor": 4, "width": 160, "height": 120, "input_width": 640, "input_height": 480}
+    account = SetupAccount.from_settings({"own_video": own, "working_resolution": sizes})
+    assert (account.background.mode, account.background.used, account.working_factor) == (mode, used, 4)
+    assert account.background.reason == old["reason"] and account.height_m == 1.7
 
 
 def test_a_run_s_summary_is_what_its_run_json_reads_back_as_and_its_files_are_the_table_s(tmp_path):
@@ -59,9 +82,10 @@ def test_a_run_s_summary_is_what_its_run_json_reads_back_as_and_its_files_are_th
     assert seen == [summary.setup] and summary.setup.input_width == 160 and summary.setup.working_width == 160
     assert summary.setup.to_dict() == run["settings"]["own_video"]
     assert summary.setup.background_mode == "image" and summary.setup.calibration_from == "given"
-    read = RunSummary.read(out)
-    assert read == dataclasses.replace(summary, setup=dataclasses.replace(
-        summary.setup, input_width=None, input_height=None, working_width=None, working_height=None), advice=None)
+    assert run["settings"]["format"] == SETTINGS_FORMAT and "keypoints" in run["settings"]
+    read = RunSummary.read(out)          # the keypoints' line is printed, not kept
+    assert summary.setup.keypoints == "none"
+    assert read == dataclasses.replace(summary, setup=dataclasses.replace(summary.setup, keypoints=None), advice=None)
     assert (read.frames, read.failures, read.wall_s) == (run["frames"], run["failures"],
                                                          run["wall_seconds_this_session"])
     # an unfinished, a missing or a damaged run.json reads as no summary
@@ -69,3 +93,23 @@ def test_a_run_s_summary_is_what_its_run_json_reads_back_as_and_its_files_are_th
     assert RunSummary.read(out) is None
     (out / files.RUN_JSON).write_text("{")
     assert RunSummary.read(out) is None and RunSummary.read(tmp_path / "nowhere") is None
+
+
+def test_a_folder_of_the_earlier_run_json_layout_is_refused_in_one_line(tmp_path):
+    """A run folder written before ``settings.format`` (``own_video`` repeating the keypoints
+    and the working factor) does not resume: one line says why and what to do."""
+    from mocap.run.journal import Journal, previous_run
+
+    wanted = {"format": SETTINGS_FORMAT, "source": "clip.mp4", "own_video": {"hfov_deg": 60.0}, "keypoints": "none"}
+    earlier = {"source": "clip.mp4", "own_video": {"hfov_deg": 60.0, "working_factor": 4, "keypoints": "none"},
+               "keypoints": "none"}
+    journal = Journal.in_folder(tmp_path)
+    journal.path.write_text("frame\n0\n")
+    (tmp_path / files.RUN_JSON).write_text(json.dumps({"status": "running", "settings": earlier}))
+    with pytest.raises(ValueError) as refused:
+        previous_run(journal, tmp_path / files.RUN_JSON, wanted, overwrite=False)
+    line = str(refused.value)
+    assert "\n" not in line and "holds a run of an earlier mocap" in line and "mocap-run-2" in line
+    assert "--overwrite" in line and journal.path.read_text() == "frame\n0\n"      # nothing removed
+    assert previous_run(journal, tmp_path / files.RUN_JSON, wanted, overwrite=True) is None
+    assert not journal.path.exists()

@@ -19,7 +19,7 @@ from mocap.io.lock import LOCK_FILE, FolderLock
 from mocap.io.pose_table import PoseTable
 from mocap.run.journal import STATE_FILE
 
-from tests.conftest import REPO_ROOT
+from tests.conftest import REPO_ROOT, need_mediapipe
 
 N_FRAMES = 8
 #: No decoding lag: a row per frame, so the kill points below fall between known rows (a beam of
@@ -129,7 +129,7 @@ def test_resume_with_mediapipe_keypoints_is_bit_identical(sequence, tmp_path):
     anywhere resumes to the keypoints and the poses of an uninterrupted one, bit for bit:
     resumes at frame 3 (after a checkpoint, after a half-written row) and at frame 6; the
     keypoint journal ``keypoints.csv`` is the uninterrupted run's too."""
-    pytest.importorskip("mediapipe")
+    need_mediapipe()
     from mocap.io.keypoints import read_keypoints
     from mocap.run.journal import KEYPOINTS_FILE
 

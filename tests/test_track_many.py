@@ -20,7 +20,7 @@ from mocap.io.pose_table import PoseTable
 from mocap.run import files
 from mocap.run.many import SUMMARY_COLUMNS, read_summary
 
-from tests.conftest import REPO_ROOT
+from tests.conftest import REPO_ROOT, need_mediapipe
 from tests.dask_cluster import cluster_env, local_cluster, make_certificates, tls_client_env, wait_for
 from tests.killpoints import CHECKPOINT_EVERY
 
@@ -177,7 +177,7 @@ def test_a_killed_worker_s_video_resumes_elsewhere_and_every_video_is_its_single
     pytest.importorskip("distributed")
     args = [*TRACK_ARGS[:-1], keypoints]
     if keypoints != "none":
-        pytest.importorskip("mediapipe")
+        need_mediapipe()
         single_runs = {clip.name: tmp_path / "single" / clip.name for clip in clips}
         for clip in clips:
             assert main(["track", str(clip), "--out", str(single_runs[clip.name]), *args]) == 0

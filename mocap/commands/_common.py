@@ -61,7 +61,7 @@ def add_tracker_options(p: argparse.ArgumentParser) -> None:
                    help="the paper's method: one hypothesis, no recovery, re-acquisition, jumps or prior")
     p.add_argument("--config", type=Path, default=None, metavar="JSON",
                    help="TrackerConfig as JSON (options above override it)")
-    p.add_argument("--max-frames", type=int, default=None, metavar="N", help="track only the first N frames")
+    add_max_frames_option(p, "track only the first N frames")
     p.add_argument("--overwrite", action="store_true", help="start afresh instead of resuming a run in --out")
     p.add_argument("--no-overlay", action="store_true", help="skip writing overlay.mp4")
 
@@ -150,24 +150,42 @@ def add_camera_options(p: argparse.ArgumentParser, height_help: str) -> None:
     p.add_argument("--height", type=float, default=default("height_m"), metavar="M", help=height_help)
 
 
+def add_max_frames_option(p: argparse.ArgumentParser, what: str) -> None:
+    """``--max-frames N``."""
+    p.add_argument("--max-frames", type=int, default=default("max_frames"), metavar="N", help=what)
+
+
+def add_frame_options(p: argparse.ArgumentParser, width_default: str, start_help: str, damaged_help: str) -> None:
+    """``--work-width PX``, ``--start N``, ``--allow-damaged`` (``width_default``: what the
+    default working width is, in words)."""
+    p.add_argument("--work-width", type=int, default=default("work_width"), metavar="PX",
+                   help=f"working width: frames are reduced by the integer factor that brings them nearest to it "
+                        f"(default: {width_default})")
+    p.add_argument("--start", type=int, default=default("start"), metavar="N", help=start_help)
+    add_allow_damaged_option(p, damaged_help)
+
+
+def add_allow_damaged_option(p: argparse.ArgumentParser, what: str) -> None:
+    """``--allow-damaged``."""
+    p.add_argument("--allow-damaged", action="store_true", help=what)
+
+
 def add_run_options(p: argparse.ArgumentParser, start_help: str, damaged_help: str) -> None:
     """``--work-width PX``, ``--colour calibration|face``, ``--start N``, ``--allow-damaged``."""
     from mocap.imaging.resample import DEFAULT_WORK_WIDTH
     from mocap.run.options import COLOUR_SOURCES
 
-    p.add_argument("--work-width", type=int, default=default("work_width"), metavar="PX",
-                   help=f"working width: frames are reduced by the integer factor that brings them nearest to it "
-                        f"(default: the tracker chooses, near {DEFAULT_WORK_WIDTH} or less for a person close to "
-                        "the camera; see docs/own-video.md)")
+    add_frame_options(p, f"the tracker chooses, near {DEFAULT_WORK_WIDTH} or less for a person close to the camera; "
+                         "see docs/own-video.md", start_help, damaged_help)
     p.add_argument("--colour", choices=COLOUR_SOURCES, default=default("colour"),
                    help="learn colours inside the calibrated model (default) or from the detected face (needs "
                         "--calibration and a background)")
-    p.add_argument("--start", type=int, default=default("start"), metavar="N", help=start_help)
-    p.add_argument("--allow-damaged", action="store_true", help=damaged_help)
 
 
-def keypoints_line(name) -> str:
-    """``keypoints: ...``: which keypoints ``--keypoints NAME`` gives here (and why, for ``auto``)."""
+def keypoints_line(options) -> str:
+    """``keypoints: ...``: which keypoints :class:`mocap.run.OwnVideoOptions` ``options`` give
+    here (and why, for ``auto``: :func:`mocap.run.options.resolve_keypoints`), without making the
+    source (``track-many``'s workers make their own)."""
     from mocap.run.options import resolve_keypoints
 
-    return f"keypoints: {resolve_keypoints(None if name is None else str(name))[1]}"
+    return f"keypoints: {resolve_keypoints(options.keypoints)[1]}"

@@ -14,7 +14,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mocap.commands._common import add_background_options, add_camera_options, add_keypoints_option, own_video_options
+from mocap.commands._common import (add_allow_damaged_option, add_background_options, add_camera_options,
+                                    add_keypoints_option, own_video_options)
 
 
 def add_parser(subparsers) -> None:
@@ -28,8 +29,7 @@ def add_parser(subparsers) -> None:
                         "first usable frame is found")
     add_camera_options(p, "the person's height in metres: fixes the absolute scale")
     add_keypoints_option(p, "of the calibration frame")
-    p.add_argument("--allow-damaged", action="store_true",
-                   help="calibrate on a video whose frames do not all decode instead of stopping")
+    add_allow_damaged_option(p, "calibrate on a video whose frames do not all decode instead of stopping")
     p.set_defaults(run=run)
 
 

@@ -22,6 +22,7 @@ def run(args: argparse.Namespace) -> int:
     import dataclasses
 
     import mocap.run
+    from mocap.run import files
     from mocap.calibrate import Calibration, auto_calibrate
     from mocap.io.sequence import find_sequence
     from mocap.io.video import iter_frames, read_image
@@ -34,7 +35,7 @@ def run(args: argparse.Namespace) -> int:
         first = next(iter_frames(seq.frames, 0, 1))
         found = auto_calibrate(first, read_image(seq.background), Calibration.from_json(seq.calibration).camera)
         args.out.mkdir(parents=True, exist_ok=True)
-        calibration = str(args.out / "calibration.json")
+        calibration = str(args.out / files.CALIBRATION_JSON)
         found.to_json(calibration)
     print(f"tracking {root} ({'automatic' if args.auto_calibrate else 'true'} calibration)")
     # the paper's setting: no keypoints, so that the demo's figures are the same on every install

@@ -18,7 +18,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mocap.commands._common import add_background_options, add_keypoints_option, keypoints_line
+from mocap.commands._common import (add_background_options, add_frame_options, add_keypoints_option,
+                                    add_max_frames_option, own_video_options)
 
 
 def _box(text: str) -> tuple[int, int, int, int]:
@@ -50,14 +51,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("--lower-body-box", type=_box, metavar="R,C,H,W",
                    help="lower-body (trousers, skirt) sample box; without it there is no lower-body class")
     p.add_argument("--config", type=Path, metavar="JSON", help="imaging parameters (ImagingConfig)")
-    p.add_argument("--work-width", type=int, default=None, metavar="PX",
-                   help="working width: frames are reduced by the integer factor that brings them nearest to it "
-                        "(default: as track, near 160 pixels)")
-    p.add_argument("--allow-damaged", action="store_true",
-                   help="segment a video whose frames do not all decode instead of stopping")
+    add_frame_options(p, "as track, near 160 pixels", "first frame (default 0)",
+                      "segment a video whose frames do not all decode instead of stopping")
+    add_max_frames_option(p, "process at most N frames")
     add_keypoints_option(p, "the tracker would get, drawn")
-    p.add_argument("--start", type=int, default=0, metavar="N", help="first frame (default 0)")
-    p.add_argument("--max-frames", type=int, metavar="N", help="process at most N frames")
     p.set_defaults(run=run)
 
 
@@ -67,13 +64,8 @@ def run(args: argparse.Namespace) -> int:
 
     boxes = {name: getattr(args, f"{name}_box") for name in ("skin", "clothes", "hair", "lower_body")
              if getattr(args, f"{name}_box") is not None}
-    options = SegmentOptions(
-        background=args.background, background_frames=args.background_frames, no_background=args.no_background,
-        colour_model=args.colour_model, boxes=boxes,
-        imaging=ImagingConfig.from_json(args.config) if args.config else ImagingConfig(),
-        work_width=args.work_width, allow_damaged=args.allow_damaged,
-        keypoints=None if args.keypoints is None else str(args.keypoints), start=args.start,
-        max_frames=args.max_frames)
-    print(keypoints_line(args.keypoints))
-    segment(args.video, args.out, options)
+    options = own_video_options(args)          # background, frames, working width, keypoints: as track's
+    own = SegmentOptions(colour_model=args.colour_model, boxes=boxes,
+                         imaging=ImagingConfig.from_json(args.config) if args.config else ImagingConfig())
+    segment(args.video, args.out, options, own)
     return 0

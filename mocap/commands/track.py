@@ -46,7 +46,7 @@ def add_parser(subparsers) -> None:
 
 def print_setup(account) -> None:
     """What the set-up found (:func:`mocap.run.track`'s ``on_setup``: a
-    :class:`mocap.run.setup.SetupAccount`)."""
+    :class:`mocap.run.accounts.SetupAccount`)."""
     print(f"working resolution {account.working_width}x{account.working_height} "
           f"(input {account.input_width}x{account.input_height} reduced {account.working_factor}x)")
     background, calibration = account.background, account.calibration

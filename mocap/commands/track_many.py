@@ -34,7 +34,7 @@ def add_parser(subparsers) -> None:
                             "process, one video after another)")
     where.add_argument("--scheduler", default=None, metavar="ADDRESS",
                        help="a running Dask scheduler (tcp://HOST:8786) whose workers reach DIR (docs/cluster.md)")
-    p.add_argument("--hung-after", type=float, default=None, metavar="S",
+    p.add_argument("--hung-after", type=float, default=HUNG_AFTER_S, metavar="S",
                    help="seconds without a heartbeat after which a worker holding a video is restarted and its "
                         f"videos resumed elsewhere (default {HUNG_AFTER_S:g}; needs the worker's nanny, dask worker's "
                         "default)")
@@ -50,13 +50,14 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from mocap.run.many import HUNG_AFTER_S, track_many
+    from mocap.run import files
+    from mocap.run.many import track_many
 
     options = own_video_options(args)
-    print(keypoints_line(args.keypoints))
+    print(keypoints_line(options))
     summary = track_many(args.inputs, args.out, options, workers=args.workers, scheduler=args.scheduler,
                          progress=not args.no_progress,
-                         hung_after_s=HUNG_AFTER_S if args.hung_after is None else args.hung_after)
+                         hung_after_s=args.hung_after)
     for row in summary.rows:
         if row["status"] == "failed":
             print(f"failed: {row['input']}: {row['reason']}", file=sys.stderr)
@@ -65,5 +66,5 @@ def run(args: argparse.Namespace) -> int:
                   f"({row['hung_restarts']}x); tracked elsewhere from its checkpoint")
     print(f"{summary.finished} of {len(summary.rows)} inputs finished ({summary.skipped} already were), "
           f"{summary.failed} failed, {summary.wall_s:.0f} s on {summary.backend}; "
-          f"summary in {args.out / 'summary.csv'}")
+          f"summary in {args.out / files.SUMMARY_CSV}")
     return 1 if summary.failed else 0

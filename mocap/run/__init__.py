@@ -7,6 +7,7 @@ notebooks. One module a job:
 - :mod:`~mocap.run.files`    the names of the files a run writes (one table)
 - :mod:`~mocap.run.options`  what a person may set (:class:`OwnVideoOptions`), the background's mode
 - :mod:`~mocap.run.setup`    working resolution, background, calibration, decided once
+- :mod:`~mocap.run.accounts` how the set-up was found (``run.json`` ``settings.own_video``)
 - :mod:`~mocap.run.person`   finding and calibrating a person on one frame, newcomers
 - :mod:`~mocap.run.colours`  the colour classes, learnt in one place
 - :mod:`~mocap.run.loop`     the run loop: reader thread, tracker, people, damage verdict

@@ -28,7 +28,8 @@ class RunFacts:
         MediaPipe Pose (the optional extra ``keypoints``) is installed
         (:func:`mocap.io.mediapipe_keypoints.available`).
     background : str or None
-        How the background was found (``image``, ``frames``, ``estimated``, ``none``); None: unknown.
+        The background's mode (:data:`mocap.run.options.BACKGROUND_MODES`: ``auto``, ``image``,
+        ``frames``, ``none``); None: unknown.
     height_given : bool
         The person's height was given (the absolute scale is known).
     calibration : str or None
@@ -62,7 +63,7 @@ def what_to_try(facts: RunFacts) -> str | None:
                      "cue, used by default once installed)")
     elif facts.keypoints is None:
         tries.append("--keypoints mediapipe (2D keypoints as a further cue)")
-    if facts.background in ("estimated", "none"):
+    if facts.background in ("auto", "none"):            # no picture of the empty scene given
         tries.append("a background plate (--background IMG, a picture of the empty scene, or "
                      "--background-frames A:B where nobody is in view)")
     if facts.calibration == "automatic" and not facts.height_given:

@@ -5,15 +5,19 @@ A track run's folder (:func:`mocap.run.track`): :data:`POSES_CSV` (the journal),
 :data:`KEYPOINTS_CSV` (their journal),
 :data:`POSES_BVH`, :data:`OVERLAY_MP4`, :data:`RUN_JSON`, :data:`COLOUR_MODEL_JSON`,
 :data:`RESIDUALS_PNG`, the checkpoint :data:`STATE_FILE` (kept: a finished run's last state)
-and the lock :data:`LOCK_FILE`, and while it runs :data:`OVERLAY_TMP`. A ``segment`` folder: :data:`SEGMENT_JSON` (and the colour model). The top
-of a ``track-many`` folder: :data:`SUMMARY_CSV`, :data:`SUMMARY_PNG`, :data:`TRACK_MANY_JSON`.
+and the lock :data:`LOCK_FILE`, and while it runs :data:`OVERLAY_TMP`. A ``segment`` folder:
+:data:`SEGMENT_JSON`, :data:`IMAGING_JSON`, :data:`SEGMENT_MP4`, the folders
+:data:`SEGMENT_PICTURES` (and the colour model). The top of a ``track-many`` folder:
+:data:`SUMMARY_CSV`, :data:`SUMMARY_PNG`, :data:`TRACK_MANY_JSON`. ``calibrate``'s default output
+and ``demo --auto-calibrate``'s calibration: :data:`CALIBRATION_JSON`.
 """
 from __future__ import annotations
 
 from mocap.io.lock import LOCK_FILE
 
-__all__ = ["COLOUR_MODEL_JSON", "KEYPOINTS_CSV", "LOCK_FILE", "OVERLAY_MP4", "OVERLAY_TMP", "POSES_BVH", "POSES_CSV", "RESIDUALS_PNG", "RUN_JSON",
-           "RUN_OUTPUTS", "SEGMENT_JSON", "STATE_FILE", "SUMMARY_CSV", "SUMMARY_PNG", "TRACK_MANY_JSON"]
+__all__ = ["CALIBRATION_JSON", "COLOUR_MODEL_JSON", "IMAGING_JSON", "KEYPOINTS_CSV", "LOCK_FILE", "OVERLAY_MP4",
+           "OVERLAY_TMP", "POSES_BVH", "POSES_CSV", "RESIDUALS_PNG", "RUN_JSON", "RUN_OUTPUTS", "SEGMENT_JSON",
+           "SEGMENT_MP4", "SEGMENT_PICTURES", "STATE_FILE", "SUMMARY_CSV", "SUMMARY_PNG", "TRACK_MANY_JSON"]
 
 #: Pose, 3D and 2D joints and per-frame columns of every tracked frame, appended as frames are decided.
 POSES_CSV = "poses.csv"
@@ -36,6 +40,15 @@ RESIDUALS_PNG = "residuals.png"
 STATE_FILE = ".tracker_state.npz"
 #: ``python -m mocap segment``'s settings.
 SEGMENT_JSON = "segment.json"
+#: ``segment``'s imaging parameters (:class:`mocap.imaging.ImagingConfig`).
+IMAGING_JSON = "imaging.json"
+#: ``segment``'s video: frame | labels / edges | distance.
+SEGMENT_MP4 = "segment.mp4"
+#: ``segment``'s folders of per-frame PNGs: label images, edge masks, distance maps.
+SEGMENT_PICTURES = ("labels", "edges", "distance")
+#: A calibration (:mod:`mocap.calibrate`): ``demo --auto-calibrate``'s, in its output folder (and
+#: ``calibrate``'s default ``--out``, spelled in its parser, which imports no run module).
+CALIBRATION_JSON = "calibration.json"
 #: ``track-many``: one row per input; a plot of it; the options of the folder's videos.
 SUMMARY_CSV, SUMMARY_PNG, TRACK_MANY_JSON = "summary.csv", "summary.png", "track-many.json"
 #: What a finished track run leaves in its folder for people (with an overlay); besides them,

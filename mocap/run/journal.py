@@ -24,8 +24,8 @@ from mocap.io.keypoints import Keypoints, append_keypoints
 from mocap.io.pose_table import PoseTable
 from mocap.run import files
 
-__all__ = ["CHECKPOINT_EVERY", "KEYPOINTS_FILE", "STATE_FILE", "Journal", "People", "other_settings",
-           "previous_run"]
+__all__ = ["CHECKPOINT_EVERY", "KEYPOINTS_FILE", "SETTINGS_FORMAT", "STATE_FILE", "Journal", "People",
+           "other_settings", "previous_run"]
 
 #: Frames between two checkpoints (and after the last frame of a file): a resumed run redoes at
 #: most this many frames (the journal is cut back to the checkpoint), bit for bit the same.
@@ -43,6 +43,11 @@ KEYPOINTS_BYTES = "run_keypoints_bytes"
 PEOPLE = "run_people"
 #: Checkpoint entry holding ``(frame, dark)`` of the frames the tracker still holds back.
 PENDING_DARK = "run_pending_dark"
+#: ``run.json`` ``settings.format``: the settings' layout. A run of an earlier layout (none: each
+#: option said once, the background's mode in the options' words since ``mocap-run-2``) is not
+#: resumed (:func:`other_settings` says so in one line); its finished ``run.json`` still reads
+#: (:meth:`mocap.run.accounts.SetupAccount.from_settings`).
+SETTINGS_FORMAT = "mocap-run-2"
 #: Frames in a row with nobody in view after which the tracked person has left: the next person
 #: seen is calibrated afresh (:class:`mocap.run.person.NewcomerFinder`).
 PERSON_GONE_FRAMES = 10
@@ -213,13 +218,18 @@ def other_settings(folder: Path, held: dict | None, wanted: dict) -> str:
     """Why ``folder``'s run (``run.json`` ``settings``: ``held``) is not resumed with ``wanted``,
     and what to do, in one line: no ``run.json``; a run of an earlier mocap (no
     ``settings.keypoints``); other keypoints (``--keypoints`` changed, or the optional extra
-    ``keypoints`` installed or removed under ``auto``); else the settings that differ."""
+    ``keypoints`` installed or removed under ``auto``); a run of an earlier layout
+    (:data:`SETTINGS_FORMAT`); else the settings that differ."""
     what = "start afresh with --overwrite or use another --out"
     if not isinstance(held, dict):
         return f"{folder} holds a run without a readable run.json: {what}"
     if "keypoints" not in held:
         return (f"{folder} holds a run of an earlier mocap (its run.json has no settings.keypoints), which cannot be "
                 f"resumed exactly: {what}")
+    if held.get("format") != wanted.get("format"):
+        laid = "no settings.format" if held.get("format") is None else f"settings.format {held['format']!r}"
+        return (f"{folder} holds a run of an earlier mocap (its run.json has {laid}, this mocap writes "
+                f"{wanted.get('format')!r}), which cannot be resumed: {what}")
     if held["keypoints"] != wanted.get("keypoints"):
         return (f"{folder} holds a run tracked with keypoints from {held['keypoints']!r}, this run's would come from "
                 f"{wanted.get('keypoints')!r} (--keypoints changed, or the optional extra 'keypoints' was installed or "

@@ -21,7 +21,7 @@ import collections
 import json
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -44,9 +44,10 @@ from mocap.run import files
 from mocap.run.colours import learn_colours
 from mocap.run.journal import Journal, People, Resumed, previous_run
 from mocap.run.outputs import FinishedRun, RunSummary, finish_run, frame_row
+from mocap.run.options import OwnVideoOptions, RunChoices
 from mocap.run.overlay import OverlayGeometry, OverlayWriter, redraw_overlay
 from mocap.run.setup import RunSetup
-from mocap.track import FrameResult, Tracker, TrackerConfig
+from mocap.track import FrameResult, Tracker
 
 __all__ = ["DARK_MEAN", "READ_AHEAD", "RunParams", "track_frames"]
 
@@ -58,57 +59,54 @@ READ_AHEAD = 4
 
 @dataclass(frozen=True, eq=False, kw_only=True)
 class RunParams:
-    """How to run (:func:`track_frames`).
+    """How to run (:func:`track_frames`): the :class:`~mocap.run.options.OwnVideoOptions` and
+    :class:`~mocap.run.options.RunChoices` the run was made from, as they are, and what the
+    input or the caller adds.
 
     Attributes
     ----------
-    config : TrackerConfig
+    options : OwnVideoOptions
+        Read as they are: ``tracker``, ``start`` (the calibration's initial pose is the pose
+        there), ``max_frames``, ``overwrite``, ``overlay``, ``show``, ``allow_damaged`` (a
+        damaged video's frame numbers go to ``run.json``).
+    choices : RunChoices or None
+        What the options mean here (the keypoint source); None: :meth:`RunChoices.of`
+        ``options``.
     ground_truth : str, Path or None
-        ``ground_truth.csv``: adds the ``metrics`` object to ``run.json``.
+        ``ground_truth.csv``: adds the ``metrics`` object to ``run.json`` (the options' or a
+        sequence folder's: :class:`mocap.run.tracking.RunInput`).
     fps : float, frames per second
         Frame rate of the output video and BVH.
-    max_frames : int or None
-        Track only the first ``max_frames`` frames (from ``start_frame``).
-    overwrite : bool
-        Start afresh even if the folder holds a run.
     progress : bool
         Show a progress bar.
-    write_overlay : bool
-        Also write ``overlay.mp4``.
-    allow_damaged : bool
-        Track a video whose frames do not all decode (:func:`mocap.io.video_check.check_video`)
-        instead of refusing it; the damaged frame numbers go to ``run.json``.
-    start_frame : int
-        First frame to track (0-based); the calibration's initial pose is the pose there.
-    show : bool
-        Show the overlay live in a window (needs a display).
     newcomer : callable or None
         People change (:class:`mocap.run.person.NewcomerFinder`): once nobody has been in view
         for :data:`mocap.run.journal.PERSON_GONE_FRAMES` frames, it is called with ``(index,
         input-size frame)`` of every third frame that shows someone until it returns a set-up,
         which starts a new segment with a fresh tracker. The same frame must give the same answer.
-    keypoints : KeypointSource or None
-        2D keypoints of each frame (:mod:`mocap.io.keypoints`), asked on the input-size frame
-        and given to the tracker in working pixels.
     detect_ahead : int
         Frames the keypoint source may work ahead on a thread of its own
         (:class:`~mocap.io.keypoint_pipeline.KeypointPipeline`); 0 asks it on the reader thread,
         frame by frame. The outputs are the same either way (timings aside).
     """
 
-    config: TrackerConfig
+    options: OwnVideoOptions = field(default_factory=OwnVideoOptions)
+    choices: RunChoices | None = None
     ground_truth: str | Path | None = None
     fps: float = 25.0
-    max_frames: int | None = None
-    overwrite: bool = False
     progress: bool = True
-    write_overlay: bool = True
-    allow_damaged: bool = False
-    start_frame: int = 0
-    show: bool = False
     newcomer: Callable[[int, np.ndarray], RunSetup | None] | None = None
-    keypoints: KeypointSource | None = None
     detect_ahead: int = DETECT_AHEAD
+
+    def __post_init__(self) -> None:
+        if self.choices is None:
+            object.__setattr__(self, "choices", RunChoices.of(self.options))
+
+    @property
+    def keypoints(self) -> KeypointSource | None:
+        """``choices.keypoint_source``: 2D keypoints of each frame (:mod:`mocap.io.keypoints`),
+        asked on the input-size frame and given to the tracker in working pixels."""
+        return self.choices.keypoint_source
 
 
 @dataclass(frozen=True, eq=False)
@@ -285,7 +283,7 @@ class DamageCheck:
 
 def _span(frames_in, params: RunParams) -> tuple[int | None, int | None]:
     """The last frame (exclusive) to track and the progress bar's expected end, or None."""
-    start_frame, max_frames = params.start_frame, params.max_frames
+    start_frame, max_frames = params.options.start, params.options.max_frames
     total = frames_in.count if frames_in.live or frames_in.checked else None
     if not frames_in.live and start_frame >= frames_in.count_hint and start_frame >= frames_in.count:
         raise ValueError(f"start frame {start_frame} is past the end of {frames_in.name} "
@@ -315,15 +313,15 @@ def run_settings(frames_in, setup: RunSetup, params: RunParams, resolution: int)
     source = frames_in.name
     source = str(Path(source).resolve()) if Path(source).exists() else source
     camera, background = setup.calibration.camera, setup.background_file
-    settings = {"source": source, "background": str(background.resolve()) if background else None,
-                "calibration": setup.calibration.to_dict(), "tracker": params.config.to_dict(),
+    settings = {"format": journalling.SETTINGS_FORMAT, "source": source, "background": str(background.resolve()) if background else None,
+                "calibration": setup.calibration.to_dict(), "tracker": params.options.tracker.to_dict(),
                 "imaging": setup.imaging.to_dict(), "colour_model_from": setup.colour_from,
                 "mesh_resolution": resolution,
                 "working_resolution": {"factor": setup.factor, "width": camera.width, "height": camera.height,
                                        "input_width": frames_in.width, "input_height": frames_in.height}}
     if setup.record is not None:
         settings["own_video"] = setup.record.to_dict()
-    settings["start_frame"] = params.start_frame
+    settings["start_frame"] = params.options.start
     settings["keypoints"] = "none" if params.keypoints is None else getattr(params.keypoints, "description",
                                                                             type(params.keypoints).__name__)
     return settings
@@ -358,7 +356,7 @@ class RunLoop:
 
     def __init__(self, frames_in, setup: RunSetup, out_dir: Path, params: RunParams) -> None:
         self.frames_in, self.setup, self.out_dir, self.params = frames_in, setup, out_dir, params
-        self.config = params.config
+        self.config = params.options.tracker
         self.camera = setup.calibration.camera
         self.journal = Journal.in_folder(out_dir)
         self.run_json = out_dir / files.RUN_JSON
@@ -379,19 +377,19 @@ class RunLoop:
         from mocap.body.mesh import resolution_for_image
 
         loop = cls(frames_in, setup, out_dir, params)
-        start_frame = params.start_frame
+        start_frame = params.options.start
         if isinstance(start_frame, bool) or not isinstance(start_frame, int) or start_frame < 0:
             raise ValueError(f"the start frame must be a non-negative integer, got {start_frame!r}")
-        loop.damage = DamageCheck(frames_in, params.allow_damaged, [])
+        loop.damage = DamageCheck(frames_in, params.options.allow_damaged, [])
         stop, expected = _span(frames_in, params)
         _check_sizes(frames_in, setup)
         loop.truth = PoseTable.read(params.ground_truth) if params.ground_truth is not None else None
         camera = loop.camera
-        loop.resolution = params.config.mesh_resolution or resolution_for_image(camera.width, camera.height)
+        loop.resolution = params.options.tracker.mesh_resolution or resolution_for_image(camera.width, camera.height)
         model = setup.calibration.body_model(loop.resolution)
         loop.settings = run_settings(frames_in, setup, params, loop.resolution)
         out_dir.mkdir(parents=True, exist_ok=True)
-        checkpoint = previous_run(loop.journal, loop.run_json, loop.settings, params.overwrite)
+        checkpoint = previous_run(loop.journal, loop.run_json, loop.settings, params.options.overwrite)
         colour_model = setup.colour_model
         if colour_model is None:
             if frames_in.live:
@@ -440,12 +438,12 @@ class RunLoop:
         """The overlay drawn as frames come (no second decoding pass) unless an earlier session's
         frames must be in it too (a resumed file run redraws it whole at the end)."""
         params, frames_in = self.params, self.frames_in
-        self.overlay_now = frames_in.live or (params.write_overlay and self.span.start == self.span.first)
+        self.overlay_now = frames_in.live or (params.options.overlay and self.span.start == self.span.first)
         self.geometry = OverlayGeometry.of(self.camera, self.setup.factor, frames_in.width, frames_in.height)
-        if not (self.overlay_now or params.show):
+        if not (self.overlay_now or params.options.show):
             return None
         self.overlay = OverlayWriter(self.out_dir, params.fps, self.person.model, self.geometry.camera,
-                                     show=params.show, write=self.overlay_now)
+                                     show=params.options.show, write=self.overlay_now)
         self.damage.overlay = self.overlay
         return self.geometry
 
@@ -476,7 +474,7 @@ class RunLoop:
         self.emit(self.tracker.finish())
         self.person = Person.of_setup(found, self.resolution)
         self.people.begin(index, self.person.calibration, self.person.colour_model,
-                          None if found.record is None else found.record.to_dict(source=False))
+                          None if found.record is None else found.record.calibration.to_dict(source=False))
         reader.colours = Colours(self.people.segment, self.person.colour_model, self.person.scene)
         self.tracker = Tracker(self.person.model, self.camera, self.config, self.person.calibration.initial_pose)
         if self.overlay is not None:
@@ -569,7 +567,7 @@ class RunLoop:
             raise ValueError(f"no frame was tracked from {self.frames_in.name}")
         table = PoseTable.read(self.journal.path)     # (not rewritten: the checkpoint records its length)
         self.people.close()
-        if self.params.write_overlay and not self.overlay_now:
+        if self.params.options.overlay and not self.overlay_now:
             models = [Calibration.from_dict(seg["calibration"]).body_model(self.resolution)
                       .with_class_names(tuple(seg["colour_classes"])) for seg in self.people.segments]
             frames = enumerate(self.frames_in.frames(0, int(table.frames.max()) + 1))

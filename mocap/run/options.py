@@ -9,6 +9,7 @@ read.
 """
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -218,8 +219,9 @@ def resolve_keypoints(name: str | None) -> tuple[str | None, str]:
 
         if mediapipe_keypoints.available():
             return "mediapipe", "mediapipe (auto: the optional extra 'keypoints' is installed)"
-        return None, ("none (auto: MediaPipe Pose, the optional extra 'keypoints', is not installed; "
-                      "pip install 'mocap[keypoints]' adds 2D keypoints as a cue)")
+        how = ("pip install 'mocap[keypoints]' adds 2D keypoints as a cue" if sys.version_info < (3, 13) else
+               "it needs Python 3.11 or 3.12: mediapipe 0.10.14, the last with its model inside, has no later wheel")
+        return None, f"none (auto: MediaPipe Pose, the optional extra 'keypoints', is not installed; {how})"
     return name, name if name == "mediapipe" else f"file {name}"
 
 

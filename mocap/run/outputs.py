@@ -26,7 +26,7 @@ from mocap.io.pose_table import PoseTable
 from mocap.io.video_check import format_frames
 from mocap.render.camera import Camera
 from mocap.run import files
-from mocap.run.setup import SetupAccount
+from mocap.run.accounts import SetupAccount
 from mocap.track.config import EDGE_FAILURE_THRESHOLD_PX, REGION_FAILURE_THRESHOLD
 
 __all__ = ["EXTRA_COLUMNS", "PIXEL_COLUMNS", "FinishedRun", "RunSummary", "finish_run", "frame_row",
@@ -97,12 +97,11 @@ class RunSummary:
         if not isinstance(record, dict) or record.get("status") != "finished":
             return None
         try:
-            own = record["settings"].get("own_video")
             return cls(out_dir=out_dir, frames=record["frames"], resumed_from=record["resumed_from_frame"],
                        fps=record["fps"], metrics=record.get("metrics"), failures=record["failures"],
                        damaged_frames=tuple(record.get("damaged_frames", ())), empty_frames=record["empty_frames"],
                        dark_frames=record.get("dark_frames", 0), wall_s=record["wall_seconds_this_session"],
-                       setup=None if own is None else SetupAccount.from_dict(own))
+                       setup=SetupAccount.from_settings(record["settings"]))
         except (KeyError, TypeError, AttributeError):          # a run.json of another version
             return None
 
@@ -296,8 +295,7 @@ def finish_run(run: FinishedRun) -> RunSummary:
     if run.live is not None:
         record["live"] = run.live
     write_text_atomic(run.out_dir / files.RUN_JSON, json.dumps(record, indent=2))
-    own = run.settings.get("own_video")
     return RunSummary(out_dir=run.out_dir, frames=len(table), resumed_from=run.start, fps=record["fps"],
                       metrics=metrics, failures=failures, damaged_frames=tuple(run.damaged),
                       empty_frames=record["empty_frames"], dark_frames=record.get("dark_frames", 0), wall_s=run.wall_s,
-                      setup=None if own is None else SetupAccount.from_dict(own))
+                      setup=SetupAccount.from_settings(run.settings))

@@ -13,6 +13,7 @@ from mocap.imaging import Box, ImagingConfig, detect_face, rgb_to_hsv
 from mocap.imaging.background import PERSON_MIN_SHARE, subtract_background
 from mocap.imaging.resample import downscale
 from mocap.render.camera import DEFAULT_HFOV_DEG, Camera
+from mocap.run.accounts import CalibrationAccount
 
 __all__ = ["FACE_SEARCH_SIDE", "FoundPerson", "NewcomerFinder", "find_face", "find_person", "plausible_face",
            "whole_person"]
@@ -138,20 +139,21 @@ class NewcomerFinder:
     """The run's way to calibrate a new person (:class:`mocap.run.loop.RunLoop`'s ``newcomer``):
     called with ``(frame index, input-size frame)``, it gives the new person's
     :class:`mocap.run.setup.RunSetup` (the same working resolution and background, a fresh
-    calibration, colours and scene) or None (:func:`find_person`). The same frame gives the
-    same answer (a resumed run asks again).
+    calibration, colours and scene; its record the run's, the calibration's account the
+    newcomer's) or None (:func:`find_person`). The same frame gives the same answer (a resumed
+    run asks again).
 
     Attributes
     ----------
-    setup : RunSetup
-        The run's set-up.
+    setup : mocap.run.setup.RunSetup
+        The run's set-up (its ``record`` a :class:`~mocap.run.accounts.SetupAccount`, or None).
     camera : Camera
         The default camera of the input at the working resolution.
     height_m : float or None, metres
     auto : AutoCalibrationConfig or None
     """
 
-    setup: "RunSetup"  # noqa: F821  (mocap.run.setup, which imports this module)
+    setup: object  # mocap.run.setup.RunSetup (that module imports this one)
     camera: Camera
     height_m: float | None = None
     auto: AutoCalibrationConfig | None = None
@@ -170,10 +172,9 @@ class NewcomerFinder:
         if found is None:
             return None
         person, face = found.person, found.face
-        from mocap.run.setup import CalibrationAccount
-
-        record = CalibrationAccount(source="automatic", frame=int(index),
-                                    face_input_px=None if face is None else [int(v) for v in face],
-                                    depth_m=round(float(person.calibration.initial_pose[2]), 3))
+        account = CalibrationAccount(source="automatic", frame=int(index),
+                                     face_input_px=None if face is None else [int(v) for v in face],
+                                     depth_m=round(float(person.calibration.initial_pose[2]), 3))
+        record = None if setup.record is None else dataclasses.replace(setup.record, calibration=account)
         return dataclasses.replace(setup, calibration=person.calibration, colour_model=person.colour_model,
                                    scene=person.scene, record=record)

@@ -6,7 +6,9 @@ and the parameters (``imaging.json``) it used.
 Frames are reduced to the working resolution ``track`` uses, the background is found as the
 run's set-up finds it (:func:`mocap.run.setup.find_background`) and the colours are learnt as
 the run learns them (:func:`mocap.run.colours.learn_colours`, from a face or sample boxes), so
-the pictures are the images the tracker compares its model against. An interrupted run
+the pictures are the images the tracker compares its model against; what it is told is what
+``track`` is told (:class:`~mocap.run.options.OwnVideoOptions`, resolved once by
+:class:`~mocap.run.options.RunChoices`), with :class:`SegmentOptions` beside. An interrupted run
 resumes: the same call keeps the frames already written (``segment.json`` holds the settings
 they were made with).
 """
@@ -31,7 +33,7 @@ from mocap.io.lock import FolderLock
 from mocap.io.video import VideoWriter, read_image
 from mocap.run import files
 from mocap.run.colours import ColourRecipe, SampleBoxes, learn_colours
-from mocap.run.options import background_mode, keypoint_source, resolve_keypoints
+from mocap.run.options import OwnVideoOptions, RunChoices
 from mocap.run.setup import FaceSearch, FrameAccess, SetupRequest, find_background
 
 __all__ = ["SegmentOptions", "segment"]
@@ -41,60 +43,44 @@ Box = tuple[int, int, int, int]
 
 @dataclass(frozen=True)
 class SegmentOptions:
-    """What ``segment`` is told.
+    """What ``segment`` is told besides what ``track`` is (:class:`~mocap.run.options.OwnVideoOptions`).
 
     Attributes
     ----------
-    background : Path or None
-        Image of the empty scene (input size).
-    background_frames : (int, int) or None
-        Frames ``A:B`` of empty scene (their median).
-    no_background : bool
-        Colour-only foreground.
     colour_model : Path or None
         Colour model to use (else learnt on the first frame that shows the person).
     boxes : dict of str to (int, int, int, int)
         Sample boxes in input pixels (``row, col, height, width``), by
         :class:`mocap.run.colours.SampleBoxes` field (``skin``, ``clothes``, ``hair``, ``lower_body``).
     imaging : ImagingConfig
-    work_width : int or None, pixels
-        Wanted working width; None: as ``track`` (near 160 pixels).
-    allow_damaged : bool
-    keypoints : str or None
-        ``"auto"`` (MediaPipe where the optional extra imports, none otherwise), ``"mediapipe"``,
-        ``"none"`` or a keypoint file: drawn on the frame panel of ``segment.mp4``.
-    start : int
-    max_frames : int or None
     """
 
-    background: Path | None = None
-    background_frames: tuple[int, int] | None = None
-    no_background: bool = False
     colour_model: Path | None = None
     boxes: dict[str, Box] = field(default_factory=dict)
     imaging: ImagingConfig = field(default_factory=ImagingConfig)
-    work_width: int | None = None
-    allow_damaged: bool = False
-    keypoints: str | None = None
-    start: int = 0
-    max_frames: int | None = None
 
 
-def segment(video: Path, out: Path | None, options: SegmentOptions) -> None:
+def segment(video: Path, out: Path | None, options: OwnVideoOptions, own: SegmentOptions | None = None,
+            choices: RunChoices | None = None) -> None:
     """Segment ``video`` into ``out`` (default ``<video name>_segment``); prints what it did.
+
+    ``options`` as ``track`` takes them: the background (one of ``background``,
+    ``background_frames``, ``no_background``: segment has no automatic one), ``work_width``,
+    ``start``, ``max_frames``, ``allow_damaged`` and ``keypoints`` (drawn on the frame panel of
+    ``segment.mp4``); the rest is not used. ``choices``: what they mean here (default
+    :meth:`RunChoices.of` ``options``, made once the options are checked).
 
     Raises
     ------
     ValueError
         No background option, bad frames, another segmentation's settings in ``out``.
     """
-    if options.background is None and options.background_frames is None and not options.no_background:
+    own = SegmentOptions() if own is None else own
+    if options.background_mode() == "auto":
         raise ValueError("give --background IMG, --background-frames A:B (median of empty "
                          "frames of VIDEO) or --no-background")
-    if options.start < 0:
-        raise ValueError(f"--start must be >= 0, got {options.start}")
-    if options.max_frames is not None and options.max_frames < 1:
-        raise ValueError(f"--max-frames must be >= 1, got {options.max_frames}")
+    choices = RunChoices.of(options) if choices is None else choices    # a bad keypoint file stops here
+    print(f"keypoints: {choices.keypoints_line}")
     source = VideoSource(video)
     source.damaged_frames(options.allow_damaged)
     total = source.count
@@ -105,26 +91,24 @@ def segment(video: Path, out: Path | None, options: SegmentOptions) -> None:
                                                            (options.work_width,)))
     out = out if out is not None else Path(f"{video.stem}_segment")
     with FolderLock(out):
-        _Segmenter(video, source, factor, out, options, stop).run()
+        _Segmenter(video, source, factor, out, options, own, choices, stop).run()
 
 
-def _settings(video: Path, options: SegmentOptions, stop: int, factor: int) -> dict:
-    """What the output folder's images depend on (``segment.json``): a resume needs the same."""
+def _settings(video: Path, options: OwnVideoOptions, own: SegmentOptions, choices: RunChoices, stop: int,
+              factor: int) -> dict:
+    """What the output folder's images depend on (``segment.json``): a resume needs the same.
+    ``keypoints``: what ``--keypoints`` gave (``auto`` resolved), ``mediapipe``, a file's
+    absolute path or None."""
     path = lambda p: None if p is None else str(Path(p).resolve())
-    box = lambda name: list(options.boxes[name]) if options.boxes.get(name) else None
+    box = lambda name: list(own.boxes[name]) if own.boxes.get(name) else None
+    keypoints = choices.keypoint_cue
     return {"video": path(video), "background": path(options.background),
             "background_frames": list(options.background_frames) if options.background_frames else None,
-            "no_background": bool(options.no_background), "colour_model": path(options.colour_model),
+            "no_background": bool(options.no_background), "colour_model": path(own.colour_model),
             "skin_box": box("skin"), "clothes_box": box("clothes"), "hair_box": box("hair"),
             "lower_body_box": box("lower_body"),
-            "start": options.start, "stop": stop, "working_factor": factor, "imaging": options.imaging.to_dict(),
-            "keypoints": _keypoints_setting(options.keypoints, path)}
-
-
-def _keypoints_setting(name: str | None, path) -> str | None:
-    """What ``--keypoints NAME`` gave (``auto`` resolved): ``mediapipe``, a file's absolute path or None."""
-    resolved = resolve_keypoints(name)[0]
-    return resolved if resolved in (None, "mediapipe") else path(resolved)
+            "start": options.start, "stop": stop, "working_factor": factor, "imaging": own.imaging.to_dict(),
+            "keypoints": keypoints if keypoints in (None, "mediapipe") else path(keypoints)}
 
 
 def _other_settings(out: Path, held: dict, wanted: dict) -> str:
@@ -164,18 +148,17 @@ def _draw_keypoints(frame: np.ndarray, keypoints) -> np.ndarray:
 class _Segmenter:
     """One segmentation into an output folder (held locked by :func:`segment`)."""
 
-    def __init__(self, video: Path, source, factor: int, out: Path, options: SegmentOptions, stop: int) -> None:
+    def __init__(self, video: Path, source, factor: int, out: Path, options: OwnVideoOptions, own: SegmentOptions,
+                 choices: RunChoices, stop: int) -> None:
         self.video, self.source, self.factor, self.out, self.options, self.stop = video, source, factor, out, options, stop
-        self.config = options.imaging
+        self.own, self.choices, self.config = own, choices, own.imaging
 
     def background(self) -> np.ndarray | None:
         """The empty scene at the working resolution, as the run's set-up finds it."""
         options = self.options
-        mode = background_mode(options.background is not None, options.background_frames is not None,
-                               options.no_background)
         image = read_image(options.background) if options.background is not None else None
-        request = SetupRequest(factor=self.factor, background_mode=mode, background_image=image,
-                               background_frames=options.background_frames, imaging=self.config, progress=False)
+        request = SetupRequest(factor=self.factor, background_mode=options.background_mode(), background_image=image,
+                               background_frames=options.background_frames, progress=False)
         return find_background(FrameAccess(self.source, 0), request, self.factor, FaceSearch(self.factor),
                                self.config).image
 
@@ -183,12 +166,12 @@ class _Segmenter:
         """The given colour model, a resumed run's, or one learnt on the first frame that shows the person."""
         options, out = self.options, self.out
         learned = out / files.COLOUR_MODEL_JSON
-        if options.colour_model is not None:
-            model = ColourModel.from_json(options.colour_model)
+        if self.own.colour_model is not None:
+            model = ColourModel.from_json(self.own.colour_model)
         elif learned.is_file():                   # a resumed run: the model its first images were made with
             model = ColourModel.from_json(learned)
         else:
-            boxes = SampleBoxes(**{name: _working_box(box, self.factor) for name, box in options.boxes.items()})
+            boxes = SampleBoxes(**{name: _working_box(box, self.factor) for name, box in self.own.boxes.items()})
             frames = ((i, downscale(f, self.factor)) for i, f in enumerate(self.source.frames(options.start, self.stop),
                                                                            start=options.start))
             learnt = learn_colours(frames, ColourRecipe("face", background, self.config, boxes=boxes), str(self.video))
@@ -200,14 +183,14 @@ class _Segmenter:
 
     def run(self) -> None:
         options, out, source, factor = self.options, self.out, self.source, self.factor
-        keypoints = keypoint_source(options.keypoints)      # a bad keypoint file stops before anything is written
-        settings = _settings(self.video, options, self.stop, factor)
+        keypoints = self.choices.keypoint_source
+        settings = _settings(self.video, options, self.own, self.choices, self.stop, factor)
         settings_file = out / files.SEGMENT_JSON
         if settings_file.is_file():
             held, wanted = read_json(settings_file), json.loads(json.dumps(settings))
             if held != wanted:
                 raise ValueError(_other_settings(out, held, wanted))
-        for sub in ("labels", "edges", "distance"):
+        for sub in files.SEGMENT_PICTURES:
             (out / sub).mkdir(parents=True, exist_ok=True)
         write_json(settings_file, settings)
         background = self.background()
@@ -215,7 +198,7 @@ class _Segmenter:
             print(f"working resolution {source.width // factor}x{source.height // factor} (input "
                   f"{source.width}x{source.height} reduced {factor}x, as track sees it)")
         model = self.colours(background)
-        self.config.to_json(out / "imaging.json")
+        self.config.to_json(out / files.IMAGING_JSON)
         started = time.perf_counter()
         counts = self.frames(background, model, keypoints)
         self.report(counts, time.perf_counter() - started, model)
@@ -223,7 +206,7 @@ class _Segmenter:
     def frame(self, index: int, frame: np.ndarray, background, model: ColourModel, counts: dict):
         """One frame's three pictures, written (or read back from an interrupted run)."""
         name = f"{index:06d}.png"
-        paths = [self.out / sub / name for sub in ("labels", "edges", "distance")]
+        paths = [self.out / sub / name for sub in files.SEGMENT_PICTURES]
         if all(p.is_file() for p in paths):           # written by an interrupted run: kept
             labels_rgb, edges_img, distance_rgb = (read_image(p, allow_gray=True) for p in paths)
             counts["resumed"] += 1
@@ -244,7 +227,7 @@ class _Segmenter:
         """Every frame's pictures and ``segment.mp4``; the counts."""
         options, out = self.options, self.out
         counts = {"timings": {}, "empty": 0, "resumed": 0, "frames": 0}
-        video_path = out / "segment.mp4"
+        video_path = out / files.SEGMENT_MP4
         partial = out / f".{video_path.stem}.partial{video_path.suffix}"
         with VideoWriter(partial, self.source.fps or 10.0) as video:
             for index, full in tqdm(enumerate(self.source.frames(options.start, self.stop), start=options.start),

@@ -6,12 +6,12 @@ find what is not given, from the video itself, at the tracker's working resoluti
 (:mod:`mocap.imaging.resample`):
 
 1. **Face and working resolution** (:func:`look_for_face`) — without a calibration, the first
-   frame among the first ``search_frames`` with a plausible face (:func:`mocap.run.person.find_face`);
+   frame among the first :data:`SEARCH_FRAMES` with a plausible face (:func:`mocap.run.person.find_face`);
    a face larger than :data:`FACE_WORKING_PX` working pixels makes the working resolution
    coarser (a person close to the camera fills the frame).
 2. **Background** (:func:`find_background`) — given (an image, or the median of empty frames
    ``A:B``), none (colour-only foreground) or, by default, chosen (:func:`choose_background`):
-   estimated from up to ``sample_frames`` frames of the clip and used when the person moves
+   estimated from up to :data:`SAMPLE_FRAMES` frames of the clip and used when the person moves
    enough to be seen against it; otherwise the foreground is colour-only (the colour classes,
    less the scene's colours: :mod:`mocap.imaging.scene`). A live camera has no clip to look
    at: colour-only unless a background is given.
@@ -21,8 +21,8 @@ find what is not given, from the video itself, at the tracker's working resoluti
    background, the first frame with a person-sized foreground clear of the borders. The
    camera is a pinhole of horizontal field of view ``hfov_deg``; ``height_m`` fixes the scale.
 
-What was chosen and why is the set-up's ``record``, a :class:`SetupAccount` (``run.json``
-``settings.own_video`` is its :meth:`SetupAccount.to_dict`).
+What was chosen and why is the set-up's ``record``, a :class:`mocap.run.accounts.SetupAccount`
+(``run.json`` ``settings.own_video`` is its :meth:`~mocap.run.accounts.SetupAccount.to_dict`).
 """
 from __future__ import annotations
 
@@ -32,19 +32,19 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap.calibrate import AutoCalibrationConfig, Calibration, PersonCalibration, calibrate_person
+from mocap.calibrate import Calibration, PersonCalibration, calibrate_person
 from mocap.imaging import Box, ColourModel, ImagingConfig, median_background
 from mocap.imaging.background import estimate_background, person_against_background, subtract_background
 from mocap.imaging.resample import downscale, working_factor
 from mocap.imaging.scene import SceneColours
 from mocap.io.keypoints import KeypointSource
-from mocap.io.video import read_image
 from mocap.render.camera import DEFAULT_HFOV_DEG, Camera
+from mocap.run.accounts import BackgroundAccount, CalibrationAccount, SetupAccount
 from mocap.run.colours import ColourRecipe, learn_colours
 from mocap.run.options import BACKGROUND_MODES, COLOUR_SOURCES
 from mocap.run.person import find_face, plausible_face, whole_person
 
-__all__ = ["BackgroundAccount", "CalibrationAccount", "FoundSetup", "RunSetup", "SetupAccount", "SetupRequest",
+__all__ = ["FoundSetup", "RunSetup", "SAMPLE_FRAMES", "SAMPLE_LIMIT", "SEARCH_FRAMES", "SetupRequest",
            "choose_background", "find_setup", "spread", "working_camera"]
 
 #: Share of the sample frames with someone in view (against the estimate) needed to use it.
@@ -58,128 +58,15 @@ MIN_PERSON_FRACTION = 0.01
 FACE_WORKING_PX = 14
 #: Share of the face box that must be foreground against the estimate to use it.
 MIN_FACE_FOREGROUND = 0.5
-
-
-@dataclass(frozen=True, kw_only=True)
-class BackgroundAccount:
-    """How the background was found (``run.json`` ``settings.own_video.background``).
-
-    Attributes
-    ----------
-    mode : {"image", "frames", "estimated", "none"}
-    reason : str
-        Why, in words.
-    details : dict
-        What the choice rests on, JSON-ready: ``frames`` ``[A, B]`` (mode ``frames``), or
-        ``sample_frames`` and ``evidence`` (an estimate, used or not: :func:`choose_background`).
-    """
-
-    mode: str
-    reason: str
-    details: dict = field(default_factory=dict)
-
-    def to_dict(self) -> dict:
-        return {"mode": self.mode, **self.details, "reason": self.reason}
-
-    @classmethod
-    def from_dict(cls, data: dict) -> "BackgroundAccount":
-        details = {k: v for k, v in data.items() if k not in ("mode", "reason")}
-        return cls(mode=data["mode"], reason=data["reason"], details=details)
-
-
-@dataclass(frozen=True, kw_only=True)
-class CalibrationAccount:
-    """Where the calibration came from (``run.json`` ``settings.own_video.calibration``; a
-    newcomer's ``segments[].found`` without ``source``).
-
-    Attributes
-    ----------
-    source : {"given", "automatic"}
-        (JSON ``from``.)
-    frame : int or None
-        The frame calibrated on (automatic).
-    face_input_px : list of int or None, input pixels
-        The face found there (``x0, y0, x1, y1`` as :class:`mocap.imaging.Box`), None without one.
-    depth_m : float or None, metres
-        The person's distance found (the initial pose's depth, 3 decimals).
-    """
-
-    source: str
-    frame: int | None = None
-    face_input_px: list[int] | None = None
-    depth_m: float | None = None
-
-    def to_dict(self, source: bool = True) -> dict:
-        """JSON-ready (``source``: with ``from``, as in ``settings.own_video``; without, as a
-        newcomer's ``found``)."""
-        if self.source == "given":
-            return {"from": "given"}
-        found = {"frame": self.frame, "face_input_px": self.face_input_px, "depth_m": self.depth_m}
-        return {"from": self.source, **found} if source else found
-
-    @classmethod
-    def from_dict(cls, data: dict) -> "CalibrationAccount":
-        return cls(source=data["from"], frame=data.get("frame"), face_input_px=data.get("face_input_px"),
-                   depth_m=data.get("depth_m"))
-
-
-@dataclass(frozen=True, kw_only=True)
-class SetupAccount:
-    """How the set-up was found: what was chosen and why (:func:`find_setup`; the
-    ``on_setup`` of :func:`mocap.run.track` prints it; ``RunSummary.setup``).
-
-    :meth:`to_dict` is ``run.json`` ``settings.own_video`` (the sizes left out).
-
-    Attributes
-    ----------
-    hfov_deg : float, degrees
-        The camera's horizontal field of view (without a calibration).
-    height_m : float or None, metres
-        The person's stature as given.
-    background : BackgroundAccount
-    working_factor : int
-        Input pixels per working pixel.
-    calibration : CalibrationAccount
-    keypoints : str or None
-        What keypoints run and why (:func:`mocap.run.options.resolve_keypoints`); None: not
-        said (a set-up found outside :func:`mocap.run.track`).
-    input_width, input_height, working_width, working_height : int or None, pixels
-        The input's and the working frames' sizes (:func:`mocap.run.track` fills them).
-    """
-
-    hfov_deg: float
-    height_m: float | None
-    background: BackgroundAccount
-    working_factor: int
-    calibration: CalibrationAccount
-    keypoints: str | None = None
-    input_width: int | None = None
-    input_height: int | None = None
-    working_width: int | None = None
-    working_height: int | None = None
-
-    @property
-    def background_mode(self) -> str:
-        return self.background.mode
-
-    @property
-    def calibration_from(self) -> str:
-        return self.calibration.source
-
-    def to_dict(self) -> dict:
-        """``run.json`` ``settings.own_video``, JSON-ready."""
-        record = {"hfov_deg": self.hfov_deg, "height_m": self.height_m, "background": self.background.to_dict(),
-                  "working_factor": self.working_factor, "calibration": self.calibration.to_dict()}
-        if self.keypoints is not None:
-            record["keypoints"] = self.keypoints
-        return record
-
-    @classmethod
-    def from_dict(cls, data: dict) -> "SetupAccount":
-        """From ``run.json`` ``settings.own_video`` (the sizes unknown)."""
-        return cls(hfov_deg=data["hfov_deg"], height_m=data["height_m"],
-                   background=BackgroundAccount.from_dict(data["background"]), working_factor=data["working_factor"],
-                   calibration=CalibrationAccount.from_dict(data["calibration"]), keypoints=data.get("keypoints"))
+#: Background estimation (and a background's empty frames ``A:B``) uses this many frames spread
+#: over the first :data:`SAMPLE_LIMIT`, each reduced to the working resolution as it is read (the
+#: set-up holds working-size frames and one input-size frame of a file): a long video's key
+#: frames, decoded without the frames between them (:meth:`mocap.io.frames.VideoSource.sample`).
+SAMPLE_FRAMES = 60
+SAMPLE_LIMIT = 1500
+#: Calibration looks at most this many frames into the video for a face (a camera's frames read
+#: so far are kept to be tracked).
+SEARCH_FRAMES = 90
 
 
 @dataclass(frozen=True, eq=False)
@@ -204,10 +91,10 @@ class RunSetup:
         detected face and a box under it (the paper's way).
     scene : SceneColours or None
         The scene's colours, for a foreground without background (:func:`mocap.imaging.prepare_frame`).
-    record : SetupAccount, CalibrationAccount or None
+    record : SetupAccount or None
         How background and calibration were found (``run.json`` ``settings.own_video``); a
-        newcomer's set-up (:class:`mocap.run.person.NewcomerFinder`): how they were calibrated
-        (``run.json`` ``segments[].found``).
+        newcomer's set-up (:class:`mocap.run.person.NewcomerFinder`): the run's, with how they
+        were calibrated (``run.json`` ``segments[].found``).
     background_file : Path or None
         The file the background came from, for ``run.json``.
     """
@@ -219,7 +106,7 @@ class RunSetup:
     colour_model: ColourModel | None = None
     colour_from: str = "calibration"
     scene: SceneColours | None = None
-    record: SetupAccount | CalibrationAccount | None = None
+    record: SetupAccount | None = None
     background_file: Path | None = None
 
     def __post_init__(self) -> None:
@@ -253,16 +140,6 @@ class SetupRequest:
         Horizontal field of view of the camera.
     height_m : float or None, metres
         The person's stature.
-    imaging : ImagingConfig
-    auto : AutoCalibrationConfig or None
-    sample_frames, sample_limit : int
-        Background estimation uses ``sample_frames`` frames spread over the first
-        ``sample_limit``, each reduced to the working resolution as it is read (the set-up
-        holds working-size frames and one input-size frame of a file): a long video's key
-        frames, decoded without the frames between them
-        (:meth:`mocap.io.frames.VideoSource.sample`); ``background_frames`` by number.
-    search_frames : int
-        Calibration looks at most this many frames into the video for a face.
     progress : bool
         Progress bars.
     keypoints : KeypointSource or None
@@ -277,11 +154,6 @@ class SetupRequest:
     calibration: Calibration | None = None
     hfov_deg: float = DEFAULT_HFOV_DEG
     height_m: float | None = None
-    imaging: ImagingConfig = field(default_factory=ImagingConfig)
-    auto: AutoCalibrationConfig | None = None
-    sample_frames: int = 60
-    sample_limit: int = 1500
-    search_frames: int = 90
     progress: bool = True
     keypoints: KeypointSource | None = None
 
@@ -323,7 +195,7 @@ def spread(start: int, stop: int, count: int) -> list[int]:
 
 
 def choose_background(frames: list[np.ndarray], imaging: ImagingConfig | None = None, *, face: Box | None = None,
-                      face_frame: np.ndarray | None = None) -> tuple[np.ndarray | None, dict]:
+                      face_frame: np.ndarray | None = None) -> tuple[np.ndarray | None, BackgroundAccount]:
     """Estimate a background from sample frames and decide whether to use it.
 
     Parameters
@@ -341,25 +213,26 @@ def choose_background(frames: list[np.ndarray], imaging: ImagingConfig | None = 
         The estimate when the person moves enough (someone in view against it in at least
         :data:`MIN_FRAMES_WITH_PERSON` of the frames and, with a face, the face box at least
         :data:`MIN_FACE_FOREGROUND` foreground), else None (colour-only foreground).
-    record : dict
-        ``mode`` ("estimated" or "none"), ``reason``, ``evidence``, ``sample_frames``.
+    account : BackgroundAccount
+        Mode ``auto``: ``used`` (the estimate), ``sample_frames``, ``evidence`` and ``reason``.
     """
     estimate, _ = estimate_background(frames, imaging)
     evidence = person_against_background(frames, estimate, imaging, face=face, face_frame=face_frame)
     moves = evidence["frames_with_person"] >= MIN_FRAMES_WITH_PERSON and \
         evidence.get("face_foreground", 1.0) >= MIN_FACE_FOREGROUND
-    record = {"mode": "estimated" if moves else "none", "sample_frames": len(frames),
-              "evidence": {k: round(v, 4) for k, v in evidence.items()},
-              "reason": ("the person moves enough: background estimated from the video (temporal median with a "
-                         "motion mask)") if moves else
-                        ("the person hardly moves: an estimated background would hold them; colour-only foreground")}
-    return (estimate if moves else None), record
+    account = BackgroundAccount(
+        mode="auto", used=bool(moves),
+        details={"sample_frames": len(frames), "evidence": {k: round(v, 4) for k, v in evidence.items()}},
+        reason=("the person moves enough: background estimated from the video (temporal median with a "
+                "motion mask)") if moves else
+               ("the person hardly moves: an estimated background would hold them; colour-only foreground"))
+    return (estimate if moves else None), account
 
 
 class FrameAccess:
     """Frames of the source by number, for the set-up: a file is read again later (only the
     chosen frames are decoded, one input-size frame held at a time); a camera is not, so what
-    it delivered is kept (:attr:`consumed`, at most ``search_frames`` frames) to be tracked.
+    it delivered is kept (:attr:`consumed`, at most :data:`SEARCH_FRAMES` frames) to be tracked.
 
     Attributes
     ----------
@@ -368,10 +241,10 @@ class FrameAccess:
         A live source's frames read so far.
     count : int
         Frames to look at: a file's announced count (not waiting for the damage check), a
-        camera's ``search_frames``.
+        camera's :data:`SEARCH_FRAMES`.
     """
 
-    def __init__(self, source, search_frames: int) -> None:
+    def __init__(self, source, search_frames: int = SEARCH_FRAMES) -> None:
         self.source, self.consumed = source, []
         self.count = search_frames if source.live else source.count_hint
         self._stream = iter(source.frames()) if source.live else None
@@ -423,14 +296,14 @@ class FaceSearch:
 
 
 def look_for_face(access: FrameAccess, request: SetupRequest, factor: int, choose_factor: bool) -> FaceSearch:
-    """The first plausible face among every third of the first ``search_frames`` frames (none
+    """The first plausible face among every third of the first :data:`SEARCH_FRAMES` frames (none
     looked for with a given calibration), and the working factor (``choose_factor``: grown so
     that the face is at most :data:`FACE_WORKING_PX` working pixels wide)."""
     from tqdm import tqdm
 
     if request.calibration is not None:
         return FaceSearch(factor)
-    searched = range(0, min(request.search_frames, access.count), 3)
+    searched = range(0, min(SEARCH_FRAMES, access.count), 3)
     for index, frame in tqdm(access.at(searched), total=len(searched), desc="looking for a face", unit="frame",
                              disable=not request.progress):
         found = find_face(frame, factor)
@@ -465,24 +338,23 @@ def find_background(access: FrameAccess, request: SetupRequest, factor: int, fac
         if image.shape[:2] != (source.height, source.width):
             raise ValueError(f"background is {image.shape[1]}x{image.shape[0]} but the video is "
                              f"{source.width}x{source.height}")
-        return BackgroundFound(downscale(image, factor), BackgroundAccount(mode="image", reason="given"))
+        return BackgroundFound(downscale(image, factor), BackgroundAccount(mode="image", used=True, reason="given"))
     if mode == "frames":
         a, b = request.background_frames
-        empty = [downscale(f, factor) for _, f in access.at(spread(a, min(b, access.count), request.sample_frames))]
+        empty = [downscale(f, factor) for _, f in access.at(spread(a, min(b, access.count), SAMPLE_FRAMES))]
         if not empty:
             raise ValueError(f"background frames {a}:{b}: the video has no such frames")
         return BackgroundFound(median_background(empty), BackgroundAccount(
-            mode="frames", reason="median of the given empty frames", details={"frames": [a, b]}))
+            mode="frames", used=True, reason="median of the given empty frames", details={"frames": [a, b]}))
     if mode == "none":
-        return BackgroundFound(None, BackgroundAccount(mode="none", reason="asked for: colour-only foreground"))
+        return BackgroundFound(None, BackgroundAccount(mode="none", used=False,
+                                                       reason="asked for: colour-only foreground"))
     if source.live:
         return BackgroundFound(None, BackgroundAccount(
-            mode="none", reason="live camera without --background: colour-only foreground"))
-    sample = source.sample(request.sample_frames, min(request.sample_limit, access.count),
-                           lambda frame: downscale(frame, factor))
+            mode="auto", used=False, reason="live camera without --background: colour-only foreground"))
+    sample = source.sample(SAMPLE_FRAMES, min(SAMPLE_LIMIT, access.count), lambda frame: downscale(frame, factor))
     face_frame = downscale(face.frame, factor) if face.face_input is not None else None
-    image, record = choose_background(sample, imaging, face=face.face, face_frame=face_frame)
-    return BackgroundFound(image, BackgroundAccount.from_dict(record))
+    return BackgroundFound(*choose_background(sample, imaging, face=face.face, face_frame=face_frame))
 
 
 def setup_with_calibration(first: np.ndarray, request: SetupRequest, background: np.ndarray | None, factor: int,
@@ -523,23 +395,22 @@ def calibrate_automatically(access: FrameAccess, request: SetupRequest, camera: 
     if face.face_input is not None:
         face_keypoints = keypoints_of(face.index, face.frame)
         return calibrate_person(downscale(face.frame, face.factor), camera, background=background, face=face.face,
-                                height_m=request.height_m, imaging=imaging, config=request.auto,
-                                keypoints=face_keypoints), face.index
+                                height_m=request.height_m, imaging=imaging, keypoints=face_keypoints), face.index
     if background is None:
-        searched = min(request.search_frames, access.count)
+        searched = min(SEARCH_FRAMES, access.count)
         raise ValueError(f"no face found in the first {searched} frames and no background to find the "
                          "person by: pass --background IMG or --background-frames A:B, or --calibration JSON")
-    for index, full in access.at(range(0, min(request.sample_limit, access.count), 3)):
+    for index, full in access.at(range(0, min(SAMPLE_LIMIT, access.count), 3)):
         frame = downscale(full, face.factor)
         if not whole_person(subtract_background(frame, background, imaging)):
             continue
         try:
             return calibrate_person(frame, camera, background=background, height_m=request.height_m,
-                                    imaging=imaging, config=request.auto, keypoints=keypoints_of(index, full)), index
+                                    imaging=imaging, keypoints=keypoints_of(index, full)), index
         except ValueError:
             continue            # a person too small or cut off for every colour class: the next frame
     raise ValueError("nobody wholly in view (a person covering 2 % of the image, clear of its borders) "
-                     f"in the first {request.sample_limit} frames: cannot calibrate")
+                     f"in the first {SAMPLE_LIMIT} frames: cannot calibrate")
 
 
 def find_setup(source, request: SetupRequest | None = None) -> FoundSetup:
@@ -559,11 +430,11 @@ def find_setup(source, request: SetupRequest | None = None) -> FoundSetup:
     """
     request = SetupRequest() if request is None else request
     factor = working_factor(source.width, source.height) if request.factor is None else request.factor
-    imaging = request.imaging
+    imaging = ImagingConfig()
     if request.background_mode in ("auto", "none"):
         imaging = dataclasses.replace(imaging, min_object_fraction=max(imaging.min_object_fraction,
                                                                        MIN_PERSON_FRACTION))
-    access = FrameAccess(source, request.search_frames)
+    access = FrameAccess(source)
     first = next(iter(access.at([0])), (0, None))[1]
     if first is None:
         raise ValueError(f"{source.name} has no frames")

@@ -26,7 +26,8 @@ from mocap.run.loop import RunParams, track_frames
 from mocap.run.options import OwnVideoOptions, RunChoices
 from mocap.run.outputs import RunSummary
 from mocap.run.person import NewcomerFinder
-from mocap.run.setup import SetupAccount, SetupRequest, find_setup
+from mocap.run.accounts import SetupAccount
+from mocap.run.setup import SetupRequest, find_setup
 
 __all__ = ["RunInput", "track"]
 
@@ -115,8 +116,8 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
     progress : bool
         Progress bars.
     on_setup : callable, optional
-        Called with the set-up's account (:class:`mocap.run.setup.SetupAccount`: ``run.json``
-        ``settings.own_video``, and the input and working sizes) before the first frame is
+        Called with the set-up's account (:class:`mocap.run.accounts.SetupAccount`: ``run.json``
+        ``settings.own_video``, the input and working sizes and the keypoints' line) before the first frame is
         tracked (the CLI prints it).
 
     Returns
@@ -152,10 +153,8 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
         if on_setup is not None:
             on_setup(account)
         newcomer = NewcomerFinder.of(setup, width, height, hfov_deg=options.hfov_deg, height_m=options.height_m)
-        params = RunParams(config=options.tracker, ground_truth=opened.ground_truth, fps=opened.fps,
-                           max_frames=options.max_frames, overwrite=options.overwrite, progress=progress,
-                           write_overlay=options.overlay, allow_damaged=options.allow_damaged, start_frame=options.start,
-                           show=options.show, newcomer=newcomer, keypoints=choices.keypoint_source)
+        params = RunParams(options=options, choices=choices, ground_truth=opened.ground_truth, fps=opened.fps,
+                           progress=progress, newcomer=newcomer)
         summary = track_frames(frames_in, setup, out_dir, params)
     finally:
         if not frames_in.live:

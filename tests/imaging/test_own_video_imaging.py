@@ -62,16 +62,16 @@ def test_estimated_background_recovers_the_static_scene_behind_a_moving_actor():
 
 def test_auto_choice_uses_the_estimate_when_the_actor_moves():
     frames, truth = _clip(moving=True)
-    background, record = choose_background(frames)
-    assert record["mode"] == "estimated" and background is not None
+    background, account = choose_background(frames)
+    assert account.mode == "auto" and account.used and background is not None
     assert np.abs(background.astype(float) - truth).max() <= BACKGROUND_ERROR_BOUND
 
 
 def test_auto_choice_is_colour_only_when_the_actor_never_moves():
     frames, _ = _clip(moving=False)
-    background, record = choose_background(frames)
-    assert background is None and record["mode"] == "none"
-    assert record["evidence"]["frames_with_person"] == 0.0
+    background, account = choose_background(frames)
+    assert background is None and account.mode == "auto" and not account.used
+    assert account.details["evidence"]["frames_with_person"] == 0.0
 
 
 def test_scene_colours_leave_the_scene_out_and_keep_the_person():

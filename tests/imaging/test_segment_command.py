@@ -11,6 +11,8 @@ from mocap.imaging.colour import skin_box_of_face
 from mocap.imaging.testing import synthetic_scene_with_labels
 from mocap.io.video import count_frames, read_image
 
+from tests.conftest import need_mediapipe
+
 
 @pytest.fixture()
 def clip(tmp_path):
@@ -138,7 +140,7 @@ def test_colours_are_learned_on_the_first_frame_that_shows_the_person(clip, caps
 def test_a_segmentation_resumed_after_the_keypoints_extra_came_is_refused_with_why(clip, capsys, monkeypatch):
     """``--keypoints auto`` gave none (no extra); with the extra installed since, it would give
     MediaPipe: the folder's segment.json says otherwise, and the one-line refusal says why."""
-    pytest.importorskip("mediapipe")
+    need_mediapipe()
     from mocap.io import mediapipe_keypoints
 
     root, scene = clip

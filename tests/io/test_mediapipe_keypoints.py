@@ -6,13 +6,12 @@ needs it).
 """
 from __future__ import annotations
 
-import importlib.util
-import os
-
 import numpy as np
 import pytest
 
 from mocap.body.skeleton import JOINT_NAMES
+
+from tests.conftest import need_mediapipe
 
 pytestmark = pytest.mark.shared_data
 
@@ -26,11 +25,7 @@ TOLERANCE_PX = 0.25 * (395 - 225)
 
 @pytest.fixture(scope="module")
 def mediapipe_available():
-    if importlib.util.find_spec("mediapipe") is None:
-        reason = "MediaPipe is not installed (optional extra 'keypoints': pip install 'mocap[keypoints]')"
-        if os.environ.get("CI"):
-            pytest.fail(reason + "; CI installs it with the test extra")
-        pytest.skip(reason)
+    need_mediapipe()
 
 
 def test_mediapipe_finds_the_visible_joints_of_a_real_clip(shared_data, mediapipe_available, capfd):
