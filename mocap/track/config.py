@@ -148,6 +148,16 @@ class TrackerConfig(JsonConfig):
         Proposals of each source refined per frame: the lowest-F ones (0: the stage is off).
     proposal_evaluations : int
         Evaluations of each proposal's refinement.
+    mirrors : bool
+        On frames with keypoints, the converged leader's depth alternatives
+        (:func:`mocap.track.branches.depth_alternatives`: each arm's upper arm, forearm or both
+        flipped in depth about their parent joint, same projections and bone lengths, within the
+        joint limits) join the candidates, scored where they stand (or polished by
+        ``mirror_evaluations``), and every frame's mirrors stay in the decoder's states beside the
+        beam (not re-registered), so that a mirrored branch's path links to the previous frame's
+        same mirror and the Viterbi over the lag sums its evidence before the branch switches.
+    mirror_evaluations : int
+        Evaluations of each mirror's polish (0: scored exactly where it stands).
     gradient_step : bool
         Beyond the paper (its future work): after the edge step, a bounded Gauss–Newton descent
         of eq. (2) on its analytic gradient (:func:`mocap.optimize.minimize_edge_gauss_newton`),
@@ -180,6 +190,8 @@ class TrackerConfig(JsonConfig):
     motion_weight: float = 1.0
     proposals_refined: int = 2
     proposal_evaluations: int = 100
+    mirrors: bool = True
+    mirror_evaluations: int = 0
     gradient_step: bool = False
     smoothing: SmootherConfig = SmootherConfig()
 
@@ -189,11 +201,11 @@ class TrackerConfig(JsonConfig):
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise ValueError(f"{name} must be an integer of at least 1, got {v!r}")
         for name in ("evaluations", "hypothesis_evaluations", "jump_evaluations", "lag", "mesh_resolution",
-                     "proposals_refined", "proposal_evaluations"):
+                     "proposals_refined", "proposal_evaluations", "mirror_evaluations"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                 raise ValueError(f"{name} must be a non-negative integer, got {v!r}")
-        for name in ("recovery", "hand_reacquisition", "jumps", "offline", "gradient_step"):
+        for name in ("recovery", "hand_reacquisition", "jumps", "offline", "gradient_step", "mirrors"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         if isinstance(self.smoothing, dict):         # TrackerConfig(**config.to_dict()) gives its dict
@@ -227,7 +239,8 @@ class TrackerConfig(JsonConfig):
             unknown names raise TypeError.
         """
         return replace(cls(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0, gradient_step=False,
-                           smoothing=SmootherConfig(on=False), **{name: 0.0 for name in BEYOND_PAPER_FIELDS}),
+                           smoothing=SmootherConfig(on=False), mirrors=False,
+                           **{name: 0.0 for name in BEYOND_PAPER_FIELDS}),
                        **changes)
 
     @property

@@ -4,7 +4,9 @@ Every frame, each hypothesis kept from the previous frame is extended by the two
 registration (:func:`~mocap.track.registration.register`; the leading one with the full
 budget, the others with ``hypothesis_evaluations``). Proposals compete with them: a recovery
 from the last good pose when the leader fails, hand re-acquisition when a skin region is left
-unexplained, the leader's kinematic jumps (:mod:`mocap.body.jumps`), and the proposal stage's
+unexplained, the leader's kinematic jumps (:mod:`mocap.body.jumps`), on frames with keypoints the
+converged leader's exact depth alternatives (:mod:`mocap.track.branches`, origin ``mirror``: the
+same projections, scored where they stand), and the proposal stage's
 poses read from the current image (:class:`~mocap.track.proposals.ProposalSource`: from 2D
 keypoints, the learned lifter's whole-body hypotheses), each refined by a short registration. Every
 candidate gets a **unary score** (``REGION_WEIGHT * F + edge_weight * edge distance +
@@ -16,7 +18,10 @@ them. The terms, their weights and the motion term are :mod:`mocap.track.score`'
 candidates and their terms before the weights stay readable in :attr:`Tracker.scored`
 (:class:`ScoredCandidate`; ``experiments.fit_score`` fits the weights on them). The forward
 Viterbi recursion (:func:`~mocap.track.decode.viterbi_step`) gives each candidate the cost of
-the best path to it; near-duplicates are merged and the ``beam`` cheapest survive.
+the best path to it; near-duplicates are merged and the ``beam`` cheapest survive, and beside them
+the frame's mirrors: decoder states that the next frame does not register, so that a mirrored
+branch's path runs through the previous frame's same mirror (a small motion term) and a switch of
+branch is decided by the evidence summed over the lag rather than by one frame's margin.
 
 A frame's pose is decided ``lag`` frames later by backtracking the best path from the newest
 frame (online), or at the end of the sequence through all frames (``offline``). With
@@ -49,6 +54,7 @@ from mocap.body.pose import check_pose, clamp_to_limits
 from mocap.body.prior import PosePrior, default_prior
 from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.render.camera import Camera
+from mocap.track.branches import depth_alternatives
 from mocap.track.config import JUMPS_REFINED, MERGE_DISTANCE_M, RECOVERY_STEP_SCALE, TrackerConfig, split_budget
 from mocap.track.decode import backtrack, viterbi_step
 from mocap.track.lifter import LiftedHypotheses, Lifter
@@ -255,7 +261,8 @@ class Tracker:
 
     @property
     def hypotheses(self) -> list[np.ndarray]:
-        """Poses of the current beam, best path cost first (metres, radians)."""
+        """Poses of the current beam, best path cost first (metres, radians); after a frame with
+        mirrors, its mirrors past the ``beam`` registered ones."""
         return [h.pose.copy() for h in self._beam]
 
     # -- one frame ---------------------------------------------------------------------------
@@ -292,7 +299,7 @@ class Tracker:
         candidates: list[tuple[Registration, str]] = []
         evaluations = 0
         t1 = time.perf_counter()
-        for rank, h in enumerate(self._beam):
+        for rank, h in enumerate(self._beam[:cfg.beam]):      # past the beam: last frame's mirrors
             budget = cfg.evaluations if rank == 0 else cfg.hypothesis_evaluations
             if budget > 0 or rank == 0:                 # the leader always (0: its pose kept)
                 reg = fit(h.pose, evaluations=budget)
@@ -313,6 +320,8 @@ class Tracker:
             evaluations += self._reacquire(prepared, region_cost, fit, leader, candidates)
         if cfg.jumps:
             evaluations += self._jump(region_cost, fit, leader, candidates)
+        if cfg.mirrors and keypoint_cost is not None:
+            evaluations += self._mirror(fit, leader, candidates)
         t3 = time.perf_counter()
         if self.sources and cfg.proposals_refined > 0:
             context = ProposalContext(lifted=lifted)
@@ -364,16 +373,25 @@ class Tracker:
                            reg.region.iterations if reg.region else 0, reg.edge.iterations if reg.edge else 0)
 
     def _select(self, hypotheses: list[_Hypothesis], cost: np.ndarray) -> list[int]:
-        """Indices of the survivors: cheapest path first, near-duplicates merged, at most ``beam``."""
+        """Indices of the survivors: cheapest path first, near-duplicates merged, at most ``beam``;
+        then the frame's mirrors not merged into them (the decoder's states of the mirrored
+        branches, which the next frame does not register)."""
         keep: list[int] = []
-        for i in np.argsort(cost, kind="stable"):
+
+        def merged(i) -> bool:
             joints = hypotheses[i].joints
-            if any(np.linalg.norm(joints - hypotheses[k].joints, axis=1).mean() < MERGE_DISTANCE_M
-                   for k in keep):
+            return any(np.linalg.norm(joints - hypotheses[k].joints, axis=1).mean() < MERGE_DISTANCE_M for k in keep)
+
+        order = np.argsort(cost, kind="stable")
+        for i in order:
+            if merged(i):
                 continue
             keep.append(int(i))
             if len(keep) == self.config.beam:
                 break
+        for i in order:
+            if hypotheses[i].origin == "mirror" and int(i) not in keep and not merged(i):
+                keep.append(int(i))
         return keep
 
     def _reacquire(self, prepared, region_cost, fit, leader: Registration, candidates: list) -> int:
@@ -400,6 +418,16 @@ class Tracker:
             reg = fit(q, evaluations=self.config.jump_evaluations)
             used += reg.evaluations
             candidates.append((reg, "jump"))
+        return used
+
+    def _mirror(self, fit, leader: Registration, candidates: list) -> int:
+        """The converged leader's depth alternatives (:mod:`mocap.track.branches`), each registered
+        with ``mirror_evaluations`` (0: its residuals where it stands); returns evaluations used."""
+        used = 0
+        for alternative in depth_alternatives(leader.pose, self.model, self.camera):
+            reg = fit(alternative.pose, evaluations=self.config.mirror_evaluations)
+            used += reg.evaluations
+            candidates.append((reg, "mirror"))
         return used
 
     def _propose(self, source: ProposalSource, prepared, context: ProposalContext, rough, fit,

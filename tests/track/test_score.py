@@ -89,4 +89,5 @@ def test_the_papers_method_switches_off_the_terms_beyond_the_paper():
     assert (paper.keypoint_weight, paper.prior_weight, paper.lifter_weight) == (0.0, 0.0, 0.0)
     assert (paper.edge_weight, paper.motion_weight) == (TrackerConfig().edge_weight, TrackerConfig().motion_weight)
     assert paper == TrackerConfig(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
-                                  gradient_step=False, prior_weight=0.0, keypoint_weight=0.0, lifter_weight=0.0)
+                                  gradient_step=False, mirrors=False, prior_weight=0.0, keypoint_weight=0.0,
+                                  lifter_weight=0.0)
