@@ -1,0 +1,579 @@
+"""``python -m experiments.branch_audit``: can the cues tell a pose from its depth mirrors?
+
+The evidence audit of issue 39 (item 1), before the tracker's branch comparison is designed.
+On every frame of a benchmark sequence it takes the **true pose** and its **depth
+alternatives**: each arm bone's depth flipped about its parent joint (the upper arm about the
+shoulder, the forearm about the elbow, or both: the child joint moved to the other crossing of
+its camera ray with the sphere of the bone's length about the parent), which keeps the joints'
+projections and the bone lengths, placed onto the body within the joint limits. A mirror that
+the limits do not let the arm reach (its joints more than :data:`PRUNE_TOLERANCE_M` off the exact
+mirror once inside the limits) is **pruned**: counted, not compared.
+
+Every candidate (the truth and each alternative) is scored by each cue twice: **unrefined**
+(the exact mirror as built, no registration) and **refined** (the tracker's two-step
+registration, :func:`mocap.track.register` with the tracker's config and the frame's keypoint
+distance, started where the candidate stands, with the same number of evaluations for every
+candidate). The cues (:data:`CUES`, lower is better for each):
+
+* ``region``: F, the non-overlapping ratio (eq. 1); ``edge``: the mean edge distance (eq. 2, px);
+* ``keypoint``: the keypoint distance D_k (px) to the frame's keypoints (true 2D + noise, as the
+  experiments' oracle keypoints: :func:`experiments.keypoints.oracle_keypoints`);
+* ``lifter``: the lifter term (:meth:`mocap.track.proposals.LifterSource.energy`, nats, capped);
+* ``prior``: the pose prior's energy (nats);
+* ``world``: the number of arm bones whose depth order (child nearer or farther than its parent)
+  disagrees with the keypoints' own 3D (MediaPipe's world landmarks); NaN without them (the
+  oracle keypoints have none);
+* and two weighted sums: ``region_edge`` (``REGION_WEIGHT * F + edge_weight * edge``, the
+  tracker's weights) and ``score`` (the tracker's whole unary score with keypoints: plus
+  ``keypoint_weight``, ``prior_weight`` and ``lifter_weight`` times theirs).
+
+A pair (truth, alternative) is compared only when the alternative is **distinct**: some joint at
+least :data:`DISTINCT_M` from the truth's. A cue **separates** the pair when it rates the truth
+lower than the alternative by more than rounding (:func:`truth_better`); after refinement a pair
+whose refined alternative came back within :data:`DISTINCT_M` of the truth's joints (every joint)
+also counts as separated (nothing wrong can be chosen), and is counted as ``collapsed``. A frame
+is at the **ambiguity floor** when one of its distinct alternatives is separated by none of the
+single cues: nothing the cues see could choose the truth there.
+
+Results go to ``--out`` (default ``experiments/results/branch_audit``): the generated sequences
+(as :mod:`experiments.ambiguity`), and one ``.npz`` per sequence, seed and budget under
+``units/`` (written atomically, each when its sequence is done; a crash loses at most the
+sequence in progress). A unit is reused only when it was measured with the same code
+(:func:`experiments.ambiguity.code_key` with this module) and settings. ``report`` prints the
+tables (and ``--json`` a summary) and draws the figure (:mod:`experiments.figures.ext_branch_audit`).
+"""
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from experiments import RESULTS_DIR
+from mocap.body.jumps import ARM_JUMPS, ARM_ANGLES, JUMP_JUDGED_ANGLES, SIDES, arm_angles_for_points, arm_jumps
+from mocap.body.pose import clamp_to_limits
+from mocap.body.skeleton import JOINT_INDEX, JOINT_NAMES
+from mocap.synth import SEQUENCE_NAMES, SEQUENCES
+from mocap.track import TrackerConfig
+
+#: Candidate slots of a frame: the truth, then each arm's alternatives.
+SLOTS: tuple[str, ...] = ("truth",) + tuple(f"{side}_{name}" for side in SIDES for name in ARM_JUMPS)
+#: Single cues, lower is better for each (see the module).
+CUES: tuple[str, ...] = ("region", "edge", "keypoint", "lifter", "prior", "world")
+#: The weighted sums of cues (see the module).
+COMBINED: tuple[str, ...] = ("region_edge", "score")
+#: Every column of a candidate's cue vector.
+COLUMNS: tuple[str, ...] = CUES + COMBINED
+#: An alternative whose joints, inside the joint limits, are farther than this from the exact
+#: mirror (metres, any joint) is pruned: the limits do not let the arm reach it.
+PRUNE_TOLERANCE_M = 0.01
+#: An alternative is compared only when some joint is at least this far from the truth's (metres).
+DISTINCT_M = 0.05
+#: Relative difference under which two cue values count as a tie (rounding).
+TIE_RELATIVE = 1e-6
+#: Oracle keypoint noise, pixels (as the experiments' oracle keypoints).
+ORACLE_SIGMA_PX = 2.0
+#: Arm bones as (parent, child) joint names, for the depth-order cue.
+ARM_BONES: tuple[tuple[str, str], ...] = tuple((f"{s}_{a}", f"{s}_{b}") for s in SIDES
+                                               for a, b in (("shoulder", "elbow"), ("elbow", "wrist")))
+#: Seeds the logistic combination is fitted on; it is checked on the others.
+FIT_SEEDS: tuple[int, ...] = (0, 1, 2)
+
+
+@dataclass(frozen=True)
+class Alternative:
+    """One depth alternative of a pose.
+
+    Attributes
+    ----------
+    name : str
+        Its slot (:data:`SLOTS`), e.g. ``"r_forearm"``.
+    pose : ndarray, shape (23,), float64
+        Inside the joint limits (metres, radians).
+    pruned : bool
+        Whether the limits keep the arm off the exact mirror (see :data:`PRUNE_TOLERANCE_M`).
+    """
+
+    name: str
+    pose: np.ndarray
+    pruned: bool
+
+
+def mirror_alternatives(pose, model) -> list[Alternative]:
+    """The depth alternatives of ``pose`` (see the module), built from :func:`mocap.body.jumps.arm_jumps`.
+
+    Each arm jump is solved twice (its two closed-form solutions judged by the shoulder's limits
+    and by all four arm angles' limits), clamped to the joint limits, and the one whose joints
+    lie nearer the exact mirror is kept; it is pruned when still more than
+    :data:`PRUNE_TOLERANCE_M` off. The forearm and wrist angles are kept, so the hand follows
+    the forearm (its projection moves a little with a flipped forearm).
+
+    Parameters
+    ----------
+    pose : array_like, shape (23,)
+    model : BodyModel
+
+    Returns
+    -------
+    list of Alternative
+        In :data:`SLOTS` order; a mirror whose ray misses the bone's sphere is left out.
+    """
+    q = np.asarray(pose, dtype=np.float64)
+    skeleton = model.skeleton
+    out = []
+    for side in SIDES:
+        arm = [JOINT_INDEX[f"{side}_{j}"] for j in ("elbow", "wrist")]
+        for name, exact in arm_jumps(q, skeleton, side).items():
+            target = model.joint_positions(exact)[arm]
+            best, miss = None, math.inf
+            for judged in (JUMP_JUDGED_ANGLES, ARM_ANGLES):
+                solved = clamp_to_limits(arm_angles_for_points(q, skeleton, side, target[0], target[1], judged=judged))
+                m = float(np.linalg.norm(model.joint_positions(solved)[arm] - target, axis=1).max())
+                if m < miss:
+                    best, miss = solved, m
+            out.append(Alternative(f"{side}_{name}", best, miss > PRUNE_TOLERANCE_M))
+    return out
+
+
+def depth_order_disagreements(joints, world) -> float:
+    """Arm bones whose depth order disagrees with a detector's 3D.
+
+    Parameters
+    ----------
+    joints : array_like, shape (10, 3), metres
+        A candidate's joints (camera coordinates).
+    world : array_like, shape (10, 3), metres, or None
+        The detector's 3D of each joint (camera axes, any origin; NaN where absent).
+
+    Returns
+    -------
+    float
+        How many of :data:`ARM_BONES` have the child nearer than the parent in one and farther in
+        the other (bones with an absent joint left out); NaN without ``world``.
+    """
+    if world is None:
+        return math.nan
+    j, w = np.asarray(joints, dtype=np.float64), np.asarray(world, dtype=np.float64)
+    count = 0
+    for parent, child in ARM_BONES:
+        a, b = JOINT_INDEX[parent], JOINT_INDEX[child]
+        dw = w[b, 2] - w[a, 2]
+        if np.isfinite(dw) and dw != 0.0 and (j[b, 2] - j[a, 2]) * dw < 0.0:
+            count += 1
+    return float(count)
+
+
+def cue_vector(tracker, costs, keypoint_cost, lifted, world, pose, region=None, edge=None, keypoint=None) -> np.ndarray:
+    """The cues of one pose (:data:`COLUMNS` order); residuals already known may be passed."""
+    cfg = tracker.config
+    region_cost, edge_cost = costs
+    joints = tracker.model.joint_positions(pose)
+    r = region_cost(pose) if region is None else region
+    e = edge_cost(pose) if edge is None else edge
+    k = (keypoint_cost(pose) if keypoint is None else keypoint) if keypoint_cost is not None else math.nan
+    lifter = tracker.lifting.energy(lifted, joints) if lifted is not None else math.nan
+    prior = tracker.prior.energy(pose) if tracker.prior is not None else math.nan
+    order = depth_order_disagreements(joints, world)
+    from mocap.track.config import REGION_WEIGHT
+    region_edge = REGION_WEIGHT * r + cfg.edge_weight * e
+    score = region_edge + sum(w * v for w, v in ((cfg.keypoint_weight, k), (cfg.prior_weight, prior),
+                                                  (cfg.lifter_weight, lifter)) if not math.isnan(v))
+    return np.array([r, e, k, lifter, prior, order, region_edge, score])
+
+
+def audit_frames(model, camera, config: TrackerConfig, truth_poses, prepared, keypoints, evaluations: int,
+                 alternatives=mirror_alternatives, progress: bool = False, description: str = "auditing") -> dict:
+    """The audit's raw measurements on a run of frames.
+
+    Parameters
+    ----------
+    model : BodyModel
+    camera : Camera
+    config : TrackerConfig
+        The tracker's settings (registration, weights, lifter, prior).
+    truth_poses : ndarray, shape (N, 23)
+    prepared : sequence of PreparedFrame, length N
+    keypoints : sequence of Keypoints or None, length N
+    evaluations : int
+        Every candidate's refinement budget.
+    alternatives : callable
+        ``alternatives(pose, model) -> list[Alternative]`` (default :func:`mirror_alternatives`).
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``exists`` (N, S) bool, ``pruned`` (N, S) bool, ``start_joints`` and ``refined_joints``
+        (N, S, 10, 3) metres, ``unrefined`` and ``refined`` (N, S, len(COLUMNS)) cue values,
+        ``refined_evaluations`` (N, S) int, ``truth_joints`` (N, 10, 3); S = len(:data:`SLOTS`),
+        NaN where a candidate does not exist.
+    """
+    from tqdm import tqdm
+
+    from mocap.track import Tracker, register
+
+    n, s, c = len(prepared), len(SLOTS), len(COLUMNS)
+    if len(truth_poses) != n or len(keypoints) != n:
+        raise ValueError(f"need as many true poses and keypoints as frames, got {len(truth_poses)}, "
+                         f"{len(keypoints)} and {n}")
+    tracker = Tracker(model, camera, config, truth_poses[0])
+    out = {"exists": np.zeros((n, s), bool), "pruned": np.zeros((n, s), bool),
+           "start_joints": np.full((n, s, len(JOINT_NAMES), 3), np.nan),
+           "refined_joints": np.full((n, s, len(JOINT_NAMES), 3), np.nan),
+           "unrefined": np.full((n, s, c), np.nan), "refined": np.full((n, s, c), np.nan),
+           "refined_evaluations": np.zeros((n, s), np.int64),
+           "truth_joints": np.array([model.joint_positions(q) for q in truth_poses])}
+    for i in tqdm(range(n), desc=description, unit="frame", disable=not progress):
+        if prepared[i].is_empty:
+            continue
+        costs = tracker.costs(prepared[i])
+        kp = keypoints[i]
+        keypoint_cost = tracker.keypoint_cost(kp)
+        lifted = tracker.lifting.lift(kp, camera, model) if tracker.lifting is not None else None
+        world = None if kp is None else kp.world
+        truth = clamp_to_limits(np.asarray(truth_poses[i], dtype=np.float64))
+        candidates = [("truth", truth, False)] + [(a.name, a.pose, a.pruned) for a in alternatives(truth, model)]
+        for name, pose, pruned in candidates:
+            k = SLOTS.index(name)
+            out["exists"][i, k], out["pruned"][i, k] = True, pruned
+            out["start_joints"][i, k] = model.joint_positions(pose)
+            if pruned:
+                continue
+            out["unrefined"][i, k] = cue_vector(tracker, costs, keypoint_cost, lifted, world, pose)
+            reg = register(*costs, pose, config, evaluations=evaluations, keypoint_cost=keypoint_cost)
+            out["refined_joints"][i, k] = model.joint_positions(reg.pose)
+            out["refined_evaluations"][i, k] = reg.evaluations
+            out["refined"][i, k] = cue_vector(tracker, costs, keypoint_cost, lifted, world, reg.pose,
+                                              reg.region_residual, reg.edge_residual,
+                                              reg.keypoint_residual if keypoint_cost is not None else None)
+    return out
+
+
+def audit_sequence(sequence: str, seed: int, root: Path, config: TrackerConfig, evaluations: int,
+                   sigma_px: float = ORACLE_SIGMA_PX, frames: int | None = None, progress: bool = False) -> dict:
+    """:func:`audit_frames` on a benchmark sequence (generated under ``root`` if not there) with
+    the oracle keypoints of its truth (``sigma_px``, seeded by ``seed``)."""
+    from experiments.ambiguity import benchmark_sequence
+    from experiments.keypoints import oracle_keypoints
+
+    loaded, prepared = benchmark_sequence(sequence, root, seed)
+    n = len(prepared) if frames is None else min(frames, len(prepared))
+    camera = loaded.calibration.camera
+    truth = np.asarray(loaded.ground_truth.poses[:n], dtype=np.float64)
+    keypoints = oracle_keypoints(loaded.ground_truth.joints[:n], camera, sigma_px, seed)
+    return audit_frames(loaded.model, camera, config, truth, prepared[:n], keypoints, evaluations,
+                        progress=progress, description=f"{sequence} s{seed}")
+
+
+# -- analysis ----------------------------------------------------------------------------------
+def truth_better(truth, other) -> np.ndarray:
+    """Whether the truth's cue value is lower than another's by more than rounding.
+
+    Parameters
+    ----------
+    truth, other : array_like, same shape
+        Cue values (NaN: not measured, never better).
+
+    Returns
+    -------
+    ndarray of bool
+        ``truth < other`` with a margin of :data:`TIE_RELATIVE` of the larger magnitude (at least 1).
+    """
+    a, b = np.asarray(truth, dtype=np.float64), np.asarray(other, dtype=np.float64)
+    margin = TIE_RELATIVE * np.maximum(1.0, np.maximum(np.abs(a), np.abs(b)))
+    with np.errstate(invalid="ignore"):
+        return (b - a) > margin
+
+
+def max_joint_distance(a, b) -> np.ndarray:
+    """Largest joint distance between joint sets (..., 10, 3) -> (...), metres."""
+    return np.linalg.norm(np.asarray(a) - np.asarray(b), axis=-1).max(axis=-1)
+
+
+def pairs(unit: dict) -> dict:
+    """The compared pairs of a unit: each distinct, unpruned alternative against the truth.
+
+    Returns
+    -------
+    dict of str to ndarray
+        ``frame`` (P,) and ``slot`` (P,) indices; ``unrefined`` and ``refined`` (P, len(COLUMNS))
+        bool: the cue separates the pair (refined: or the alternative collapsed); ``collapsed``
+        (P,) bool; ``diff_unrefined`` and ``diff_refined`` (P, len(COLUMNS)): the alternative's
+        cue minus the truth's.
+    """
+    exists, pruned = unit["exists"], unit["pruned"]
+    start_distance = max_joint_distance(unit["start_joints"], unit["truth_joints"][:, None])
+    compared = exists & ~pruned & (start_distance >= DISTINCT_M)
+    compared[:, 0] = False
+    frame, slot = np.nonzero(compared)
+    u, r = unit["unrefined"], unit["refined"]
+    collapsed = max_joint_distance(unit["refined_joints"][frame, slot], unit["truth_joints"][frame]) < DISTINCT_M
+    sep_u = truth_better(u[frame, 0], u[frame, slot])
+    sep_r = truth_better(r[frame, 0], r[frame, slot]) | collapsed[:, None]
+    return {"frame": frame, "slot": slot, "unrefined": sep_u, "refined": sep_r, "collapsed": collapsed,
+            "diff_unrefined": u[frame, slot] - u[frame, 0], "diff_refined": r[frame, slot] - r[frame, 0]}
+
+
+def frame_rates(unit: dict, p: dict, stage: str, separated: np.ndarray | None = None) -> dict:
+    """Per-frame shares of a unit's frames with a compared pair (``stage``: unrefined or refined).
+
+    ``<cue>``: the share of those frames on which the cue separates every pair (it alone would
+    choose the truth); ``floor``: the share on which some pair is separated by no single cue.
+    ``separated`` (P,) replaces the cues by one decision (the logistic combination)."""
+    n = unit["exists"].shape[0]
+    has_pair = np.zeros(n, bool)
+    has_pair[p["frame"]] = True
+    frames = int(has_pair.sum())
+    out = {"frames": frames}
+    if frames == 0:
+        return out
+    cols = p[stage]
+    single = [COLUMNS.index(c) for c in CUES]
+    any_single = cols[:, single].any(axis=1)
+    for name, sep in [(c, cols[:, COLUMNS.index(c)]) for c in COLUMNS] + [("floor", ~any_single)] + (
+            [("logistic", separated)] if separated is not None else []):
+        if name == "floor":
+            bad = np.zeros(n, bool)
+            np.logical_or.at(bad, p["frame"], sep)
+            out[name] = float(bad[has_pair].mean())
+        else:
+            missed = np.zeros(n, bool)
+            np.logical_or.at(missed, p["frame"], ~sep)
+            out[name] = float((~missed[has_pair]).mean())
+    return out
+
+
+def logistic_fit(diffs: np.ndarray, columns: tuple[str, ...] = CUES[:5]):
+    """A logistic decision on the cue differences (alternative minus truth), no intercept, each
+    difference scaled by its standard deviation; each pair enters both ways round. Returns a
+    function ``(P, len(COLUMNS)) diffs -> (P,) bool`` (the truth chosen), and the weights."""
+    from sklearn.linear_model import LogisticRegression
+
+    idx = [COLUMNS.index(c) for c in columns]
+    x = np.nan_to_num(diffs[:, idx])
+    scale = x.std(axis=0)
+    scale[scale == 0] = 1.0
+    x = x / scale
+    model = LogisticRegression(fit_intercept=False, C=1.0, max_iter=1000)
+    model.fit(np.vstack([x, -x]), np.r_[np.ones(len(x)), np.zeros(len(x))])
+    weights = model.coef_[0] / scale
+
+    def decide(d: np.ndarray) -> np.ndarray:
+        return np.nan_to_num(d[:, idx]) @ weights > 0.0
+
+    return decide, dict(zip(columns, weights.tolist()))
+
+
+def summarise(units: dict[tuple[str, int], dict]) -> dict:
+    """Every reported number of a set of units keyed by (sequence, seed) (see the module)."""
+    per_pair = {k: pairs(u) for k, u in units.items()}
+    out = {"settings": {"distinct_m": DISTINCT_M, "prune_tolerance_m": PRUNE_TOLERANCE_M, "tie_relative": TIE_RELATIVE},
+           "per_sequence": {}, "pooled": {}, "per_alternative": {}}
+    frames_total = sum(u["exists"].shape[0] for u in units.values())
+    pruned_frames = sum(int(u["pruned"][:, 1:].any(axis=1).sum()) for u in units.values())
+    pruned_share = sum(int(u["pruned"][:, 1:].sum()) for u in units.values()) / max(
+        1, sum(int(u["exists"][:, 1:].sum()) for u in units.values()))
+    out["frames"], out["frames_with_pruned_mirror"] = frames_total, pruned_frames
+    out["pruned_share_of_alternatives"] = pruned_share
+    # logistic: fitted on FIT_SEEDS' refined pairs, checked on the others
+    fit_keys = [k for k in units if k[1] in FIT_SEEDS]
+    test_keys = [k for k in units if k[1] not in FIT_SEEDS]
+    decide = decide_u = None
+    if fit_keys and test_keys:
+        for stage in ("unrefined", "refined"):
+            diffs = np.vstack([per_pair[k][f"diff_{stage}"] for k in fit_keys])
+            decide_s, weights = logistic_fit(diffs)
+            out[f"logistic_{stage}_weights"] = weights
+            if stage == "refined":
+                decide = decide_s
+            else:
+                decide_u = decide_s
+    sequences = list(dict.fromkeys(k[0] for k in units))
+
+    def group_rates(keys):
+        rates = {}
+        for stage in ("unrefined", "refined"):
+            frames, acc = 0, {}
+            for k in keys:
+                p = per_pair[k]
+                extra = None
+                if decide is not None and k in test_keys:
+                    d = decide if stage == "refined" else decide_u
+                    extra = d(p[f"diff_{stage}"])
+                    if stage == "refined":
+                        extra = extra | p["collapsed"]
+                r = frame_rates(units[k], p, stage, extra)
+                for name, v in r.items():
+                    if name != "frames":            # a frame-weighted mean (logistic: the checked seeds only)
+                        acc.setdefault(name, [0.0, 0])
+                        acc[name][0] += v * r["frames"]
+                        acc[name][1] += r["frames"]
+                frames += r["frames"]
+            rates[stage] = {"frames": frames, **{n: (s / w if w else math.nan) for n, (s, w) in acc.items()}}
+            all_p = [per_pair[k] for k in keys]
+            sep = np.vstack([p[stage] for p in all_p]) if all_p else np.zeros((0, len(COLUMNS)), bool)
+            diff = np.vstack([p[f"diff_{stage}"] for p in all_p]) if all_p else np.zeros((0, len(COLUMNS)))
+            measured = np.isfinite(diff).any(axis=0)          # a cue without values (world on true 2D): NaN
+            rates[stage]["pairs"] = int(len(sep))
+            rates[stage]["pair_truth_better"] = {c: float(sep[:, i].mean()) if len(sep) and measured[i] else math.nan
+                                                 for i, c in enumerate(COLUMNS)}
+            for i, c in enumerate(COLUMNS):
+                if not measured[i]:
+                    rates[stage][c] = math.nan
+            if stage == "refined":
+                coll = np.concatenate([p["collapsed"] for p in all_p]) if all_p else np.zeros(0, bool)
+                rates[stage]["collapsed"] = float(coll.mean()) if len(coll) else math.nan
+        return rates
+
+    for name in sequences:
+        out["per_sequence"][name] = group_rates([k for k in units if k[0] == name])
+    out["pooled"] = group_rates(list(units))
+    for slot in SLOTS[1:]:
+        sel = {}
+        for stage in ("unrefined", "refined"):
+            chosen = [per_pair[k]["slot"] == SLOTS.index(slot) for k in units]
+            sep = np.vstack([per_pair[k][stage][m] for k, m in zip(units, chosen)])
+            diff = np.vstack([per_pair[k][f"diff_{stage}"][m] for k, m in zip(units, chosen)])
+            measured = np.isfinite(diff).any(axis=0)
+            sel[stage] = {c: float(sep[:, i].mean()) if len(sep) and measured[i] else math.nan
+                          for i, c in enumerate(COLUMNS)}
+            sel["pairs"] = int(len(sep))
+        out["per_alternative"][slot] = sel
+    return out
+
+
+def tables(summary: dict) -> str:
+    """Markdown tables of :func:`summarise`."""
+    pct = lambda v: "–" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{100 * v:.1f}"
+    lines = [f"{summary['frames']} frames; {summary['frames_with_pruned_mirror']} with a pruned mirror "
+             f"({pct(summary['pruned_share_of_alternatives'])} % of alternatives pruned)", ""]
+    for stage in ("unrefined", "refined"):
+        head = ["sequence", "frames", "pairs"] + [f"{c} %" for c in COLUMNS] + ["logistic %", "floor %"]
+        lines += [f"**{stage}**: share of frames on which the cue rates the truth better than every distinct "
+                  "alternative; floor: frames with an alternative no single cue separates", "",
+                  "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+        for name, rates in list(summary["per_sequence"].items()) + [("**pooled**", summary["pooled"])]:
+            r = rates[stage]
+            lines.append("| " + " | ".join([name, str(r["frames"]), str(r["pairs"])]
+                                           + [pct(r.get(c)) for c in COLUMNS]
+                                           + [pct(r.get("logistic")), pct(r.get("floor"))]) + " |")
+        lines.append("")
+        head = ["alternative", "pairs"] + [f"{c} %" for c in COLUMNS]
+        lines += [f"**{stage}**, per pair: share on which the cue rates the truth better", "",
+                  "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+        for slot, sel in summary["per_alternative"].items():
+            lines.append("| " + " | ".join([slot, str(sel["pairs"])] + [pct(sel[stage][c]) for c in COLUMNS]) + " |")
+        p = summary["pooled"][stage]
+        lines.append("| **all** | " + " | ".join([str(p["pairs"])] + [pct(p["pair_truth_better"][c]) for c in COLUMNS])
+                     + " |")
+        lines.append("")
+    if "collapsed" in summary["pooled"]["refined"]:
+        lines.append(f"refined alternatives back within {DISTINCT_M * 1e3:.0f} mm of the truth (collapsed): "
+                     f"{pct(summary['pooled']['refined']['collapsed'])} %")
+    for stage in ("unrefined", "refined"):
+        if f"logistic_{stage}_weights" in summary:
+            w = summary[f"logistic_{stage}_weights"]
+            lines.append(f"logistic ({stage}, fitted on seeds {','.join(map(str, FIT_SEEDS))}, checked on the others): "
+                         + ", ".join(f"{k} {v:.3g}" for k, v in w.items()))
+    return "\n".join(lines)
+
+
+# -- units on disk ------------------------------------------------------------------------------
+def unit_path(out: Path, sequence: str, seed: int, evaluations: int, frames: int | None) -> Path:
+    return out / "units" / f"{sequence}-s{seed}-e{evaluations}" f"{'' if frames is None else f'-f{frames}'}.npz"
+
+
+def save_unit(path: Path, unit: dict, meta: dict) -> None:
+    """Write a unit atomically (the arrays and a JSON ``meta``)."""
+    from mocap.io.files import write_bytes_atomic
+
+    buf = io.BytesIO()
+    np.savez_compressed(buf, meta=np.array(json.dumps(meta)), **unit)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_bytes_atomic(path, buf.getvalue())
+
+
+def load_unit(path: Path, meta: dict | None = None) -> dict | None:
+    """A unit stored at ``path`` when its meta equals ``meta`` (None: any); else None."""
+    if not path.is_file():
+        return None
+    with np.load(path, allow_pickle=False) as z:
+        stored = json.loads(str(z["meta"]))
+        if meta is not None and stored != meta:
+            print(f"{path.name}: measured with other code or settings; measuring again", file=sys.stderr)
+            return None
+        return {k: z[k] for k in z.files if k != "meta"}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m experiments.branch_audit", description=__doc__.split("\n\n")[0])
+    sub = p.add_subparsers(dest="command", required=True)
+    for name, text in (("measure", "measure the units not stored yet, then report"),
+                       ("report", "report the stored units only")):
+        s = sub.add_parser(name, help=text)
+        s.add_argument("--sequences", default=",".join(SEQUENCE_NAMES), help="comma-separated benchmark sequences")
+        s.add_argument("--seeds", default="0", help="comma-separated seeds (default 0)")
+        s.add_argument("--evaluations", type=int, default=200,
+                       help="every candidate's refinement budget (default 200)")
+        s.add_argument("--frames", type=int, default=None, help="first frames only (default: full length)")
+        s.add_argument("--config", type=Path, default=None, help="TrackerConfig JSON (default: the tracker's)")
+        s.add_argument("--out", type=Path, default=RESULTS_DIR / "branch_audit", help="results folder")
+        s.add_argument("--json", action="store_true", help="print the summary as JSON instead of the tables")
+        s.add_argument("--no-figure", action="store_true", help="do not draw the figure")
+        s.add_argument("--no-progress", action="store_true")
+    return p
+
+
+def main(argv=None) -> int:
+    from experiments.ambiguity import code_key
+
+    args = build_parser().parse_args(argv)
+    names = tuple(s for s in args.sequences.split(",") if s)
+    unknown = [s for s in names if s not in SEQUENCES]
+    if unknown or not names:
+        print(f"error: unknown sequence(s) {unknown}; choose from {', '.join(SEQUENCE_NAMES)}", file=sys.stderr)
+        return 2
+    try:
+        seeds = tuple(int(v) for v in args.seeds.split(",") if v.strip())
+    except ValueError:
+        seeds = ()
+    if not seeds or args.evaluations < 1 or (args.frames is not None and args.frames < 1):
+        print("error: --seeds takes comma-separated integers, --evaluations and --frames positive integers",
+              file=sys.stderr)
+        return 2
+    config = TrackerConfig.from_json(args.config) if args.config is not None else TrackerConfig()
+    here = Path(__file__).resolve().parent
+    meta = {"code": code_key(modules=(here / "branch_audit.py", here / "ambiguity.py", here / "units.py",
+                                      here / "keypoints.py")),
+            "config": config.to_dict(), "evaluations": args.evaluations, "sigma_px": ORACLE_SIGMA_PX}
+    units = {}
+    for seed in seeds:
+        for name in names:
+            path = unit_path(args.out, name, seed, args.evaluations, args.frames)
+            unit = load_unit(path, meta if args.command == "measure" else None)
+            if unit is None and args.command == "measure":
+                unit = audit_sequence(name, seed, args.out, config, args.evaluations, frames=args.frames,
+                                      progress=not args.no_progress)
+                save_unit(path, unit, meta)
+            if unit is not None:
+                units[(name, seed)] = unit
+    if not units:
+        print("error: no stored units; run measure first", file=sys.stderr)
+        return 2
+    summary = summarise(units)
+    summary["units"] = [f"{k[0]} s{k[1]}" for k in units]
+    summary["evaluations"] = args.evaluations
+    if not args.no_figure:
+        from experiments.figures import ext_branch_audit
+
+        ext_branch_audit.main(summary, args.out / "figures")
+    print(json.dumps(summary, indent=1) if args.json else tables(summary))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
