@@ -39,7 +39,7 @@ Results go to ``--out`` (default ``experiments/results/branch_audit``): the gene
 (as :mod:`experiments.ambiguity`), and one ``.npz`` per sequence, seed and budget under
 ``units/`` (written atomically, each when its sequence is done; a crash loses at most the
 sequence in progress). A unit is reused only when it was measured with the same code
-(:func:`experiments.ambiguity.code_key` with this module) and settings. ``report`` prints the
+(:func:`measuring_code_key`) and settings. ``report`` prints the
 tables (and ``--json`` a summary) and draws the figure (:mod:`experiments.figures.ext_branch_audit`).
 """
 from __future__ import annotations
@@ -509,6 +509,23 @@ def load_unit(path: Path, meta: dict | None = None) -> dict | None:
         return {k: z[k] for k in z.files if k != "meta"}
 
 
+def measuring_code_key() -> str:
+    """Short stable name of the code a unit is measured with: the ``mocap`` package and the
+    experiment modules it reads (:func:`experiments.ambiguity.code_key`), and the source of this
+    module's measuring functions and constants (the analysis may change without measuring again)."""
+    import hashlib
+    import inspect
+
+    from experiments.ambiguity import code_key
+
+    here = Path(__file__).resolve().parent
+    digest = hashlib.sha256(code_key(modules=(here / "ambiguity.py", here / "units.py", here / "keypoints.py")).encode())
+    for f in (mirror_alternatives, depth_order_disagreements, cue_vector, audit_frames, audit_sequence):
+        digest.update(inspect.getsource(f).encode())
+    digest.update(repr((SLOTS, COLUMNS, PRUNE_TOLERANCE_M, ORACLE_SIGMA_PX, ARM_BONES)).encode())
+    return digest.hexdigest()[:12]
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python -m experiments.branch_audit", description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -529,8 +546,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    from experiments.ambiguity import code_key
-
     args = build_parser().parse_args(argv)
     names = tuple(s for s in args.sequences.split(",") if s)
     unknown = [s for s in names if s not in SEQUENCES]
@@ -546,10 +561,8 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return 2
     config = TrackerConfig.from_json(args.config) if args.config is not None else TrackerConfig()
-    here = Path(__file__).resolve().parent
-    meta = {"code": code_key(modules=(here / "branch_audit.py", here / "ambiguity.py", here / "units.py",
-                                      here / "keypoints.py")),
-            "config": config.to_dict(), "evaluations": args.evaluations, "sigma_px": ORACLE_SIGMA_PX}
+    meta = {"code": measuring_code_key(), "config": config.to_dict(), "evaluations": args.evaluations,
+            "sigma_px": ORACLE_SIGMA_PX}
     units = {}
     for seed in seeds:
         for name in names:
