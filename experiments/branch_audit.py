@@ -253,20 +253,83 @@ def audit_frames(model, camera, config: TrackerConfig, truth_poses, prepared, ke
     return out
 
 
-def audit_sequence(sequence: str, seed: int, root: Path, config: TrackerConfig, evaluations: int,
-                   sigma_px: float = ORACLE_SIGMA_PX, frames: int | None = None, progress: bool = False) -> dict:
-    """:func:`audit_frames` on a benchmark sequence (generated under ``root`` if not there) with
-    the oracle keypoints of its truth (``sigma_px``, seeded by ``seed``)."""
-    from experiments.ambiguity import benchmark_sequence
-    from experiments.keypoints import oracle_keypoints
+#: Materials the audit runs on: the six benchmark sequences at full length with the oracle's true
+#: 2D (or MediaPipe's); ``peers``: :mod:`experiments.peers`' synthetic clips and ``cmu``: its
+#: CMU-driven clips (the held-out subject's trials in the scenes), both with MediaPipe's 2D and 3D.
+MATERIALS: tuple[str, ...] = ("benchmark", "peers", "cmu")
+#: Keypoint sources: the truth's projection plus noise, or MediaPipe Pose on the frames enlarged 4x.
+KEYPOINT_SOURCES: tuple[str, ...] = ("oracle", "mediapipe")
 
-    loaded, prepared = benchmark_sequence(sequence, root, seed)
-    n = len(prepared) if frames is None else min(frames, len(prepared))
+
+def material_clips(material: str, sequences: tuple[str, ...], train: Path | None = None) -> list[tuple[str, str | None, int]]:
+    """The clips of a material as (name, motion file or None, frames)."""
+    from experiments import peers
+
+    if material == "benchmark":
+        return [(s, None, SEQUENCES[s].frames) for s in sequences]
+    if material == "peers":
+        return [(s, None, peers.SYNTHETIC_FRAMES) for s in peers.SYNTHETIC]
+    if material == "cmu":
+        if train is None:
+            raise ValueError("the cmu material needs the CMU trials folder (--train)")
+        trials = peers.CMU_TRIALS["14"]
+        return [(scene, str(train / f"cmu_{trial}.amc"), peers.CMU_FRAMES)
+                for trial, scene in zip(trials, peers.CMU_SCENES)]
+    raise ValueError(f"material must be one of {MATERIALS}, got {material!r}")
+
+
+def mediapipe_keypoints(frames, cache: Path) -> list:
+    """MediaPipe Pose's arm joints (2D) and its 3D joints on ``frames``, as :mod:`experiments.peers`
+    gives them to the tracker (frames enlarged 4x; a Keypoints per frame, None where nobody was
+    found), its landmarks cached in ``cache`` (``.npz``)."""
+    from experiments.peers import arm_indices, run_mediapipe
+    from mocap.io.keypoints import Keypoints
+    from mocap.io.mediapipe_keypoints import world_joints
+
+    if cache.is_file():
+        with np.load(cache) as z:
+            mp = {k: z[k] for k in z.files}
+    else:
+        mp = run_mediapipe(frames, upscale=4)
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        np.savez(cache, **mp)
+    out = []
+    for i in range(len(frames)):
+        if not np.isfinite(mp["uv"][i]).all():
+            out.append(None)
+            continue
+        full = np.full((len(JOINT_NAMES), 2), np.nan)
+        full[arm_indices()] = mp["uv"][i]
+        world = (world_joints(mp["world33"][i], mp["visibility33"][i])[0] if np.isfinite(mp["world33"][i]).all()
+                 else None)
+        out.append(Keypoints(full, np.where(np.isfinite(full).all(axis=1), 1.0, 0.0), world))
+    return out
+
+
+def audit_sequence(sequence: str, seed: int, root: Path, config: TrackerConfig, evaluations: int,
+                   sigma_px: float = ORACLE_SIGMA_PX, frames: int | None = None, progress: bool = False,
+                   motion: str | None = None, keypoint_source: str = "oracle") -> dict:
+    """:func:`audit_frames` on a benchmark sequence (``motion``: driven by that clip; generated
+    under ``root`` if not there) with the oracle keypoints of its truth (``sigma_px``, seeded by
+    ``seed``) or MediaPipe's (:func:`mediapipe_keypoints`)."""
+    from experiments.keypoints import oracle_keypoints
+    from experiments.units import DataSpec, load_prepared, load_sequence, prepare_data
+
+    length = SEQUENCES[sequence].frames if frames is None else frames
+    spec = DataSpec(sequence, motion, length, seed, 160, 120)
+    folder = prepare_data(spec, str(root))
+    loaded, prepared = load_sequence(folder, length), load_prepared(folder)
+    n = min(length, len(prepared), len(loaded.ground_truth.poses))
     camera = loaded.calibration.camera
     truth = np.asarray(loaded.ground_truth.poses[:n], dtype=np.float64)
-    keypoints = oracle_keypoints(loaded.ground_truth.joints[:n], camera, sigma_px, seed)
+    if keypoint_source == "oracle":
+        keypoints = oracle_keypoints(loaded.ground_truth.joints[:n], camera, sigma_px, seed)
+    elif keypoint_source == "mediapipe":
+        keypoints = mediapipe_keypoints(loaded.frames[:n], Path(folder) / f"mediapipe-{n}.npz")
+    else:
+        raise ValueError(f"keypoint_source must be one of {KEYPOINT_SOURCES}, got {keypoint_source!r}")
     return audit_frames(loaded.model, camera, config, truth, prepared[:n], keypoints, evaluations,
-                        progress=progress, description=f"{sequence} s{seed}")
+                        progress=progress, description=f"{spec.name} s{seed}")
 
 
 # -- analysis ----------------------------------------------------------------------------------
@@ -483,8 +546,10 @@ def tables(summary: dict) -> str:
 
 
 # -- units on disk ------------------------------------------------------------------------------
-def unit_path(out: Path, sequence: str, seed: int, evaluations: int, frames: int | None) -> Path:
-    return out / "units" / f"{sequence}-s{seed}-e{evaluations}" f"{'' if frames is None else f'-f{frames}'}.npz"
+def unit_path(out: Path, name: str, seed: int, evaluations: int, frames: int | None, keypoints: str = "oracle") -> Path:
+    """Where a unit is stored: ``out/units/<clip>-s<seed>-e<evaluations>[-<keypoints>][-f<frames>].npz``."""
+    source = "" if keypoints == "oracle" else f"-{keypoints}"
+    return out / "units" / f"{name}-s{seed}-e{evaluations}{source}{'' if frames is None else f'-f{frames}'}.npz"
 
 
 def save_unit(path: Path, unit: dict, meta: dict) -> None:
@@ -520,7 +585,7 @@ def measuring_code_key() -> str:
 
     here = Path(__file__).resolve().parent
     digest = hashlib.sha256(code_key(modules=(here / "ambiguity.py", here / "units.py", here / "keypoints.py")).encode())
-    for f in (mirror_alternatives, depth_order_disagreements, cue_vector, audit_frames, audit_sequence):
+    for f in (mirror_alternatives, depth_order_disagreements, cue_vector, audit_frames):
         digest.update(inspect.getsource(f).encode())
     digest.update(repr((SLOTS, COLUMNS, PRUNE_TOLERANCE_M, ORACLE_SIGMA_PX, ARM_BONES)).encode())
     return digest.hexdigest()[:12]
@@ -532,6 +597,13 @@ def build_parser() -> argparse.ArgumentParser:
     for name, text in (("measure", "measure the units not stored yet, then report"),
                        ("report", "report the stored units only")):
         s = sub.add_parser(name, help=text)
+        s.add_argument("--material", choices=MATERIALS, default="benchmark",
+                       help="benchmark: the six sequences at full length; peers / cmu: experiments.peers' "
+                            "synthetic / CMU-driven clips (with --keypoints mediapipe)")
+        s.add_argument("--keypoints", choices=KEYPOINT_SOURCES, default="oracle",
+                       help=f"oracle: true 2D + {ORACLE_SIGMA_PX:g} px; mediapipe: MediaPipe's 2D arm joints and 3D")
+        s.add_argument("--train", type=Path, default=None,
+                       help="cmu: the CMU trials folder (default ../shared/data/mocap/train beside the checkout)")
         s.add_argument("--sequences", default=",".join(SEQUENCE_NAMES), help="comma-separated benchmark sequences")
         s.add_argument("--seeds", default="0", help="comma-separated seeds (default 0)")
         s.add_argument("--evaluations", type=int, default=200,
@@ -562,18 +634,26 @@ def main(argv=None) -> int:
         return 2
     config = TrackerConfig.from_json(args.config) if args.config is not None else TrackerConfig()
     meta = {"code": measuring_code_key(), "config": config.to_dict(), "evaluations": args.evaluations,
-            "sigma_px": ORACLE_SIGMA_PX}
+            "keypoints": args.keypoints, "sigma_px": ORACLE_SIGMA_PX if args.keypoints == "oracle" else None}
+    train = args.train if args.train is not None else Path(__file__).resolve().parents[2] / "shared" / "data" / "mocap" / "train"
+    try:
+        clips = material_clips(args.material, names, train)
+    except ValueError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
     units = {}
     for seed in seeds:
-        for name in names:
-            path = unit_path(args.out, name, seed, args.evaluations, args.frames)
+        for name, motion, length in clips:
+            label = name if motion is None else f"{name}+{Path(motion).stem}"
+            frames = args.frames if args.frames is not None else (None if args.material == "benchmark" else length)
+            path = unit_path(args.out, label, seed, args.evaluations, frames, args.keypoints)
             unit = load_unit(path, meta if args.command == "measure" else None)
             if unit is None and args.command == "measure":
-                unit = audit_sequence(name, seed, args.out, config, args.evaluations, frames=args.frames,
-                                      progress=not args.no_progress)
+                unit = audit_sequence(name, seed, args.out, config, args.evaluations, frames=frames,
+                                      progress=not args.no_progress, motion=motion, keypoint_source=args.keypoints)
                 save_unit(path, unit, meta)
             if unit is not None:
-                units[(name, seed)] = unit
+                units[(label, seed)] = unit
     if not units:
         print("error: no stored units; run measure first", file=sys.stderr)
         return 2
