@@ -210,7 +210,10 @@ def audit_frames(model, camera, config: TrackerConfig, truth_poses, prepared, ke
         ``exists`` (N, S) bool, ``pruned`` (N, S) bool, ``start_joints`` and ``refined_joints``
         (N, S, 10, 3) metres, ``unrefined`` and ``refined`` (N, S, len(COLUMNS)) cue values,
         ``refined_evaluations`` (N, S) int, ``truth_joints`` (N, 10, 3); S = len(:data:`SLOTS`),
-        NaN where a candidate does not exist.
+        NaN where a candidate does not exist. The **leader** stage: ``leader_exists``,
+        ``leader_pruned``, ``leader_joints`` and ``leader`` (cues), slot 0 the refined truth (the
+        converged leader) and the others its own exact mirrors, unrefined: what the tracker would
+        compare when it builds the alternatives from its converged leader.
     """
     from tqdm import tqdm
 
@@ -226,7 +229,9 @@ def audit_frames(model, camera, config: TrackerConfig, truth_poses, prepared, ke
            "refined_joints": np.full((n, s, len(JOINT_NAMES), 3), np.nan),
            "unrefined": np.full((n, s, c), np.nan), "refined": np.full((n, s, c), np.nan),
            "refined_evaluations": np.zeros((n, s), np.int64),
-           "truth_joints": np.array([model.joint_positions(q) for q in truth_poses])}
+           "truth_joints": np.array([model.joint_positions(q) for q in truth_poses]),
+           "leader_exists": np.zeros((n, s), bool), "leader_pruned": np.zeros((n, s), bool),
+           "leader_joints": np.full((n, s, len(JOINT_NAMES), 3), np.nan), "leader": np.full((n, s, c), np.nan)}
     for i in tqdm(range(n), desc=description, unit="frame", disable=not progress):
         if prepared[i].is_empty:
             continue
@@ -250,6 +255,16 @@ def audit_frames(model, camera, config: TrackerConfig, truth_poses, prepared, ke
             out["refined"][i, k] = cue_vector(tracker, costs, keypoint_cost, lifted, world, reg.pose,
                                               reg.region_residual, reg.edge_residual,
                                               reg.keypoint_residual if keypoint_cost is not None else None)
+            if k == 0:                          # the converged leader and its own exact mirrors
+                out["leader_exists"][i, 0] = True
+                out["leader_joints"][i, 0] = out["refined_joints"][i, 0]
+                out["leader"][i, 0] = out["refined"][i, 0]
+                for a in alternatives(reg.pose, model):
+                    j = SLOTS.index(a.name)
+                    out["leader_exists"][i, j], out["leader_pruned"][i, j] = True, a.pruned
+                    out["leader_joints"][i, j] = model.joint_positions(a.pose)
+                    if not a.pruned:
+                        out["leader"][i, j] = cue_vector(tracker, costs, keypoint_cost, lifted, world, a.pose)
     return out
 
 
@@ -377,43 +392,112 @@ def pairs(unit: dict) -> dict:
     collapsed = max_joint_distance(unit["refined_joints"][frame, slot], unit["truth_joints"][frame]) < DISTINCT_M
     sep_u = truth_better(u[frame, 0], u[frame, slot])
     sep_r = truth_better(r[frame, 0], r[frame, slot]) | collapsed[:, None]
-    return {"frame": frame, "slot": slot, "unrefined": sep_u, "refined": sep_r, "collapsed": collapsed,
-            "diff_unrefined": u[frame, slot] - u[frame, 0], "diff_refined": r[frame, slot] - r[frame, 0]}
+    out = {"frame": frame, "slot": slot, "unrefined": sep_u, "refined": sep_r, "collapsed": collapsed,
+           "diff_unrefined": u[frame, slot] - u[frame, 0], "diff_refined": r[frame, slot] - r[frame, 0]}
+    if "leader" in unit:
+        distance = max_joint_distance(unit["leader_joints"], unit["leader_joints"][:, :1])
+        lead = unit["leader_exists"] & ~unit["leader_pruned"] & (distance >= DISTINCT_M)
+        lead[:, 0] = False
+        lf, ls = np.nonzero(lead)
+        v = unit["leader"]
+        out.update(leader_frame=lf, leader_slot=ls, leader=truth_better(v[lf, 0], v[lf, ls]),
+                   diff_leader=v[lf, ls] - v[lf, 0])
+    return out
 
 
-def frame_rates(unit: dict, p: dict, stage: str, separated: np.ndarray | None = None) -> dict:
-    """Per-frame shares of a unit's frames with a compared pair (``stage``: unrefined or refined).
+def stage_pairs(p: dict, stage: str) -> dict:
+    """The pairs of one stage (``unrefined``, ``refined`` or ``leader``) as ``frame``, ``slot``,
+    ``separated`` (P, len(COLUMNS)) and ``diff`` (P, len(COLUMNS))."""
+    if stage == "leader":
+        return {"frame": p["leader_frame"], "slot": p["leader_slot"], "separated": p["leader"], "diff": p["diff_leader"]}
+    return {"frame": p["frame"], "slot": p["slot"], "separated": p[stage], "diff": p[f"diff_{stage}"]}
+
+
+#: The comparisons reported: the truth against its exact mirrors, both unrefined; both refined
+#: with the same budget; the refined truth (a converged leader) against its own exact mirrors.
+STAGES: tuple[str, ...] = ("unrefined", "refined", "leader")
+STAGE_TEXT = {"unrefined": "the truth against its exact mirrors, no registration",
+              "refined": "the truth and its mirrors each registered with the same budget from where they stand",
+              "leader": "the refined truth (a converged leader) against its own exact mirrors, unrefined"}
+
+
+def frame_rates(n: int, sp: dict, separated: np.ndarray | None = None) -> dict:
+    """Per-frame shares over the frames (of ``n``) with a compared pair of one stage (:func:`stage_pairs`).
 
     ``<cue>``: the share of those frames on which the cue separates every pair (it alone would
     choose the truth); ``floor``: the share on which some pair is separated by no single cue.
-    ``separated`` (P,) replaces the cues by one decision (the logistic combination)."""
-    n = unit["exists"].shape[0]
+    ``separated`` (P,) adds ``logistic``: one decision per pair (the logistic combination)."""
     has_pair = np.zeros(n, bool)
-    has_pair[p["frame"]] = True
+    has_pair[sp["frame"]] = True
     frames = int(has_pair.sum())
     out = {"frames": frames}
     if frames == 0:
         return out
-    cols = p[stage]
+    cols = sp["separated"]
     single = [COLUMNS.index(c) for c in CUES]
-    any_single = cols[:, single].any(axis=1)
-    for name, sep in [(c, cols[:, COLUMNS.index(c)]) for c in COLUMNS] + [("floor", ~any_single)] + (
+    bad = np.zeros(n, bool)
+    np.logical_or.at(bad, sp["frame"], ~cols[:, single].any(axis=1))
+    out["floor"] = float(bad[has_pair].mean())
+    for name, sep in [(c, cols[:, COLUMNS.index(c)]) for c in COLUMNS] + (
             [("logistic", separated)] if separated is not None else []):
-        if name == "floor":
-            bad = np.zeros(n, bool)
-            np.logical_or.at(bad, p["frame"], sep)
-            out[name] = float(bad[has_pair].mean())
-        else:
-            missed = np.zeros(n, bool)
-            np.logical_or.at(missed, p["frame"], ~sep)
-            out[name] = float((~missed[has_pair]).mean())
+        missed = np.zeros(n, bool)
+        np.logical_or.at(missed, sp["frame"], ~sep)
+        out[name] = float((~missed[has_pair]).mean())
     return out
 
 
-def logistic_fit(diffs: np.ndarray, columns: tuple[str, ...] = CUES[:5]):
+#: Frames of evidence summed for a decision over the tracker's default lag (``lag`` + 1).
+WINDOW = 9
+
+
+def window_rates(n: int, sp: dict, window: int = WINDOW) -> np.ndarray:
+    """Evidence accumulated over windows: per cue, whether the cue's differences (alternative minus
+    truth) summed over ``window`` consecutive frames favour the truth.
+
+    Each alternative slot is a branch followed through time; a window counts for a slot when the
+    slot is compared on at least half its frames, and the sum runs over those frames.
+
+    Parameters
+    ----------
+    n : int
+        Frames of the unit.
+    sp : dict
+        :func:`stage_pairs` of the unit.
+
+    Returns
+    -------
+    ndarray of bool, shape (W, len(COLUMNS))
+        One row per counted (window, slot); a cue without values is False.
+    """
+    rows = []
+    for slot in np.unique(sp["slot"]):
+        sel = sp["slot"] == slot
+        diff = np.full((n, len(COLUMNS)), np.nan)
+        diff[sp["frame"][sel]] = sp["diff"][sel]
+        present = np.isfinite(diff[:, 0])
+        for start in range(0, max(n - window + 1, 0)):
+            if present[start:start + window].sum() * 2 < window:
+                continue
+            total = np.nansum(diff[start:start + window], axis=0)
+            margin = TIE_RELATIVE * np.maximum(1.0, np.nansum(np.abs(diff[start:start + window]), axis=0))
+            rows.append(total > margin)
+    return np.array(rows, dtype=bool).reshape(-1, len(COLUMNS))
+
+
+#: The cues the logistic combination weighs.
+LOGISTIC_CUES: tuple[str, ...] = ("region", "edge", "keypoint", "lifter", "prior")
+
+
+def logistic_fit(diffs: np.ndarray, columns: tuple[str, ...] = LOGISTIC_CUES):
     """A logistic decision on the cue differences (alternative minus truth), no intercept, each
-    difference scaled by its standard deviation; each pair enters both ways round. Returns a
-    function ``(P, len(COLUMNS)) diffs -> (P,) bool`` (the truth chosen), and the weights."""
+    difference scaled by its standard deviation; each pair enters both ways round.
+
+    Returns
+    -------
+    (callable, dict)
+        ``decide(diffs) -> (P,) bool`` (the truth chosen) for (P, len(COLUMNS)) differences, and
+        the weights per cue (per unit of the cue).
+    """
     from sklearn.linear_model import LogisticRegression
 
     idx = [COLUMNS.index(c) for c in columns]
@@ -431,80 +515,82 @@ def logistic_fit(diffs: np.ndarray, columns: tuple[str, ...] = CUES[:5]):
     return decide, dict(zip(columns, weights.tolist()))
 
 
+def _shares(sep: np.ndarray, measured: np.ndarray) -> dict:
+    return {c: float(sep[:, i].mean()) if len(sep) and measured[i] else math.nan for i, c in enumerate(COLUMNS)}
+
+
 def summarise(units: dict[tuple[str, int], dict]) -> dict:
-    """Every reported number of a set of units keyed by (sequence, seed) (see the module)."""
+    """Every reported number of a set of units keyed by (sequence, seed) (see the module).
+
+    Per stage (:data:`STAGES`), per sequence and pooled: :func:`frame_rates` (frame-weighted),
+    ``pairs`` and ``pair_truth_better`` (per cue, the share of pairs it separates),
+    ``windows``, ``window_truth_better`` and ``window_floor`` (:func:`window_rates`); refined:
+    ``collapsed``. ``per_alternative``: ``pair_truth_better`` per alternative slot. With units of
+    :data:`FIT_SEEDS` and of other seeds, a logistic combination per stage fitted on the first
+    (``logistic_<stage>_weights``) and its ``logistic`` frame rate on the others.
+    """
     per_pair = {k: pairs(u) for k, u in units.items()}
-    out = {"settings": {"distinct_m": DISTINCT_M, "prune_tolerance_m": PRUNE_TOLERANCE_M, "tie_relative": TIE_RELATIVE},
-           "per_sequence": {}, "pooled": {}, "per_alternative": {}}
-    frames_total = sum(u["exists"].shape[0] for u in units.values())
-    pruned_frames = sum(int(u["pruned"][:, 1:].any(axis=1).sum()) for u in units.values())
-    pruned_share = sum(int(u["pruned"][:, 1:].sum()) for u in units.values()) / max(
+    stages = [st for st in STAGES if all(st != "leader" or "leader" in p for p in per_pair.values())]
+    sp = {(k, st): stage_pairs(per_pair[k], st) for k in units for st in stages}
+    n_of = {k: u["exists"].shape[0] for k, u in units.items()}
+    out = {"settings": {"distinct_m": DISTINCT_M, "prune_tolerance_m": PRUNE_TOLERANCE_M, "tie_relative": TIE_RELATIVE,
+                        "window": WINDOW},
+           "stages": stages, "per_sequence": {}, "pooled": {}, "per_alternative": {}}
+    out["frames"] = sum(n_of.values())
+    out["frames_with_pruned_mirror"] = sum(int(u["pruned"][:, 1:].any(axis=1).sum()) for u in units.values())
+    out["pruned_share_of_alternatives"] = sum(int(u["pruned"][:, 1:].sum()) for u in units.values()) / max(
         1, sum(int(u["exists"][:, 1:].sum()) for u in units.values()))
-    out["frames"], out["frames_with_pruned_mirror"] = frames_total, pruned_frames
-    out["pruned_share_of_alternatives"] = pruned_share
-    # logistic: fitted on FIT_SEEDS' refined pairs, checked on the others
     fit_keys = [k for k in units if k[1] in FIT_SEEDS]
     test_keys = [k for k in units if k[1] not in FIT_SEEDS]
-    decide = decide_u = None
+    decide = {}
     if fit_keys and test_keys:
-        for stage in ("unrefined", "refined"):
-            diffs = np.vstack([per_pair[k][f"diff_{stage}"] for k in fit_keys])
-            decide_s, weights = logistic_fit(diffs)
-            out[f"logistic_{stage}_weights"] = weights
-            if stage == "refined":
-                decide = decide_s
-            else:
-                decide_u = decide_s
-    sequences = list(dict.fromkeys(k[0] for k in units))
+        for st in stages:
+            decide[st], out[f"logistic_{st}_weights"] = logistic_fit(np.vstack([sp[k, st]["diff"] for k in fit_keys]))
 
     def group_rates(keys):
         rates = {}
-        for stage in ("unrefined", "refined"):
-            frames, acc = 0, {}
+        for st in stages:
+            acc, frames = {}, 0
             for k in keys:
-                p = per_pair[k]
                 extra = None
-                if decide is not None and k in test_keys:
-                    d = decide if stage == "refined" else decide_u
-                    extra = d(p[f"diff_{stage}"])
-                    if stage == "refined":
-                        extra = extra | p["collapsed"]
-                r = frame_rates(units[k], p, stage, extra)
+                if st in decide and k in test_keys:
+                    extra = decide[st](sp[k, st]["diff"])
+                    if st == "refined":
+                        extra = extra | per_pair[k]["collapsed"]
+                r = frame_rates(n_of[k], sp[k, st], extra)
                 for name, v in r.items():
-                    if name != "frames":            # a frame-weighted mean (logistic: the checked seeds only)
+                    if name != "frames":            # frame-weighted (logistic: over the checked seeds only)
                         acc.setdefault(name, [0.0, 0])
                         acc[name][0] += v * r["frames"]
                         acc[name][1] += r["frames"]
                 frames += r["frames"]
-            rates[stage] = {"frames": frames, **{n: (s / w if w else math.nan) for n, (s, w) in acc.items()}}
-            all_p = [per_pair[k] for k in keys]
-            sep = np.vstack([p[stage] for p in all_p]) if all_p else np.zeros((0, len(COLUMNS)), bool)
-            diff = np.vstack([p[f"diff_{stage}"] for p in all_p]) if all_p else np.zeros((0, len(COLUMNS)))
-            measured = np.isfinite(diff).any(axis=0)          # a cue without values (world on true 2D): NaN
-            rates[stage]["pairs"] = int(len(sep))
-            rates[stage]["pair_truth_better"] = {c: float(sep[:, i].mean()) if len(sep) and measured[i] else math.nan
-                                                 for i, c in enumerate(COLUMNS)}
+            rate = {"frames": frames, **{n: (a / w if w else math.nan) for n, (a, w) in acc.items()}}
+            sep = np.vstack([sp[k, st]["separated"] for k in keys])
+            measured = np.isfinite(np.vstack([sp[k, st]["diff"] for k in keys])).any(axis=0)
             for i, c in enumerate(COLUMNS):
-                if not measured[i]:
-                    rates[stage][c] = math.nan
-            if stage == "refined":
-                coll = np.concatenate([p["collapsed"] for p in all_p]) if all_p else np.zeros(0, bool)
-                rates[stage]["collapsed"] = float(coll.mean()) if len(coll) else math.nan
+                if not measured[i]:             # a cue without values (world on true 2D)
+                    rate[c] = math.nan
+            rate["pairs"], rate["pair_truth_better"] = int(len(sep)), _shares(sep, measured)
+            w = np.vstack([window_rates(n_of[k], sp[k, st]) for k in keys])
+            single = [COLUMNS.index(c) for c in CUES]
+            rate["windows"], rate["window_truth_better"] = int(len(w)), _shares(w, measured)
+            rate["window_floor"] = float((~w[:, single].any(axis=1)).mean()) if len(w) else math.nan
+            if st == "refined":
+                collapsed = np.concatenate([per_pair[k]["collapsed"] for k in keys])
+                rate["collapsed"] = float(collapsed.mean()) if len(collapsed) else math.nan
+            rates[st] = rate
         return rates
 
-    for name in sequences:
+    for name in dict.fromkeys(k[0] for k in units):
         out["per_sequence"][name] = group_rates([k for k in units if k[0] == name])
     out["pooled"] = group_rates(list(units))
     for slot in SLOTS[1:]:
         sel = {}
-        for stage in ("unrefined", "refined"):
-            chosen = [per_pair[k]["slot"] == SLOTS.index(slot) for k in units]
-            sep = np.vstack([per_pair[k][stage][m] for k, m in zip(units, chosen)])
-            diff = np.vstack([per_pair[k][f"diff_{stage}"][m] for k, m in zip(units, chosen)])
-            measured = np.isfinite(diff).any(axis=0)
-            sel[stage] = {c: float(sep[:, i].mean()) if len(sep) and measured[i] else math.nan
-                          for i, c in enumerate(COLUMNS)}
-            sel["pairs"] = int(len(sep))
+        for st in stages:
+            chosen = [(sp[k, st], sp[k, st]["slot"] == SLOTS.index(slot)) for k in units]
+            sep = np.vstack([a["separated"][m] for a, m in chosen])
+            measured = np.isfinite(np.vstack([a["diff"][m] for a, m in chosen])).any(axis=0)
+            sel[st] = {"pairs": int(len(sep)), **_shares(sep, measured)}
         out["per_alternative"][slot] = sel
     return out
 
@@ -514,9 +600,10 @@ def tables(summary: dict) -> str:
     pct = lambda v: "–" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{100 * v:.1f}"
     lines = [f"{summary['frames']} frames; {summary['frames_with_pruned_mirror']} with a pruned mirror "
              f"({pct(summary['pruned_share_of_alternatives'])} % of alternatives pruned)", ""]
-    for stage in ("unrefined", "refined"):
+    for stage in summary["stages"]:
         head = ["sequence", "frames", "pairs"] + [f"{c} %" for c in COLUMNS] + ["logistic %", "floor %"]
-        lines += [f"**{stage}**: share of frames on which the cue rates the truth better than every distinct "
+        lines += [f"### {stage}: {STAGE_TEXT[stage]}", "",
+                  f"**{stage}**: share of frames on which the cue rates the truth better than every distinct "
                   "alternative; floor: frames with an alternative no single cue separates", "",
                   "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
         for name, rates in list(summary["per_sequence"].items()) + [("**pooled**", summary["pooled"])]:
@@ -529,15 +616,23 @@ def tables(summary: dict) -> str:
         lines += [f"**{stage}**, per pair: share on which the cue rates the truth better", "",
                   "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
         for slot, sel in summary["per_alternative"].items():
-            lines.append("| " + " | ".join([slot, str(sel["pairs"])] + [pct(sel[stage][c]) for c in COLUMNS]) + " |")
+            lines.append("| " + " | ".join([slot, str(sel[stage]["pairs"])] + [pct(sel[stage][c]) for c in COLUMNS]) + " |")
         p = summary["pooled"][stage]
         lines.append("| **all** | " + " | ".join([str(p["pairs"])] + [pct(p["pair_truth_better"][c]) for c in COLUMNS])
                      + " |")
         lines.append("")
+        head = ["sequence", "windows"] + [f"{c} %" for c in COLUMNS] + ["floor %"]
+        lines += [f"**{stage}**, evidence summed over {WINDOW} frames per alternative branch: share of windows "
+                  "on which the sum favours the truth", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+        for name, rates in list(summary["per_sequence"].items()) + [("**pooled**", summary["pooled"])]:
+            r = rates[stage]
+            lines.append("| " + " | ".join([name, str(r["windows"])] + [pct(r["window_truth_better"][c]) for c in COLUMNS]
+                                           + [pct(r["window_floor"])]) + " |")
+        lines.append("")
     if "collapsed" in summary["pooled"]["refined"]:
         lines.append(f"refined alternatives back within {DISTINCT_M * 1e3:.0f} mm of the truth (collapsed): "
                      f"{pct(summary['pooled']['refined']['collapsed'])} %")
-    for stage in ("unrefined", "refined"):
+    for stage in summary["stages"]:
         if f"logistic_{stage}_weights" in summary:
             w = summary[f"logistic_{stage}_weights"]
             lines.append(f"logistic ({stage}, fitted on seeds {','.join(map(str, FIT_SEEDS))}, checked on the others): "

@@ -6,7 +6,7 @@ import pytest
 from scipy import ndimage
 
 from experiments.branch_audit import (COLUMNS, DISTINCT_M, SLOTS, audit_frames, depth_order_disagreements,
-                                      frame_rates, mirror_alternatives, pairs, summarise, truth_better)
+                                      frame_rates, mirror_alternatives, pairs, stage_pairs, summarise, truth_better)
 from mocap.body import BodyDimensions, BodyModel, PARAMETER_INDEX as P, neutral_pose
 from mocap.body.skeleton import JOINT_INDEX
 from mocap.imaging import PreparedFrame
@@ -106,7 +106,18 @@ def test_the_unrefined_region_cost_separates_a_mirror_the_rendering_shows(audite
     p = pairs(unit)
     assert len(p["frame"]) == 2 * 4
     assert p["unrefined"][:, COLUMNS.index("region")].all()
-    assert frame_rates(unit, p, "unrefined")["floor"] == 0.0
+    assert frame_rates(2, stage_pairs(p, "unrefined"))["floor"] == 0.0
+
+
+def test_the_leader_stage_scores_the_refined_truth_and_its_own_mirrors(audited):
+    _, unit = audited
+    np.testing.assert_array_equal(unit["leader"][:, 0], unit["refined"][:, 0])
+    np.testing.assert_array_equal(unit["leader_joints"][:, 0], unit["refined_joints"][:, 0])
+    kept = unit["leader_exists"][0] & ~unit["leader_pruned"][0]
+    assert kept[1:].any()
+    k = COLUMNS.index("keypoint")            # the leader's mirrors project where the leader does
+    np.testing.assert_allclose(unit["leader"][:, kept, k], unit["leader"][:, :1, k].repeat(kept.sum(), axis=1),
+                               atol=0.02)
 
 
 def test_ties_and_missing_values_never_separate():
@@ -127,7 +138,7 @@ def test_the_floor_counts_frames_with_a_pair_no_single_cue_separates():
             "truth_joints": truth_joints}
     p = pairs(unit)
     assert len(p["frame"]) == 2 * (s - 1) + 1
-    r = frame_rates(unit, p, "unrefined")
+    r = frame_rates(n, stage_pairs(p, "unrefined"))
     assert r["frames"] == 3 and r["floor"] == pytest.approx(1 / 3) and r["region"] == pytest.approx(2 / 3)
     summary = summarise({("gestures-1", 0): unit})
     assert summary["pooled"]["refined"]["floor"] == pytest.approx(1 / 3)
