@@ -104,14 +104,82 @@ class Alternative:
     pruned: bool
 
 
+#: The angles that place the hand once the elbow and wrist are placed (:func:`hand_on_ray`).
+HAND_ANGLES: tuple[str, ...] = ("forearm_twist", "wrist_flex", "wrist_dev")
+
+
+#: Levenberg–Marquardt iterations of :func:`hand_on_ray` at most.
+HAND_ITERATIONS = 12
+
+
+def hand_on_ray(pose, skeleton, side: str, ray) -> np.ndarray:
+    """Pose with one arm's forearm twist and wrist angles moved, within the joint limits, so that
+    its hand joint lies on a camera ray (as near as the limits allow).
+
+    A small bounded Levenberg–Marquardt (forward-difference Jacobian, three angles) on the hand's
+    distance from the ray in millimetres, with a weak pull (0.01 per radian) towards the starting
+    angles, which picks, of the postures that reach the ray, the one nearest the start.
+
+    Parameters
+    ----------
+    pose : array_like, shape (23,)
+    skeleton : Skeleton
+    side : {"r", "l"}
+    ray : array_like, shape (3,)
+        Unit direction of the camera ray (camera coordinates).
+
+    Returns
+    -------
+    ndarray, shape (23,), float64
+    """
+    from mocap.body.kinematics import joint_positions
+    from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX
+
+    q = np.asarray(pose, dtype=np.float64).copy()
+    d = np.asarray(ray, dtype=np.float64)
+    idx = [PARAMETER_INDEX[f"{side}_{a}"] for a in HAND_ANGLES]
+    lower, upper = JOINT_LIMITS[idx, 0], JOINT_LIMITS[idx, 1]
+    start = np.clip(q[idx], lower, upper)
+    hand = JOINT_INDEX[f"{side}_hand"]
+
+    def residual(x):
+        q[idx] = x
+        h = joint_positions(q, skeleton)[hand]
+        return np.concatenate([1e3 * (h - (h @ d) * d), 0.01 * (x - start)])
+
+    x, r, lam = start.copy(), residual(start), 1e-3
+    cost = float(r @ r)
+    for _ in range(HAND_ITERATIONS):
+        if cost < 1e-6:
+            break
+        jac = np.empty((len(r), 3))
+        for i in range(3):
+            step = np.zeros(3)
+            step[i] = 1e-6
+            jac[:, i] = (residual(x + step) - r) / 1e-6
+        jtj, g = jac.T @ jac, jac.T @ r
+        for _try in range(6):
+            trial = np.clip(x - np.linalg.solve(jtj + lam * (np.diag(np.diag(jtj)) + 1e-9 * np.eye(3)), g), lower, upper)
+            rt = residual(trial)
+            if float(rt @ rt) < cost:
+                x, r, cost, lam = trial, rt, float(rt @ rt), lam * 0.3
+                break
+            lam *= 10.0
+        else:
+            break
+    q[idx] = x
+    return q
+
+
 def mirror_alternatives(pose, model) -> list[Alternative]:
     """The depth alternatives of ``pose`` (see the module), built from :func:`mocap.body.jumps.arm_jumps`.
 
     Each arm jump is solved twice (its two closed-form solutions judged by the shoulder's limits
-    and by all four arm angles' limits), clamped to the joint limits, and the one whose joints
-    lie nearer the exact mirror is kept; it is pruned when still more than
-    :data:`PRUNE_TOLERANCE_M` off. The forearm and wrist angles are kept, so the hand follows
-    the forearm (its projection moves a little with a flipped forearm).
+    and by all four arm angles' limits), clamped to the joint limits, and the one whose elbow and
+    wrist lie nearer the exact mirror is kept; it is pruned when still more than
+    :data:`PRUNE_TOLERANCE_M` off. The hand is then put back on its own camera ray by the forearm
+    twist and the wrist angles (:func:`hand_on_ray`), so every joint keeps its projection where
+    the limits allow.
 
     Parameters
     ----------
@@ -126,8 +194,10 @@ def mirror_alternatives(pose, model) -> list[Alternative]:
     q = np.asarray(pose, dtype=np.float64)
     skeleton = model.skeleton
     out = []
+    joints = model.joint_positions(q)
     for side in SIDES:
         arm = [JOINT_INDEX[f"{side}_{j}"] for j in ("elbow", "wrist")]
+        hand = joints[JOINT_INDEX[f"{side}_hand"]]
         for name, exact in arm_jumps(q, skeleton, side).items():
             target = model.joint_positions(exact)[arm]
             best, miss = None, math.inf
@@ -136,7 +206,8 @@ def mirror_alternatives(pose, model) -> list[Alternative]:
                 m = float(np.linalg.norm(model.joint_positions(solved)[arm] - target, axis=1).max())
                 if m < miss:
                     best, miss = solved, m
-            out.append(Alternative(f"{side}_{name}", best, miss > PRUNE_TOLERANCE_M))
+            out.append(Alternative(f"{side}_{name}", hand_on_ray(best, skeleton, side, hand / np.linalg.norm(hand)),
+                                   miss > PRUNE_TOLERANCE_M))
     return out
 
 
@@ -680,7 +751,7 @@ def measuring_code_key() -> str:
 
     here = Path(__file__).resolve().parent
     digest = hashlib.sha256(code_key(modules=(here / "ambiguity.py", here / "units.py", here / "keypoints.py")).encode())
-    for f in (mirror_alternatives, depth_order_disagreements, cue_vector, audit_frames):
+    for f in (hand_on_ray, mirror_alternatives, depth_order_disagreements, cue_vector, audit_frames):
         digest.update(inspect.getsource(f).encode())
     digest.update(repr((SLOTS, COLUMNS, PRUNE_TOLERANCE_M, ORACLE_SIGMA_PX, ARM_BONES)).encode())
     return digest.hexdigest()[:12]
