@@ -73,3 +73,44 @@ def test_bad_input():
         reach_arm(q, MODEL.skeleton, "r", [0.0, np.nan, 1.0])
     with pytest.raises(ValueError, match="regularization"):
         reach_arm(q, MODEL.skeleton, "r", [0.0, 0.0, 2.0], regularization=-1.0)
+
+
+@pytest.mark.parametrize("side", ["r", "l"])
+def test_place_arm_puts_three_joints_made_by_forward_kinematics_back(side):
+    """Every arm posture inside the limits, from a random other start: the elbow, wrist and hand
+    are placed back on the points forward kinematics gave (the reference) within a micrometre."""
+    from mocap.body.ik import ARM_JOINTS, ARM_PARAMETERS, place_arm
+
+    rng = np.random.default_rng(5)
+    rows = [JOINT_NAMES.index(f"{side}_{j}") for j in ARM_JOINTS]
+    arm = [P[f"{side}_{n}"] for n in ARM_PARAMETERS]
+    for _ in range(60):
+        truth = standing()
+        truth[3:6] = rng.uniform(-0.4, 0.4, 3)
+        truth[arm] = rng.uniform(JOINT_LIMITS[arm, 0], JOINT_LIMITS[arm, 1])
+        start = truth.copy()
+        start[arm] = rng.uniform(JOINT_LIMITS[arm, 0], JOINT_LIMITS[arm, 1])
+        target = MODEL.joint_positions(truth)[rows]
+        placed = place_arm(start, MODEL.skeleton, side, target)
+        got = MODEL.joint_positions(placed.pose)[rows]
+        assert np.max(np.linalg.norm(got - target, axis=1)) < 1e-6
+        assert placed.miss_m < 1e-6
+        assert [i for i in range(23) if placed.pose[i] != start[i]] == [i for i in arm if placed.pose[i] != start[i]]
+        assert np.all(placed.pose >= JOINT_LIMITS[:, 0]) and np.all(placed.pose <= JOINT_LIMITS[:, 1])
+
+
+def test_place_arm_reports_an_unreachable_posture():
+    """A wrist farther from the elbow than the forearm is long cannot be reached: the placement
+    says by how much it stayed off (at least the excess length)."""
+    from mocap.body.ik import place_arm
+
+    q = standing()
+    j = MODEL.joint_positions(q)
+    rows = [JOINT_NAMES.index(f"r_{n}") for n in ("elbow", "wrist", "hand")]
+    target = j[rows].copy()
+    excess = np.linalg.norm(target[1] - target[0])
+    target[1:] += target[1] - target[0]                  # the forearm twice its length
+    placed = place_arm(q, MODEL.skeleton, "r", target)
+    assert placed.miss_m > 0.5 * excess
+    assert placed.miss_m == pytest.approx(np.max(np.linalg.norm(MODEL.joint_positions(placed.pose)[rows] - target,
+                                                                axis=1)))

@@ -1,0 +1,91 @@
+"""Depth alternatives (:mod:`mocap.track.branches`) against an independent reference: the joints
+projected with the camera and the bone lengths measured on the joints."""
+import numpy as np
+import pytest
+
+from mocap.body import JOINT_LIMITS, JOINT_NAMES, PARAMETER_INDEX as P, BodyModel, neutral_pose
+from mocap.render.camera import Camera
+from mocap.track.branches import DepthAlternative, depth_alternatives, flipped_arm_joints
+
+MODEL = BodyModel.build(resolution=6)
+CAMERA = Camera.default()
+BONES = {"upper_arm": ("shoulder", "elbow"), "forearm": ("elbow", "wrist"), "hand": ("wrist", "hand")}
+ARM = ("shoulder_flex", "shoulder_abd", "shoulder_rot", "elbow_flex", "forearm_twist", "wrist_flex", "wrist_dev")
+
+
+def random_pose(rng):
+    q = neutral_pose()
+    q[3] = rng.uniform(-0.8, 0.8)
+    q[4:6] = rng.uniform(-0.2, 0.2, 2)
+    for side in "rl":
+        idx = [P[f"{side}_{n}"] for n in ARM]
+        q[idx] = rng.uniform(JOINT_LIMITS[idx, 0], JOINT_LIMITS[idx, 1])
+    return q
+
+
+def other_intersection_depth(joints, parent, child):
+    """Distance from the camera of the other point where the child's ray meets the sphere of the
+    bone's length about the parent (the quadratic's other root)."""
+    ray = joints[child] / np.linalg.norm(joints[child])
+    return 2.0 * ray @ joints[parent] - np.linalg.norm(joints[child])
+
+
+def test_a_depth_alternative_keeps_every_projection_and_bone_length():
+    rng = np.random.default_rng(11)
+    kept = 0
+    for _ in range(30):
+        q = random_pose(rng)
+        joints = MODEL.joint_positions(q)
+        pixels = CAMERA.project(joints)
+        for alt in depth_alternatives(q, MODEL, CAMERA):
+            assert isinstance(alt, DepthAlternative)
+            kept += 1
+            got = MODEL.joint_positions(alt.pose)
+            np.testing.assert_allclose(got, alt.joints)
+            assert np.max(np.linalg.norm(CAMERA.project(got) - pixels, axis=1)) <= 0.5
+            for parent, child in BONES.values():
+                for side in "rl":
+                    a, b = JOINT_NAMES.index(f"{side}_{parent}"), JOINT_NAMES.index(f"{side}_{child}")
+                    assert np.linalg.norm(got[b] - got[a]) == pytest.approx(np.linalg.norm(joints[b] - joints[a]),
+                                                                           abs=1e-9)
+            # only that arm's angles moved, inside the limits
+            other = "l" if alt.side == "r" else "r"
+            idx = [P[f"{other}_{n}"] for n in ARM] + list(range(9))
+            np.testing.assert_array_equal(alt.pose[idx], q[idx])
+            assert np.all(alt.pose >= JOINT_LIMITS[:, 0]) and np.all(alt.pose <= JOINT_LIMITS[:, 1])
+            # the first flipped bone's child really is at the other intersection (its parent did not move)
+            first = next(b for b in BONES if b in alt.flipped)
+            parent, child = (JOINT_NAMES.index(f"{alt.side}_{j}") for j in BONES[first])
+            assert np.linalg.norm(got[child]) == pytest.approx(other_intersection_depth(joints, parent, child),
+                                                               abs=0.01)
+    assert kept >= 30            # about 2.5 a pose: the limits allow many
+
+
+def test_flipped_joints_are_exact_geometry():
+    """On the rays, at the bone lengths, and the flip of a flip is the pose itself."""
+    rng = np.random.default_rng(2)
+    for _ in range(20):
+        joints = MODEL.joint_positions(random_pose(rng))
+        for flip in (("upper_arm",), ("forearm",), ("upper_arm", "forearm")):
+            new = flipped_arm_joints(joints, "r", flip)
+            rows = [JOINT_NAMES.index(f"r_{j}") for j in ("elbow", "wrist", "hand")]
+            if np.any(np.isclose(np.linalg.norm(new[rows], axis=1), 0)):
+                continue
+            unit_old = joints[rows] / np.linalg.norm(joints[rows], axis=1)[:, None]
+            unit_new = new[rows] / np.linalg.norm(new[rows], axis=1)[:, None]
+            np.testing.assert_allclose(unit_new, unit_old, atol=1e-12)
+            np.testing.assert_array_equal(np.delete(new, rows, axis=0), np.delete(joints, rows, axis=0))
+        once = flipped_arm_joints(joints, "l", ("upper_arm",))
+        a, b = JOINT_NAMES.index("l_shoulder"), JOINT_NAMES.index("l_elbow")
+        np.testing.assert_allclose(np.linalg.norm(once[b] - once[a]), np.linalg.norm(joints[b] - joints[a]))
+        np.testing.assert_allclose(flipped_arm_joints(once, "l", ("upper_arm",))[b], joints[b], atol=1e-9)
+
+
+def test_bad_input():
+    q = neutral_pose()
+    with pytest.raises(ValueError, match="side"):
+        flipped_arm_joints(MODEL.joint_positions(q), "x", ())
+    with pytest.raises(ValueError, match="unknown bones"):
+        flipped_arm_joints(MODEL.joint_positions(q), "r", ("femur",))
+    with pytest.raises(ValueError, match="max_shift_px"):
+        depth_alternatives(q, MODEL, CAMERA, max_shift_px=-1.0)
