@@ -5,9 +5,9 @@ On every frame of a benchmark sequence it takes the **true pose** and its **dept
 alternatives**: each arm bone's depth flipped about its parent joint (the upper arm about the
 shoulder, the forearm about the elbow, or both: the child joint moved to the other crossing of
 its camera ray with the sphere of the bone's length about the parent), which keeps the joints'
-projections and the bone lengths, placed onto the body within the joint limits. A mirror that
-the limits do not let the arm reach (its joints more than :data:`PRUNE_TOLERANCE_M` off the exact
-mirror once inside the limits) is **pruned**: counted, not compared.
+projections and the bone lengths, placed onto the body within the joint limits: the tracker's own
+:func:`mocap.track.branches.depth_alternatives`. A mirror that the limits do not let the arm reach
+(the tracker's pruning thresholds, :func:`mirror_alternatives`) is **pruned**: counted, not compared.
 
 Every candidate (the truth and each alternative) is scored by each cue twice: **unrefined**
 (the exact mirror as built, no registration) and **refined** (the tracker's two-step
@@ -55,7 +55,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments import RESULTS_DIR
-from mocap.body.jumps import ARM_JUMPS, ARM_ANGLES, JUMP_JUDGED_ANGLES, SIDES, arm_angles_for_points, arm_jumps
+from mocap.body.jumps import ARM_JUMPS, SIDES
 from mocap.body.pose import clamp_to_limits
 from mocap.body.skeleton import JOINT_INDEX, JOINT_NAMES
 from mocap.synth import SEQUENCE_NAMES, SEQUENCES
@@ -69,9 +69,6 @@ CUES: tuple[str, ...] = ("region", "edge", "keypoint", "lifter", "prior", "world
 COMBINED: tuple[str, ...] = ("region_edge", "score")
 #: Every column of a candidate's cue vector.
 COLUMNS: tuple[str, ...] = CUES + COMBINED
-#: An alternative whose joints, inside the joint limits, are farther than this from the exact
-#: mirror (metres, any joint) is pruned: the limits do not let the arm reach it.
-PRUNE_TOLERANCE_M = 0.01
 #: An alternative is compared only when some joint is at least this far from the truth's (metres).
 DISTINCT_M = 0.05
 #: Relative difference under which two cue values count as a tie (rounding).
@@ -96,7 +93,7 @@ class Alternative:
     pose : ndarray, shape (23,), float64
         Inside the joint limits (metres, radians).
     pruned : bool
-        Whether the limits keep the arm off the exact mirror (see :data:`PRUNE_TOLERANCE_M`).
+        Whether the limits keep the arm off the exact mirror (see :func:`mirror_alternatives`).
     """
 
     name: str
@@ -104,111 +101,35 @@ class Alternative:
     pruned: bool
 
 
-#: The angles that place the hand once the elbow and wrist are placed (:func:`hand_on_ray`).
-HAND_ANGLES: tuple[str, ...] = ("forearm_twist", "wrist_flex", "wrist_dev")
+#: Each flip of :func:`mocap.track.branches.depth_alternatives` by its slot name.
+FLIP_NAMES = {("upper_arm",): "upper_arm", ("forearm",): "forearm", ("upper_arm", "forearm"): "both"}
 
 
-#: Levenberg–Marquardt iterations of :func:`hand_on_ray` at most.
-HAND_ITERATIONS = 12
+def mirror_alternatives(pose, model, camera) -> list[Alternative]:
+    """The depth alternatives of ``pose`` as the tracker builds them
+    (:func:`mocap.track.branches.depth_alternatives`), the pruned ones kept and marked.
 
-
-def hand_on_ray(pose, skeleton, side: str, ray) -> np.ndarray:
-    """Pose with one arm's forearm twist and wrist angles moved, within the joint limits, so that
-    its hand joint lies on a camera ray (as near as the limits allow).
-
-    A small bounded Levenberg–Marquardt (forward-difference Jacobian, three angles) on the hand's
-    distance from the ray in millimetres, with a weak pull (0.01 per radian) towards the starting
-    angles, which picks, of the postures that reach the ray, the one nearest the start.
-
-    Parameters
-    ----------
-    pose : array_like, shape (23,)
-    skeleton : Skeleton
-    side : {"r", "l"}
-    ray : array_like, shape (3,)
-        Unit direction of the camera ray (camera coordinates).
-
-    Returns
-    -------
-    ndarray, shape (23,), float64
-    """
-    from mocap.body.kinematics import joint_positions
-    from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX
-
-    q = np.asarray(pose, dtype=np.float64).copy()
-    d = np.asarray(ray, dtype=np.float64)
-    idx = [PARAMETER_INDEX[f"{side}_{a}"] for a in HAND_ANGLES]
-    lower, upper = JOINT_LIMITS[idx, 0], JOINT_LIMITS[idx, 1]
-    start = np.clip(q[idx], lower, upper)
-    hand = JOINT_INDEX[f"{side}_hand"]
-
-    def residual(x):
-        q[idx] = x
-        h = joint_positions(q, skeleton)[hand]
-        return np.concatenate([1e3 * (h - (h @ d) * d), 0.01 * (x - start)])
-
-    x, r, lam = start.copy(), residual(start), 1e-3
-    cost = float(r @ r)
-    for _ in range(HAND_ITERATIONS):
-        if cost < 1e-6:
-            break
-        jac = np.empty((len(r), 3))
-        for i in range(3):
-            step = np.zeros(3)
-            step[i] = 1e-6
-            jac[:, i] = (residual(x + step) - r) / 1e-6
-        jtj, g = jac.T @ jac, jac.T @ r
-        for _try in range(6):
-            trial = np.clip(x - np.linalg.solve(jtj + lam * (np.diag(np.diag(jtj)) + 1e-9 * np.eye(3)), g), lower, upper)
-            rt = residual(trial)
-            if float(rt @ rt) < cost:
-                x, r, cost, lam = trial, rt, float(rt @ rt), lam * 0.3
-                break
-            lam *= 10.0
-        else:
-            break
-    q[idx] = x
-    return q
-
-
-def mirror_alternatives(pose, model) -> list[Alternative]:
-    """The depth alternatives of ``pose`` (see the module), built from :func:`mocap.body.jumps.arm_jumps`.
-
-    Each arm jump is solved twice (its two closed-form solutions judged by the shoulder's limits
-    and by all four arm angles' limits), clamped to the joint limits, and the one whose elbow and
-    wrist lie nearer the exact mirror is kept; it is pruned when still more than
-    :data:`PRUNE_TOLERANCE_M` off. The hand is then put back on its own camera ray by the forearm
-    twist and the wrist angles (:func:`hand_on_ray`), so every joint keeps its projection where
-    the limits allow.
+    Built without pruning, then marked pruned by the tracker's own thresholds: the placed arm more
+    than :data:`~mocap.track.branches.MAX_MISS_M` off the exact mirror (the joint limits do not let
+    it take the other branch) or a joint's projection moved more than
+    :data:`~mocap.track.branches.MAX_SHIFT_PX`. A mirror whose arm moves less than
+    :data:`~mocap.track.branches.MIN_CHANGE_M` is left out, as the tracker does.
 
     Parameters
     ----------
     pose : array_like, shape (23,)
     model : BodyModel
+    camera : Camera
 
     Returns
     -------
     list of Alternative
-        In :data:`SLOTS` order; a mirror whose ray misses the bone's sphere is left out.
+        In :data:`SLOTS` order.
     """
-    q = np.asarray(pose, dtype=np.float64)
-    skeleton = model.skeleton
-    out = []
-    joints = model.joint_positions(q)
-    for side in SIDES:
-        arm = [JOINT_INDEX[f"{side}_{j}"] for j in ("elbow", "wrist")]
-        hand = joints[JOINT_INDEX[f"{side}_hand"]]
-        for name, exact in arm_jumps(q, skeleton, side).items():
-            target = model.joint_positions(exact)[arm]
-            best, miss = None, math.inf
-            for judged in (JUMP_JUDGED_ANGLES, ARM_ANGLES):
-                solved = clamp_to_limits(arm_angles_for_points(q, skeleton, side, target[0], target[1], judged=judged))
-                m = float(np.linalg.norm(model.joint_positions(solved)[arm] - target, axis=1).max())
-                if m < miss:
-                    best, miss = solved, m
-            out.append(Alternative(f"{side}_{name}", hand_on_ray(best, skeleton, side, hand / np.linalg.norm(hand)),
-                                   miss > PRUNE_TOLERANCE_M))
-    return out
+    from mocap.track.branches import MAX_MISS_M, MAX_SHIFT_PX, depth_alternatives
+
+    return [Alternative(f"{a.side}_{FLIP_NAMES[a.flipped]}", a.pose, a.miss_m > MAX_MISS_M or a.shift_px > MAX_SHIFT_PX)
+            for a in depth_alternatives(pose, model, camera, max_shift_px=1e9, max_miss_m=1e9)]
 
 
 def depth_order_disagreements(joints, world) -> float:
@@ -258,7 +179,8 @@ def cue_vector(tracker, costs, keypoint_cost, lifted, world, pose, region=None, 
 
 
 def audit_frames(model, camera, config: TrackerConfig, truth_poses, prepared, keypoints, evaluations: int,
-                 alternatives=mirror_alternatives, progress: bool = False, description: str = "auditing") -> dict:
+                 alternatives=mirror_alternatives, progress: bool = False, description: str = "auditing",
+                 stride: int = 1) -> dict:
     """The audit's raw measurements on a run of frames.
 
     Parameters
@@ -273,7 +195,10 @@ def audit_frames(model, camera, config: TrackerConfig, truth_poses, prepared, ke
     evaluations : int
         Every candidate's refinement budget.
     alternatives : callable
-        ``alternatives(pose, model) -> list[Alternative]`` (default :func:`mirror_alternatives`).
+        ``alternatives(pose, model, camera) -> list[Alternative]`` (default :func:`mirror_alternatives`).
+    stride : int
+        Audit every ``stride``-th frame only (the others stay empty: ``exists`` False); the
+        unit's ``stride`` records it.
 
     Returns
     -------
@@ -302,8 +227,9 @@ def audit_frames(model, camera, config: TrackerConfig, truth_poses, prepared, ke
            "refined_evaluations": np.zeros((n, s), np.int64),
            "truth_joints": np.array([model.joint_positions(q) for q in truth_poses]),
            "leader_exists": np.zeros((n, s), bool), "leader_pruned": np.zeros((n, s), bool),
-           "leader_joints": np.full((n, s, len(JOINT_NAMES), 3), np.nan), "leader": np.full((n, s, c), np.nan)}
-    for i in tqdm(range(n), desc=description, unit="frame", disable=not progress):
+           "leader_joints": np.full((n, s, len(JOINT_NAMES), 3), np.nan), "leader": np.full((n, s, c), np.nan),
+           "stride": np.array(int(stride))}
+    for i in tqdm(range(0, n, stride), desc=description, unit="frame", disable=not progress):
         if prepared[i].is_empty:
             continue
         costs = tracker.costs(prepared[i])
@@ -312,7 +238,7 @@ def audit_frames(model, camera, config: TrackerConfig, truth_poses, prepared, ke
         lifted = tracker.lifting.lift(kp, camera, model) if tracker.lifting is not None else None
         world = None if kp is None else kp.world
         truth = clamp_to_limits(np.asarray(truth_poses[i], dtype=np.float64))
-        candidates = [("truth", truth, False)] + [(a.name, a.pose, a.pruned) for a in alternatives(truth, model)]
+        candidates = [("truth", truth, False)] + [(a.name, a.pose, a.pruned) for a in alternatives(truth, model, camera)]
         for name, pose, pruned in candidates:
             k = SLOTS.index(name)
             out["exists"][i, k], out["pruned"][i, k] = True, pruned
@@ -330,7 +256,7 @@ def audit_frames(model, camera, config: TrackerConfig, truth_poses, prepared, ke
                 out["leader_exists"][i, 0] = True
                 out["leader_joints"][i, 0] = out["refined_joints"][i, 0]
                 out["leader"][i, 0] = out["refined"][i, 0]
-                for a in alternatives(reg.pose, model):
+                for a in alternatives(reg.pose, model, camera):
                     j = SLOTS.index(a.name)
                     out["leader_exists"][i, j], out["leader_pruned"][i, j] = True, a.pruned
                     out["leader_joints"][i, j] = model.joint_positions(a.pose)
@@ -394,7 +320,7 @@ def mediapipe_keypoints(frames, cache: Path) -> list:
 
 def audit_sequence(sequence: str, seed: int, root: Path, config: TrackerConfig, evaluations: int,
                    sigma_px: float = ORACLE_SIGMA_PX, frames: int | None = None, progress: bool = False,
-                   motion: str | None = None, keypoint_source: str = "oracle") -> dict:
+                   motion: str | None = None, keypoint_source: str = "oracle", stride: int = 1) -> dict:
     """:func:`audit_frames` on a benchmark sequence (``motion``: driven by that clip; generated
     under ``root`` if not there) with the oracle keypoints of its truth (``sigma_px``, seeded by
     ``seed``) or MediaPipe's (:func:`mediapipe_keypoints`)."""
@@ -415,7 +341,7 @@ def audit_sequence(sequence: str, seed: int, root: Path, config: TrackerConfig, 
     else:
         raise ValueError(f"keypoint_source must be one of {KEYPOINT_SOURCES}, got {keypoint_source!r}")
     return audit_frames(loaded.model, camera, config, truth, prepared[:n], keypoints, evaluations,
-                        progress=progress, description=f"{spec.name} s{seed}")
+                        progress=progress, description=f"{spec.name} s{seed}", stride=stride)
 
 
 # -- analysis ----------------------------------------------------------------------------------
@@ -521,12 +447,13 @@ def frame_rates(n: int, sp: dict, separated: np.ndarray | None = None) -> dict:
 WINDOW = 9
 
 
-def window_rates(n: int, sp: dict, window: int = WINDOW) -> np.ndarray:
+def window_rates(n: int, sp: dict, window: int = WINDOW, stride: int = 1) -> np.ndarray:
     """Evidence accumulated over windows: per cue, whether the cue's differences (alternative minus
     truth) summed over ``window`` consecutive frames favour the truth.
 
     Each alternative slot is a branch followed through time; a window counts for a slot when the
-    slot is compared on at least half its frames, and the sum runs over those frames.
+    slot is compared on at least half its audited frames (every ``stride``-th), and the sum runs
+    over those frames.
 
     Parameters
     ----------
@@ -546,8 +473,9 @@ def window_rates(n: int, sp: dict, window: int = WINDOW) -> np.ndarray:
         diff = np.full((n, len(COLUMNS)), np.nan)
         diff[sp["frame"][sel]] = sp["diff"][sel]
         present = np.isfinite(diff[:, 0])
-        for start in range(0, max(n - window + 1, 0)):
-            if present[start:start + window].sum() * 2 < window:
+        audited = max(1, -(-window // stride))
+        for start in range(0, max(n - window + 1, 0), stride):
+            if present[start:start + window].sum() * 2 < audited:
                 continue
             total = np.nansum(diff[start:start + window], axis=0)
             margin = TIE_RELATIVE * np.maximum(1.0, np.nansum(np.abs(diff[start:start + window]), axis=0))
@@ -604,10 +532,11 @@ def summarise(units: dict[tuple[str, int], dict]) -> dict:
     stages = [st for st in STAGES if all(st != "leader" or "leader" in p for p in per_pair.values())]
     sp = {(k, st): stage_pairs(per_pair[k], st) for k in units for st in stages}
     n_of = {k: u["exists"].shape[0] for k, u in units.items()}
-    out = {"settings": {"distinct_m": DISTINCT_M, "prune_tolerance_m": PRUNE_TOLERANCE_M, "tie_relative": TIE_RELATIVE,
+    stride_of = {k: int(u.get("stride", 1)) for k, u in units.items()}
+    out = {"settings": {"distinct_m": DISTINCT_M, "tie_relative": TIE_RELATIVE,
                         "window": WINDOW},
            "stages": stages, "per_sequence": {}, "pooled": {}, "per_alternative": {}}
-    out["frames"] = sum(n_of.values())
+    out["frames"] = sum(int(u["exists"][:, 0].sum()) for u in units.values())
     out["frames_with_pruned_mirror"] = sum(int(u["pruned"][:, 1:].any(axis=1).sum()) for u in units.values())
     out["pruned_share_of_alternatives"] = sum(int(u["pruned"][:, 1:].sum()) for u in units.values()) / max(
         1, sum(int(u["exists"][:, 1:].sum()) for u in units.values()))
@@ -642,7 +571,7 @@ def summarise(units: dict[tuple[str, int], dict]) -> dict:
                 if not measured[i]:             # a cue without values (world on true 2D)
                     rate[c] = math.nan
             rate["pairs"], rate["pair_truth_better"] = int(len(sep)), _shares(sep, measured)
-            w = np.vstack([window_rates(n_of[k], sp[k, st]) for k in keys])
+            w = np.vstack([window_rates(n_of[k], sp[k, st], stride=stride_of[k]) for k in keys])
             single = [COLUMNS.index(c) for c in CUES]
             rate["windows"], rate["window_truth_better"] = int(len(w)), _shares(w, measured)
             rate["window_floor"] = float((~w[:, single].any(axis=1)).mean()) if len(w) else math.nan
@@ -712,10 +641,12 @@ def tables(summary: dict) -> str:
 
 
 # -- units on disk ------------------------------------------------------------------------------
-def unit_path(out: Path, name: str, seed: int, evaluations: int, frames: int | None, keypoints: str = "oracle") -> Path:
-    """Where a unit is stored: ``out/units/<clip>-s<seed>-e<evaluations>[-<keypoints>][-f<frames>].npz``."""
+def unit_path(out: Path, name: str, seed: int, evaluations: int, frames: int | None, keypoints: str = "oracle",
+              stride: int = 1) -> Path:
+    """Where a unit is stored: ``out/units/<clip>-s<seed>-e<evaluations>[-<keypoints>][-f<frames>][-x<stride>].npz``."""
     source = "" if keypoints == "oracle" else f"-{keypoints}"
-    return out / "units" / f"{name}-s{seed}-e{evaluations}{source}{'' if frames is None else f'-f{frames}'}.npz"
+    every = "" if stride == 1 else f"-x{stride}"
+    return out / "units" / f"{name}-s{seed}-e{evaluations}{source}{'' if frames is None else f'-f{frames}'}{every}.npz"
 
 
 def save_unit(path: Path, unit: dict, meta: dict) -> None:
@@ -751,9 +682,9 @@ def measuring_code_key() -> str:
 
     here = Path(__file__).resolve().parent
     digest = hashlib.sha256(code_key(modules=(here / "ambiguity.py", here / "units.py", here / "keypoints.py")).encode())
-    for f in (hand_on_ray, mirror_alternatives, depth_order_disagreements, cue_vector, audit_frames):
+    for f in (mirror_alternatives, depth_order_disagreements, cue_vector, audit_frames):
         digest.update(inspect.getsource(f).encode())
-    digest.update(repr((SLOTS, COLUMNS, PRUNE_TOLERANCE_M, ORACLE_SIGMA_PX, ARM_BONES)).encode())
+    digest.update(repr((SLOTS, COLUMNS, ORACLE_SIGMA_PX, ARM_BONES)).encode())
     return digest.hexdigest()[:12]
 
 
@@ -775,6 +706,7 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--evaluations", type=int, default=200,
                        help="every candidate's refinement budget (default 200)")
         s.add_argument("--frames", type=int, default=None, help="first frames only (default: full length)")
+        s.add_argument("--stride", type=int, default=1, help="audit every N-th frame only (default 1: every frame)")
         s.add_argument("--config", type=Path, default=None, help="TrackerConfig JSON (default: the tracker's)")
         s.add_argument("--out", type=Path, default=RESULTS_DIR / "branch_audit", help="results folder")
         s.add_argument("--json", action="store_true", help="print the summary as JSON instead of the tables")
@@ -794,8 +726,8 @@ def main(argv=None) -> int:
         seeds = tuple(int(v) for v in args.seeds.split(",") if v.strip())
     except ValueError:
         seeds = ()
-    if not seeds or args.evaluations < 1 or (args.frames is not None and args.frames < 1):
-        print("error: --seeds takes comma-separated integers, --evaluations and --frames positive integers",
+    if not seeds or args.evaluations < 1 or args.stride < 1 or (args.frames is not None and args.frames < 1):
+        print("error: --seeds takes comma-separated integers, --evaluations, --stride and --frames positive integers",
               file=sys.stderr)
         return 2
     config = TrackerConfig.from_json(args.config) if args.config is not None else TrackerConfig()
@@ -812,11 +744,12 @@ def main(argv=None) -> int:
         for name, motion, length in clips:
             label = name if motion is None else f"{name}+{Path(motion).stem}"
             frames = args.frames if args.frames is not None else (None if args.material == "benchmark" else length)
-            path = unit_path(args.out, label, seed, args.evaluations, frames, args.keypoints)
+            path = unit_path(args.out, label, seed, args.evaluations, frames, args.keypoints, args.stride)
             unit = load_unit(path, meta if args.command == "measure" else None)
             if unit is None and args.command == "measure":
                 unit = audit_sequence(name, seed, args.out, config, args.evaluations, frames=frames,
-                                      progress=not args.no_progress, motion=motion, keypoint_source=args.keypoints)
+                                      progress=not args.no_progress, motion=motion, keypoint_source=args.keypoints,
+                                      stride=args.stride)
                 save_unit(path, unit, meta)
             if unit is not None:
                 units[(label, seed)] = unit

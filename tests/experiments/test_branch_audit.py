@@ -44,7 +44,7 @@ def audited():
 def test_the_alternatives_keep_the_projections_and_the_bone_lengths():
     truth = reaching_pose()
     joints = MODEL.joint_positions(truth)
-    alternatives = mirror_alternatives(truth, MODEL)
+    alternatives = mirror_alternatives(truth, MODEL, CAMERA)
     assert [a.name for a in alternatives] == list(SLOTS[1:])          # every mirror of this pose exists
     assert [a.name for a in alternatives if a.pruned] == ["r_forearm", "l_forearm"]
     from mocap.body.jumps import arm_jumps
