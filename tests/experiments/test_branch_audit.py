@@ -120,7 +120,7 @@ def test_ties_and_missing_values_never_separate():
     assert truth_better([1.0, 1.0, 1.0, np.nan], [1.0 + 1e-9, 1.1, 0.9, 2.0]).tolist() == [False, True, False, False]
 
 
-def test_the_floor_counts_frames_with_a_pair_no_single_cue_separates():
+def test_the_floor_counts_frames_with_a_pair_no_single_cue_separates(tmp_path):
     n, s, c = 3, len(SLOTS), len(COLUMNS)
     truth_joints = np.zeros((n, 10, 3))
     start = np.zeros((n, s, 10, 3))
@@ -139,6 +139,9 @@ def test_the_floor_counts_frames_with_a_pair_no_single_cue_separates():
     summary = summarise({("gestures-1", 0): unit})
     assert summary["pooled"]["refined"]["floor"] == pytest.approx(1 / 3)
     assert summary["pooled"]["unrefined"]["pair_truth_better"]["edge"] == pytest.approx(1 - 1 / 13)
+    from experiments.figures import ext_branch_audit
+    written = ext_branch_audit.main(summary, tmp_path)
+    assert sorted(p.name for p in written) == ["ext_branch_audit.pdf", "ext_branch_audit.png"]
 
 
 def test_depth_order_disagreements_count_arm_bones():
