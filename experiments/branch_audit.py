@@ -20,9 +20,9 @@ candidate). The cues (:data:`CUES`, lower is better for each):
   experiments' oracle keypoints: :func:`experiments.keypoints.oracle_keypoints`);
 * ``lifter``: the lifter term (:meth:`mocap.track.proposals.LifterSource.energy`, nats, capped);
 * ``prior``: the pose prior's energy (nats);
-* ``world``: the number of arm bones whose depth order (child nearer or farther than its parent)
-  disagrees with the keypoints' own 3D (MediaPipe's world landmarks); NaN without them (the
-  oracle keypoints have none);
+* ``world``: the number of arm bones whose depth branch (the child's depth along its camera ray
+  relative to the parent, :func:`depth_order_disagreements`) disagrees with the keypoints' own 3D
+  (MediaPipe's world landmarks); NaN without them (the oracle keypoints have none);
 * and two weighted sums: ``region_edge`` (``REGION_WEIGHT * F + edge_weight * edge``, the
   tracker's weights) and ``score`` (the tracker's whole unary score with keypoints: plus
   ``keypoint_weight``, ``prior_weight`` and ``lifter_weight`` times theirs).
@@ -133,7 +133,13 @@ def mirror_alternatives(pose, model, camera) -> list[Alternative]:
 
 
 def depth_order_disagreements(joints, world) -> float:
-    """Arm bones whose depth order disagrees with a detector's 3D.
+    """Arm bones whose depth branch disagrees with a detector's 3D.
+
+    A bone's branch is the sign of its child's depth along the child's own camera ray relative to
+    the parent, ``(child - parent) . ray``: what a depth mirror flips (the joints' z difference
+    does not flip for a bone seen off the optical axis: an arm hanging below a camera at chest
+    height keeps the hand nearer in z on both branches). The detector's 3D is read along the same
+    ray (its origin is free, its axes the camera's).
 
     Parameters
     ----------
@@ -145,8 +151,8 @@ def depth_order_disagreements(joints, world) -> float:
     Returns
     -------
     float
-        How many of :data:`ARM_BONES` have the child nearer than the parent in one and farther in
-        the other (bones with an absent joint left out); NaN without ``world``.
+        How many of :data:`ARM_BONES` have opposite signs (bones with an absent joint left out);
+        NaN without ``world``.
     """
     if world is None:
         return math.nan
@@ -154,8 +160,9 @@ def depth_order_disagreements(joints, world) -> float:
     count = 0
     for parent, child in ARM_BONES:
         a, b = JOINT_INDEX[parent], JOINT_INDEX[child]
-        dw = w[b, 2] - w[a, 2]
-        if np.isfinite(dw) and dw != 0.0 and (j[b, 2] - j[a, 2]) * dw < 0.0:
+        ray = j[b] / np.linalg.norm(j[b])
+        dw = float((w[b] - w[a]) @ ray)
+        if np.isfinite(dw) and dw != 0.0 and float((j[b] - j[a]) @ ray) * dw < 0.0:
             count += 1
     return float(count)
 

@@ -146,9 +146,27 @@ def test_the_floor_counts_frames_with_a_pair_no_single_cue_separates(tmp_path):
 
 def test_depth_order_disagreements_count_arm_bones():
     j = np.zeros((10, 3))
-    j[JOINT_INDEX["r_elbow"], 2] = 0.1                   # the right elbow behind its shoulder
-    world = j.copy()
+    j[:, 2] = 2.0                                       # every joint 2 m straight ahead ...
+    j[JOINT_INDEX["r_elbow"], 2] = 2.1                  # ... the right elbow 10 cm behind its shoulder,
+    j[JOINT_INDEX["r_wrist"], 2] = 2.2                  # the wrist 10 cm behind the elbow
+    world = j - 2.0                                     # the detector's own origin
     assert depth_order_disagreements(j, world) == 0.0
-    world[JOINT_INDEX["r_elbow"], 2] = -0.1              # in front, by the detector
-    assert depth_order_disagreements(j, world) == 2.0    # shoulder-elbow and elbow-wrist both disagree
+    world[JOINT_INDEX["r_elbow"], 2] = -0.1             # in front, by the detector ...
+    assert depth_order_disagreements(j, world) == 1.0   # shoulder-elbow disagrees (elbow-wrist: +0.3 agrees)
+    world[JOINT_INDEX["r_wrist"], 2] = -0.2             # ... and the wrist in front of it
+    assert depth_order_disagreements(j, world) == 2.0
     assert math.isnan(depth_order_disagreements(j, None))
+
+
+def test_every_depth_mirror_flips_a_branch_sign_along_the_ray():
+    """The detector's 3D of the truth (any origin) agrees with the truth on every bone and
+    disagrees with each of its depth mirrors on at least one: the sign is read along the child's
+    ray, which a mirror flips (the joints' z difference need not flip off the optical axis)."""
+    q = reaching_pose()
+    truth = MODEL.joint_positions(q)
+    world = truth - truth[1]
+    assert depth_order_disagreements(truth, world) == 0.0
+    kept = [a for a in mirror_alternatives(q, MODEL, CAMERA) if not a.pruned]
+    assert kept
+    for a in kept:
+        assert depth_order_disagreements(MODEL.joint_positions(a.pose), world) >= 1.0, a.name
