@@ -99,6 +99,10 @@ def available() -> bool:
     """Whether MediaPipe (the optional extra ``keypoints``) is installed here: what
     ``--keypoints auto`` asks. Its package is looked for, not imported (an import of about 2 s,
     which the detector's own process makes)."""
+    return _installed()
+
+
+def _installed() -> bool:
     return importlib.util.find_spec("mediapipe") is not None
 
 
@@ -152,7 +156,7 @@ def mediapipe_process(*, depth: int = 3, image_mode: bool = True) -> KeypointPro
     ValueError
         When MediaPipe is not installed (:data:`MISSING_EXTRA`), at once.
     """
-    if not available():
+    if not _installed():
         raise ValueError(MISSING_EXTRA)
     make = PoseLandmarks if image_mode else functools.partial(PoseLandmarks, image_mode=False)
     return KeypointProcess(make, keypoints_of_landmarks, depth=depth, description=describe(image_mode))
