@@ -34,6 +34,7 @@ import socket
 import subprocess
 import sys
 import time
+import weakref
 from collections.abc import Callable
 from multiprocessing.connection import Connection
 from multiprocessing import shared_memory
@@ -96,6 +97,7 @@ class KeypointProcess:
                                              stdin=subprocess.DEVNULL)
         self.pid = self._process.pid
         self._conn = Connection(ours.detach())
+        self._finalizer = weakref.finalize(self, _end, self._process, self._conn, self._slots)
         try:
             self._conn.send(list(sys.path))
             self._conn.send(make)
@@ -188,26 +190,11 @@ class KeypointProcess:
                              "stops here (its frames so far are kept; the same command resumes it)")
 
     def close(self) -> None:
-        """End the child (it finishes the frame it is on) and free the shared memory; safe to call twice."""
-        if self._closed:
-            return
+        """End the child (it finishes the frame it is on) and free the shared memory; safe to
+        call twice (and done at the interpreter's exit for a source never closed)."""
         self._closed = True
-        try:
-            self._conn.send(None)
-        except OSError:
-            pass
-        self._conn.close()
-        try:
-            self._process.wait(timeout=_CLOSE_WAIT_S)
-        except subprocess.TimeoutExpired:
-            self._process.kill()
-            self._process.wait()
-        for memory in self._slots:
-            if memory is not None:
-                memory.close()
-                memory.unlink()
-        self._slots = [None] * self.depth
         self._order.clear()
+        self._finalizer()
 
     def __enter__(self) -> "KeypointProcess":
         return self
@@ -215,9 +202,24 @@ class KeypointProcess:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def __del__(self) -> None:
-        if not getattr(self, "_closed", True):
-            self.close()
+
+def _end(process: subprocess.Popen, conn: Connection, slots: list) -> None:
+    """Tell the child to stop, wait for it (kill it after :data:`_CLOSE_WAIT_S`), free the memory."""
+    try:
+        conn.send(None)
+    except OSError:
+        pass
+    conn.close()
+    try:
+        process.wait(timeout=_CLOSE_WAIT_S)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+    for k, memory in enumerate(slots):
+        if memory is not None:
+            memory.close()
+            memory.unlink()
+            slots[k] = None
 
 
 def _attach(name: str) -> shared_memory.SharedMemory:
