@@ -24,6 +24,10 @@ What can go wrong, and what it leaves behind:
 * The parent dies, even by SIGKILL: the child's socket closes, its next read ends, and it exits
   (no orphan); the shared memory is unlinked by the parent's resource tracker, which ends too.
 * Ctrl-C: the child ignores SIGINT (the terminal sends it to both), the parent decides.
+
+The child is a plain subprocess, not a :mod:`multiprocessing` one: a Dask nanny's worker
+(``track-many``) is a daemonic process, which may not have multiprocessing children. POSIX only
+(the socket is passed by its file descriptor).
 """
 from __future__ import annotations
 
@@ -118,7 +122,8 @@ class KeypointProcess:
             raise ValueError(f"{self.depth} frames are in the keypoint process already: take one first")
         image = np.ascontiguousarray(image)
         if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
-            raise ValueError(f"the keypoint process needs an RGB uint8 frame (H, W, 3), got {image.shape} {image.dtype}")
+            raise ValueError(f"the keypoint process needs an RGB uint8 frame (H, W, 3), got {image.shape} "
+                             f"{image.dtype}")
         slot = self._sent % self.depth
         memory = self._slots[slot]
         if memory is None or memory.size < image.nbytes:
