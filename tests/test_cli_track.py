@@ -160,14 +160,16 @@ def test_keypoint_file_through_track_and_a_malformed_one_is_one_line(sequence, t
 
 @pytest.mark.mediapipe                  # (the real import check, made to fail here)
 def test_keypoints_auto_without_the_extra_tracks_as_before_and_says_so(sequence, tmp_path, capsys, monkeypatch):
-    """The commands' default ``--keypoints auto`` where MediaPipe does not import (its import
-    made to fail): the same poses as ``--keypoints none``, and the output and run.json say so."""
+    """The commands' default ``--keypoints auto`` where MediaPipe is not installed (its package
+    made not to be found, and its import to fail): the same poses as ``--keypoints none``, and
+    the output and run.json say so."""
     import builtins
+    import importlib.util
 
     from mocap.io import mediapipe_keypoints
     from mocap.run import advice
 
-    real_import = builtins.__import__
+    real_import, real_find_spec = builtins.__import__, importlib.util.find_spec
 
     def no_mediapipe(name, *args, **kwargs):
         if name.split(".")[0] == "mediapipe":
@@ -175,6 +177,8 @@ def test_keypoints_auto_without_the_extra_tracks_as_before_and_says_so(sequence,
         return real_import(name, *args, **kwargs)
 
     monkeypatch.setattr(builtins, "__import__", no_mediapipe)
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *args: None if name.split(".")[0] == "mediapipe" else real_find_spec(name, *args))
     monkeypatch.setattr(advice, "MOSTLY_FAILED", -1.0)     # every run ends with its advice
     assert not mediapipe_keypoints.available()
     args = ["--iterations", "60", "--max-frames", "3", "--no-overlay"]

@@ -20,29 +20,30 @@ wrists their landmarks, ``*_hand`` the mean of the wrist, index and pinky landma
 centre, where the model's hand joint is). ``neck`` has no landmark and is left absent. A joint
 whose landmarks are averaged takes their smallest visibility.
 
-What MediaPipe and its dependencies print about themselves does not reach the terminal: the
-Python warning of protobuf's deprecated ``SymbolDatabase.GetPrototype`` (ignored by a filter on
-that message and module alone, set where MediaPipe is imported) and the lines its native code
-writes to the process's stderr when its graph opens (TensorFlow Lite's delegate, absl's
-logging notice, the feedback manager's warning: :data:`NATIVE_NOISE`, dropped from what is
-written there while the graph opens, which the constructor waits for; any other line is passed
-on).
+The run's detector works in a process of its own (:func:`mediapipe_process`, a
+:class:`~mocap.io.keypoint_process.KeypointProcess` running :class:`~mocap.io.mediapipe_pose.PoseLandmarks`),
+so that MediaPipe's import, graph and result conversion do not hold the tracker's interpreter
+lock; :class:`MediaPipeKeypoints` is the same detector in this process (the experiments'). Both
+make their joints of the same landmarks with :func:`keypoints_of_landmarks`: their keypoints are
+the same bit for bit. :func:`available` asks whether MediaPipe is installed without importing it
+(about 2 s), so that a run's process never imports it.
 """
 from __future__ import annotations
 
-import os
-import re
-import sys
-import tempfile
+import functools
+import importlib.util
 import time
-import warnings
-from contextlib import contextmanager
 from types import MappingProxyType
 
 import numpy as np
 
 from mocap.body.skeleton import JOINT_NAMES
+from mocap.io.keypoint_process import KeypointProcess
 from mocap.io.keypoints import Keypoints
+from mocap.io.mediapipe_pose import MISSING_EXTRA, N_LANDMARKS, NATIVE_NOISE, PoseLandmarks, describe
+
+__all__ = ["MEDIAPIPE_LANDMARKS", "MISSING_EXTRA", "MIN_WORLD_VISIBILITY", "MediaPipeKeypoints", "N_LANDMARKS",
+           "NATIVE_NOISE", "available", "keypoints_of_landmarks", "mediapipe_process", "world_joints"]
 
 #: MediaPipe Pose landmark indices averaged into each joint (absent joints have none).
 MEDIAPIPE_LANDMARKS = MappingProxyType({
@@ -50,13 +51,6 @@ MEDIAPIPE_LANDMARKS = MappingProxyType({
     "r_shoulder": (12,), "r_elbow": (14,), "r_wrist": (16,), "r_hand": (16, 18, 20),
     "l_shoulder": (11,), "l_elbow": (13,), "l_wrist": (15,), "l_hand": (15, 17, 19),
 })
-#: What to install for ``--keypoints mediapipe``.
-MISSING_EXTRA = ("--keypoints mediapipe needs MediaPipe Pose, the optional extra 'keypoints': "
-                 "pip install 'mocap[keypoints]' (or give a keypoint file: --keypoints FILE.csv)")
-
-
-#: Number of MediaPipe Pose landmarks.
-N_LANDMARKS = 33
 #: Least visibility of a world landmark taken as present by :func:`world_joints`.
 MIN_WORLD_VISIBILITY = 0.5
 
@@ -102,17 +96,75 @@ def world_joints(world_landmarks, visibility, min_visibility: float = MIN_WORLD_
 
 
 def available() -> bool:
-    """Whether MediaPipe Pose (the optional extra ``keypoints``) imports here: what
-    ``--keypoints auto`` asks (an import of about 2 s the first time)."""
-    try:
-        from mediapipe.python.solutions import pose  # noqa: F401
-    except ImportError:
-        return False
-    return True
+    """Whether MediaPipe (the optional extra ``keypoints``) is installed here: what
+    ``--keypoints auto`` asks. Its package is looked for, not imported (an import of about 2 s,
+    which the detector's own process makes)."""
+    return _installed()
+
+
+def _installed() -> bool:
+    return importlib.util.find_spec("mediapipe") is not None
+
+
+def keypoints_of_landmarks(landmarks: tuple[np.ndarray | None, np.ndarray | None], height: int, width: int
+                           ) -> Keypoints:
+    """The model's keypoints of one frame's MediaPipe landmarks
+    (:meth:`mocap.io.mediapipe_pose.PoseLandmarks.detect`).
+
+    Parameters
+    ----------
+    landmarks : (ndarray (33, 4) or None, ndarray (33, 4) or None)
+        The normalised landmarks and the world landmarks (metres), each with its visibility.
+    height, width : int, pixels
+        The frame's size.
+
+    Returns
+    -------
+    Keypoints
+        Input pixels; empty when no person was found. Their ``world`` holds MediaPipe's
+        world joints (:func:`world_joints`; all NaN when no person was found).
+    """
+    image, world = landmarks
+    none = np.full((len(JOINT_NAMES), 3), np.nan)     # the world columns: none this frame
+    if image is None:
+        empty = Keypoints.empty()
+        return Keypoints(empty.uv, empty.confidence, none)
+    joints = {}
+    for name, indices in MEDIAPIPE_LANDMARKS.items():
+        points = np.array([(image[i, 0] * width, image[i, 1] * height) for i in indices])
+        confidence = min(float(np.clip(image[i, 3], 0.0, 1.0)) for i in indices)
+        joints[name] = (*points.mean(axis=0), confidence)
+    flat = Keypoints.from_mapping(joints)
+    if world is None:
+        return Keypoints(flat.uv, flat.confidence, none)
+    xyz, _ = world_joints(world[:, :3], world[:, 3])
+    return Keypoints(flat.uv, flat.confidence, xyz)
+
+
+def mediapipe_process(*, depth: int = 3, image_mode: bool = True) -> KeypointProcess:
+    """MediaPipe Pose in a process of its own (the run's detector; see the module), started now:
+    its import and graph overlap what the caller does next.
+
+    Parameters
+    ----------
+    depth : int
+        Frames in flight at most (:class:`~mocap.io.keypoint_process.KeypointProcess`).
+    image_mode : bool
+
+    Raises
+    ------
+    ValueError
+        When MediaPipe is not installed (:data:`MISSING_EXTRA`), at once.
+    """
+    if not _installed():
+        raise ValueError(MISSING_EXTRA)
+    make = PoseLandmarks if image_mode else functools.partial(PoseLandmarks, image_mode=False)
+    return KeypointProcess(make, keypoints_of_landmarks, depth=depth, description=describe(image_mode))
 
 
 class MediaPipeKeypoints:
-    """A :class:`~mocap.io.keypoints.KeypointSource` running MediaPipe Pose on each frame.
+    """A :class:`~mocap.io.keypoints.KeypointSource` running MediaPipe Pose on each frame, in
+    this process (the run's is :func:`mediapipe_process`).
 
     Image mode by default: every frame on its own (see the module); with ``image_mode=False``,
     video mode, where frames must come in order (MediaPipe tracks the person between them). Use
@@ -135,25 +187,12 @@ class MediaPipeKeypoints:
     """
 
     def __init__(self, *, image_mode: bool = True) -> None:
-        try:
-            from mediapipe.python.solutions import pose as mp_pose
-        except ImportError:
-            raise ValueError(MISSING_EXTRA) from None
-        from mediapipe import __version__
-
-        # protobuf 4's deprecation of what MediaPipe's result conversion calls (every frame)
-        warnings.filterwarnings("ignore", message=r"SymbolDatabase\.GetPrototype\(\) is deprecated",
-                                category=UserWarning, module=r"google\.protobuf\.symbol_database")
-
-        with _native_noise_dropped():       # the graph opens its calculators on threads of its own: waited for
-            self._pose = mp_pose.Pose(static_image_mode=image_mode, model_complexity=1)
-            self._pose._graph.wait_until_idle()
+        self._pose = PoseLandmarks(image_mode=image_mode)
         self.milliseconds: list[float] = []
-        mode = "image" if image_mode else "video"
-        self.description = f"mediapipe {__version__} pose, model complexity 1, {mode} mode"
+        self.description = describe(image_mode)
 
     def keypoints(self, frame_index: int, image: np.ndarray | None) -> Keypoints:
-        """Keypoints of one frame.
+        """Keypoints of one frame (:func:`keypoints_of_landmarks`).
 
         Parameters
         ----------
@@ -161,36 +200,11 @@ class MediaPipeKeypoints:
             Unused (video mode relies on the frames' order).
         image : ndarray, shape (H, W, 3), uint8
             The input-resolution RGB frame.
-
-        Returns
-        -------
-        Keypoints
-            Input pixels; empty when no person was found. Their ``world`` holds MediaPipe's
-            world joints (:func:`world_joints`; all NaN when no person was found).
         """
-        if image is None or image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
-            raise ValueError(f"MediaPipe needs an RGB uint8 frame (H, W, 3), got "
-                             f"{getattr(image, 'shape', None)} {getattr(image, 'dtype', None)}")
-        height, width = image.shape[:2]
         started = time.perf_counter()
-        result = self._pose.process(np.ascontiguousarray(image))
+        landmarks = self._pose.detect(image)
         self.milliseconds.append(1e3 * (time.perf_counter() - started))
-        none = np.full((len(JOINT_NAMES), 3), np.nan)     # the world columns: none this frame
-        if result.pose_landmarks is None:
-            empty = Keypoints.empty()
-            return Keypoints(empty.uv, empty.confidence, none)
-        landmarks = result.pose_landmarks.landmark
-        joints = {}
-        for name, indices in MEDIAPIPE_LANDMARKS.items():
-            points = np.array([(landmarks[i].x * width, landmarks[i].y * height) for i in indices])
-            confidence = min(float(np.clip(landmarks[i].visibility, 0.0, 1.0)) for i in indices)
-            joints[name] = (*points.mean(axis=0), confidence)
-        flat = Keypoints.from_mapping(joints)
-        if result.pose_world_landmarks is None:
-            return Keypoints(flat.uv, flat.confidence, none)
-        world = result.pose_world_landmarks.landmark
-        xyz, _ = world_joints([(p.x, p.y, p.z) for p in world], [p.visibility for p in world])
-        return Keypoints(flat.uv, flat.confidence, xyz)
+        return keypoints_of_landmarks(landmarks, *image.shape[:2])
 
     def close(self) -> None:
         """Release MediaPipe's graph."""
@@ -201,33 +215,3 @@ class MediaPipeKeypoints:
 
     def __exit__(self, *exc) -> None:
         self.close()
-
-
-#: Lines MediaPipe's native code writes to stderr when its graph starts (regular expressions).
-NATIVE_NOISE = (r"INFO: Created TensorFlow Lite XNNPACK delegate",
-                r"WARNING: All log messages before absl::InitializeLog\(\) is called",
-                r"W\d{4} .*inference_feedback_manager\.cc:\d+\] Feedback manager requires")
-
-
-@contextmanager
-def _native_noise_dropped():
-    """Within the block, what is written to file descriptor 2 (native code's stderr, and
-    Python's) goes to a temporary file; after it, the lines that are not :data:`NATIVE_NOISE`
-    are written to ``sys.stderr`` (nothing is lost, only delayed)."""
-    noise = re.compile("|".join(NATIVE_NOISE))
-    sys.stderr.flush()
-    saved = os.dup(2)
-    with tempfile.TemporaryFile() as caught:
-        os.dup2(caught.fileno(), 2)
-        try:
-            yield
-        finally:
-            sys.stderr.flush()
-            os.dup2(saved, 2)
-            os.close(saved)
-            caught.seek(0)
-            kept = [line for line in caught.read().decode("utf-8", "replace").splitlines(keepends=True)
-                    if not noise.search(line)]
-            if kept:
-                sys.stderr.write("".join(kept))
-                sys.stderr.flush()

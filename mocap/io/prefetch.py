@@ -1,31 +1,130 @@
-"""Work ahead on a thread: the items of an iterator made by a reader thread while the caller
-works on the ones before (decoding and image processing ahead of the tracker); and
-:func:`newest`, the newest item only, for a live source whose delay must not grow.
+"""Work ahead on a thread, the one helper of the run's threads (:class:`Ahead`): the items of an
+iterator made on a thread of their own while the caller works on the ones before. Two ways to
+keep them:
 
-At most ``depth`` finished items wait in between, so the memory it holds is bounded. An error
-in the reader comes out of the caller's loop as it was raised; when the caller stops early
-(a ``break``, an error, Ctrl-C) the reader stops and closes its iterator (ending an ffmpeg
-process). A crash leaves nothing behind: the items are in memory only.
+* :func:`prefetch`: every item, in order, at most ``depth`` waiting (decoding and image
+  processing ahead of the tracker; the keypoint pipeline's detector,
+  :class:`mocap.io.keypoint_pipeline.KeypointPipeline`).
+* :func:`newest`: the newest item only, for a live source whose delay must not grow.
+
+The memory it holds is bounded (``depth`` items, or one). Nothing polls: the reader and the
+caller wait on one condition, which every item, every take and the stop wake. An error in the
+reader comes out of the caller's loop as it was raised, after the items made before it; when
+the caller stops early (a ``break``, an error, Ctrl-C) the reader stops and closes its iterator
+(ending an ffmpeg process). A crash leaves nothing behind: the items are in memory only.
 """
 from __future__ import annotations
 
-import queue
+import collections
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import TypeVar
 
-__all__ = ["Arrival", "newest", "prefetch"]
+__all__ = ["Ahead", "Arrival", "newest", "prefetch"]
 
 T = TypeVar("T")
-_DONE = object()
-#: Seconds a waiting reader sleeps between looks at whether the caller has stopped.
-_POLL_S = 0.1
+#: Seconds the caller waits, once it stops, for the reader thread to end.
+_JOIN_S = 5.0
+
+
+@dataclass(frozen=True)
+class Arrival:
+    """An item of :class:`Ahead`: ``position`` counts every item the iterator gave (taken or
+    dropped) from 0, ``time_s`` is when it came (``time.perf_counter``, seconds)."""
+
+    position: int
+    time_s: float
+    item: object
+
+
+class Ahead(Iterator[Arrival]):
+    """The items of ``make()``, made on a thread of their own (started at once), as :class:`Arrival`.
+
+    Parameters
+    ----------
+    make : callable
+        Returns the iterable; called on the reader thread (a generator starts there).
+    depth : int
+        Items waiting at most (>= 1); with ``drop``, 1.
+    drop : bool
+        Keep only the newest item: the reader never waits, an item not taken yet is dropped when
+        the next comes (the gaps in :attr:`Arrival.position`).
+    name : str
+        The thread's name.
+
+    Iterating gives the arrivals in order (with ``drop``, the newest each time), waiting for one
+    when none is new; :meth:`close` (or the end of the items, or an error) stops the reader.
+    """
+
+    def __init__(self, make: Callable[[], Iterable[T]], depth: int, *, drop: bool = False,
+                 name: str = "reader") -> None:
+        if isinstance(depth, bool) or not isinstance(depth, int) or depth < 1:
+            raise ValueError(f"depth must be a positive integer, got {depth!r}")
+        self.make, self.depth, self.drop = make, 1 if drop else depth, drop
+        self._waiting: collections.deque[Arrival] = collections.deque()
+        self._changed = threading.Condition()
+        self._done, self._error, self._stop = False, None, False
+        self._thread = threading.Thread(target=self._read, name=name, daemon=True)
+        self._thread.start()
+
+    def _read(self) -> None:
+        """The reader thread."""
+        iterator, changed, waiting = None, self._changed, self._waiting
+        try:
+            iterator = iter(self.make())
+            for position, item in enumerate(iterator):
+                arrival = Arrival(position, time.perf_counter(), item)
+                with changed:
+                    while len(waiting) == self.depth and not self.drop and not self._stop:
+                        changed.wait()
+                    if self._stop:
+                        break
+                    if self.drop:
+                        waiting.clear()             # an item not taken yet is dropped
+                    waiting.append(arrival)
+                    changed.notify_all()
+        except BaseException as exc:        # handed to the caller, raised there
+            self._error = exc
+        finally:
+            with changed:
+                self._done = True
+                changed.notify_all()
+            close = getattr(iterator, "close", None)
+            if close is not None:
+                close()
+
+    def __next__(self) -> Arrival:
+        with self._changed:
+            while not self._waiting and not self._done:
+                self._changed.wait()
+            if self._waiting:
+                arrival = self._waiting.popleft()
+                self._changed.notify_all()
+                return arrival
+            error, self._error = self._error, None
+        self.close()
+        if error is not None:
+            raise error
+        raise StopIteration
+
+    def close(self) -> None:
+        """Stop the reader (it closes its iterator) and wait for it (safe to call twice)."""
+        with self._changed:
+            self._stop = True
+            self._changed.notify_all()
+        if self._thread is not threading.current_thread():
+            self._thread.join(timeout=_JOIN_S)
+
+    def __del__(self) -> None:
+        if getattr(self, "_thread", None) is not None and not self._stop:
+            self.close()
 
 
 def prefetch(make: Callable[[], Iterable[T]], depth: int = 4, *, name: str = "reader") -> Iterator[T]:
-    """The items of ``make()``, produced on a thread of their own ``depth`` items ahead.
+    """The items of ``make()``, in order, made on a thread of their own ``depth`` items ahead
+    (:class:`Ahead`).
 
     Parameters
     ----------
@@ -40,58 +139,13 @@ def prefetch(make: Callable[[], Iterable[T]], depth: int = 4, *, name: str = "re
     ------
     The items of ``make()``, in order.
     """
-    if isinstance(depth, bool) or not isinstance(depth, int) or depth < 1:
-        raise ValueError(f"depth must be a positive integer, got {depth!r}")
-    items: queue.Queue = queue.Queue(maxsize=depth)
-    stop = threading.Event()
-
-    def put(item) -> bool:
-        while not stop.is_set():
-            try:
-                items.put(item, timeout=_POLL_S)
-                return True
-            except queue.Full:
-                continue
-        return False
-
-    def read() -> None:
-        iterator = None
-        try:
-            iterator = iter(make())
-            for item in iterator:
-                if not put((True, item)):
-                    break
-            put((True, _DONE))
-        except BaseException as exc:        # handed to the caller, raised there
-            put((False, exc))
-        finally:
-            close = getattr(iterator, "close", None)
-            if close is not None:
-                close()
-
-    thread = threading.Thread(target=read, name=name, daemon=True)
-    thread.start()
+    arrivals = Ahead(make, depth, name=name)
     try:
-        while True:
-            ok, item = items.get()
-            if not ok:
-                raise item
-            if item is _DONE:
-                return
-            yield item
+        for arrival in arrivals:
+            yield arrival.item
     finally:
-        stop.set()
-        thread.join(timeout=5.0)
+        arrivals.close()
 
-
-@dataclass(frozen=True)
-class Arrival:
-    """An item of :func:`newest`: ``position`` counts every item the iterator gave (taken or
-    dropped) from 0, ``time_s`` is when it came (``time.perf_counter``, seconds)."""
-
-    position: int
-    time_s: float
-    item: object
 
 
 def newest(make: Callable[[], Iterable[T]], *, name: str = "grabber") -> Iterator[Arrival]:
@@ -102,48 +156,6 @@ def newest(make: Callable[[], Iterable[T]], *, name: str = "grabber") -> Iterato
 
     Memory: one item waits at most. An error in the reader comes out of the caller's loop; when
     the caller stops, the reader stops and closes its iterator. Dropped items are the gaps in
-    :attr:`Arrival.position`.
+    :attr:`Arrival.position` (:class:`Ahead` with ``drop``).
     """
-    slot: list[Arrival] = []
-    state = {"done": False, "error": None}
-    changed = threading.Condition()
-    stop = threading.Event()
-
-    def read() -> None:
-        iterator = None
-        try:
-            iterator = iter(make())
-            for position, item in enumerate(iterator):
-                arrival = Arrival(position, time.perf_counter(), item)
-                with changed:
-                    slot[:] = [arrival]             # an item not taken yet is dropped
-                    changed.notify_all()
-                if stop.is_set():
-                    break
-        except BaseException as exc:        # handed to the caller, raised there
-            state["error"] = exc
-        finally:
-            with changed:
-                state["done"] = True
-                changed.notify_all()
-            close = getattr(iterator, "close", None)
-            if close is not None:
-                close()
-
-    thread = threading.Thread(target=read, name=name, daemon=True)
-    thread.start()
-    try:
-        while True:
-            with changed:
-                while not slot and not state["done"]:
-                    changed.wait(timeout=_POLL_S)
-                if slot:
-                    arrival = slot.pop()
-                elif state["error"] is not None:
-                    raise state["error"]
-                else:
-                    return
-            yield arrival
-    finally:
-        stop.set()
-        thread.join(timeout=5.0)
+    return Ahead(make, 1, drop=True, name=name)

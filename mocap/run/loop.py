@@ -85,7 +85,7 @@ class RunParams:
         input-size frame)`` of every third frame that shows someone until it returns a set-up,
         which starts a new segment with a fresh tracker. The same frame must give the same answer.
     detect_ahead : int
-        Frames the keypoint source may work ahead on a thread of its own
+        Frames the keypoint source may work ahead, in its own process or on a thread of its own
         (:class:`~mocap.io.keypoint_pipeline.KeypointPipeline`); 0 asks it on the reader thread,
         frame by frame. The outputs are the same either way (timings aside).
     """
@@ -202,20 +202,22 @@ class FrameReader:
                              scene=self.colours.scene)
 
     def __call__(self):
-        """The frames, each with its keypoints when there is a source: the detector runs on a
-        thread of its own (:class:`~mocap.io.keypoint_pipeline.KeypointPipeline`), given each
-        frame as it is decoded, while this thread prepares the frames; a frame is handed on once
-        its keypoints are back (:data:`~mocap.io.keypoint_pipeline.DETECT_AHEAD` frames behind
-        the newest decoded one at most)."""
+        """The frames, each with its keypoints when there is a source: the detector works beside
+        this thread (:class:`~mocap.io.keypoint_pipeline.KeypointPipeline`: MediaPipe in a
+        process of its own, another source on a thread), given each frame as it is decoded,
+        while this thread prepares the frames; a frame is handed on once its keypoints are back
+        (:data:`~mocap.io.keypoint_pipeline.DETECT_AHEAD` frames behind the newest decoded one at
+        most)."""
         frames_in = self.frames_in
         # live, the detector works beside this thread on one frame: frames ahead would be frames late
         ahead = min(self.detect_ahead, 1) if frames_in.live else self.detect_ahead
         pipeline = None if self.keypoints is None or ahead == 0 else KeypointPipeline(self.keypoints, ahead)
         waiting: collections.deque[ReadFrame] = collections.deque()
         start, stop = self.span.start, self.span.stop
+        camera = None
         if frames_in.live and frames_in.real_time:     # the newest frame each time (drops the ones it is too slow for)
-            arrivals = ((start + a.position, a.time_s - self.clock, a.item)
-                        for a in newest(lambda: frames_in.frames(start, stop), name="mocap-camera"))
+            camera = newest(lambda: frames_in.frames(start, stop), name="mocap-camera")
+            arrivals = ((start + a.position, a.time_s - self.clock, a.item) for a in camera)
         else:       # a file's frame time is its own timestamp; a replayed one's when it came
             arrivals = ((index, self.arrived(index), frame)
                         for index, frame in enumerate(frames_in.frames(start, stop), start=start))
@@ -240,6 +242,8 @@ class FrameReader:
                 yield self._with_keypoints(waiting.popleft(), pipeline)
         finally:
             arrivals.close()
+            if camera is not None:
+                camera.close()
             if pipeline is not None:
                 pipeline.close()
 

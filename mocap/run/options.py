@@ -153,7 +153,9 @@ class RunChoices:
         Which, and why for ``auto`` (:func:`resolve_keypoints`): what the command prints and
         ``run.json`` ``settings.own_video.keypoints``.
     keypoint_source : KeypointSource or None
-        The source itself (None for ``"none"``), made once.
+        The source itself (None for ``"none"``), made once; MediaPipe's is a process of its own
+        (:func:`mocap.io.mediapipe_keypoints.mediapipe_process`), started by :meth:`of` and
+        ended by :meth:`close`.
     colour : {"calibration", "face"}
         Where the colour classes are learnt (:data:`COLOUR_SOURCES`); ``face`` only where the
         run learns them itself (:meth:`check_colour`).
@@ -176,6 +178,12 @@ class RunChoices:
         return cls(keypoints="none" if resolved is None else resolved, keypoints_line=line,
                    keypoint_source=_source(resolved, options.keypoints == "auto"), colour=options.colour,
                    background_mode=options.background_mode(sequence_background))
+
+    def close(self) -> None:
+        """End the keypoint source's process, if it has one (safe to call twice)."""
+        close = getattr(self.keypoint_source, "close", None)
+        if close is not None:
+            close()
 
     @property
     def keypoint_cue(self) -> str | None:
@@ -238,9 +246,9 @@ def _source(resolved: str | None, auto: bool):
     ``--keypoints auto`` (said in its description)."""
     if resolved is None:
         return None
-    if resolved == "mediapipe":
-        from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
-        source = MediaPipeKeypoints()
+    if resolved == "mediapipe":       # started now, in a process of its own: its import overlaps the set-up
+        from mocap.io.mediapipe_keypoints import mediapipe_process
+        source = mediapipe_process()
         if auto:
             source.description += " (--keypoints auto)"
         return source

@@ -136,6 +136,7 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
     options = OwnVideoOptions() if options is None else options
     opened = RunInput.open(source, options)
     frames_in = opened.frames
+    choices = None
     try:
         choices = RunChoices.of(options, opened.sequence_background)     # a bad keypoint file stops here
         with compiling_announced(progress, "the set-up's kernels"):
@@ -157,6 +158,8 @@ def track(source, out_dir: str | Path, options: OwnVideoOptions | None = None, *
                            progress=progress, newcomer=newcomer)
         summary = track_frames(frames_in, setup, out_dir, params)
     finally:
+        if choices is not None:
+            choices.close()         # the detector's process
         if not frames_in.live:
             frames_in.close()       # the damage check's ffmpeg, when the run ended before it did
     used = choices.keypoint_cue

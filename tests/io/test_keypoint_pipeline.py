@@ -61,22 +61,27 @@ def test_results_come_in_order_equal_to_the_source_called_in_order():
         np.testing.assert_array_equal(a.confidence, b.confidence)
 
 
-def test_as_a_source_and_its_errors_and_misuse():
-    images = _images(4)
+def test_its_errors_and_misuse():
+    images = _images(5)
     with KeypointPipeline(ImageDetector(fail_on=2), depth=2) as pipeline:
-        assert pipeline.keypoints(0, images[0]).present.sum() == 9
+        pipeline.submit(0, images[0])
+        assert pipeline.take(0).present.sum() == 9
         pipeline.submit(1, images[1])
         with pytest.raises(ValueError, match="already"):
             pipeline.submit(1, images[1])
         with pytest.raises(ValueError, match="not the next frame"):
             pipeline.take(2)
         pipeline.submit(2, images[2])
+        with pytest.raises(ValueError, match="take one first"):     # depth 2: a third waits for a take
+            pipeline.submit(3, images[3])
         pipeline.take(1)
         with pytest.raises(RuntimeError, match="failed on frame 2"):
             pipeline.take(2)
-        assert pipeline.keypoints(3, images[3]).present.sum() == 9
+        pipeline.submit(3, images[3])                   # the detector goes on after an error
+        assert pipeline.take(3).present.sum() == 9
+        pipeline.submit(4, images[4])                   # in flight at the close: dropped
     with pytest.raises(ValueError, match="closed"):
-        pipeline.submit(4, images[0])
+        pipeline.submit(5, images[0])
     pipeline.close()                                     # twice: nothing happens
     with pytest.raises(ValueError, match="depth"):
         KeypointPipeline(ImageDetector(), depth=0)

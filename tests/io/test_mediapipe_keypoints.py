@@ -6,6 +6,10 @@ needs it).
 """
 from __future__ import annotations
 
+import importlib.util
+import os
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -60,6 +64,43 @@ def test_mediapipe_finds_the_visible_joints_of_a_real_clip(shared_data, mediapip
     assert w["r_wrist"][1] < w["l_wrist"][1]
     assert 0.25 < np.linalg.norm(w["r_shoulder"] - w["l_shoulder"]) < 0.5
     assert np.isnan(k.world[JOINT_NAMES.index("neck")]).all()
+
+
+def test_the_detector_in_its_own_process_gives_the_same_keypoints_bit_for_bit(shared_data, mediapipe_available, capfd):
+    """:func:`mediapipe_process` (the run's detector) against :class:`MediaPipeKeypoints` (this
+    process) on 12 frames of a real clip: the same bytes, 2D and world; nothing of MediaPipe's
+    own on stderr; and the parent never imports MediaPipe (a process of its own asked)."""
+    import subprocess
+    import sys
+
+    from mocap.io.mediapipe_keypoints import MediaPipeKeypoints, mediapipe_process
+    from mocap.io.video import iter_frames
+
+    clip = shared_data / "video" / "intel_asl_no.mkv"
+    frames = [frame for _, frame in zip(range(12), iter_frames(clip))]
+    capfd.readouterr()
+    with mediapipe_process(depth=3) as process:
+        there = []
+        for i, frame in enumerate(frames):
+            if process.pending == process.depth:
+                there.append(process.take(len(there)))
+            process.submit(i, frame)
+        while process.pending:
+            there.append(process.take(len(there)))
+        assert process.description.startswith("mediapipe 0.") and len(process.milliseconds) == 12
+    with MediaPipeKeypoints() as source:
+        here = [source.keypoints(i, frame) for i, frame in enumerate(frames)]
+    assert capfd.readouterr().err == ""
+    assert sum(k.present.sum() for k in here) >= 9 * 10
+    for a, b in zip(here, there, strict=True):
+        assert a.uv.tobytes() == b.uv.tobytes() and a.confidence.tobytes() == b.confidence.tobytes()
+        assert a.world.tobytes() == b.world.tobytes()
+    script = ("import sys, numpy as np; from mocap.io.mediapipe_keypoints import mediapipe_process; "
+              "p = mediapipe_process(); p.keypoints(0, np.zeros((48, 64, 3), np.uint8)); p.close(); "
+              "print(sorted(m for m in sys.modules if m.split('.')[0] == 'mediapipe'))")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True,
+                          cwd=Path(__file__).resolve().parents[2])
+    assert done.stdout.strip() == "[]" and done.stderr == ""
 
 
 def test_missing_extra_is_one_clear_line(monkeypatch):
