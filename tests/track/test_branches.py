@@ -95,9 +95,11 @@ def test_bad_input():
 def test_started_with_both_arms_mirrored_the_tracker_is_back_at_the_default_weights():
     """A still clip with keypoints (1 px noise): started with both arms mirrored in depth about
     their shoulders (the same silhouette and 2D), the tracker at the default settings (online,
-    lag 0 so that each frame's pose is its own decision) is within 10 cm of the truth (mean joint
-    error about the neck) from the third frame on. Without the mirrors it is still lost on the
-    third to fifth frames (the reference: the same tracker, the stage off)."""
+    lag 0 so that each frame's pose is its own decision; its written poses smoothed, as by
+    default) is within 10 cm of the truth (mean joint error about the neck) from the fourth frame
+    on (the lag-0 smoother trails the switch by about a frame: 0.101 m on the third frame, 0.094
+    m without it). Without the mirrors it is still lost on the fourth to sixth frames (the
+    reference: the same tracker, the stage off)."""
     from mocap.body.jumps import arm_jumps
     from mocap.track import TrackerConfig
     from tests.track.test_lifter_in_tracker import BACK_M, MODEL as LIFTER_MODEL, reaching_pose, tracked_errors
@@ -107,8 +109,8 @@ def test_started_with_both_arms_mirrored_the_tracker_is_back_at_the_default_weig
     with_mirrors = tracked_errors(TrackerConfig(lag=0), start, truth, None, n=6)
     without = tracked_errors(TrackerConfig(lag=0, mirrors=False), start, truth, None, n=6)
     assert with_mirrors[0] > 2 * BACK_M                      # it did start lost
-    assert with_mirrors[2:].max() < BACK_M
-    assert without[2:5].min() > BACK_M
+    assert with_mirrors[3:].max() < BACK_M
+    assert without[3:6].min() > BACK_M
 
 
 def test_without_keypoints_the_mirrors_change_nothing():
