@@ -60,8 +60,8 @@ def world_joints(world_landmarks, visibility, min_visibility: float = MIN_WORLD_
     """The model's joints from MediaPipe Pose's 3D world landmarks (``pose_world_landmarks``).
 
     MediaPipe gives them in metres about the midpoint of the hips, on the image's axes (x right,
-    y down, z away from the camera), which are the camera's up to a translation: what
-    :func:`mocap.body.ik.fit_pose_to_joints` takes. Joints as :data:`MEDIAPIPE_LANDMARKS` (the
+    y down, z away from the camera), which are the camera's up to a translation (recorded in the
+    keypoint file's ``x,y,z`` columns; the tracker does not read them). Joints as :data:`MEDIAPIPE_LANDMARKS` (the
     mean of their landmarks); ``neck`` is absent (no landmark), and so is a joint any of whose
     landmarks is less visible than ``min_visibility`` or not finite.
 
