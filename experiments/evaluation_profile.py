@@ -26,37 +26,19 @@ Also printed: triangles drawn, pixels written (with overdraw) and the model's bo
 from __future__ import annotations
 
 import argparse
-import inspect
 import json
 import tempfile
-import textwrap
 import time
 
 import numba
 import numpy as np
 
 
-def _setup_only_rasterizer():
-    """A copy of :func:`mocap.render._raster._rasterize` that stops each triangle before its fill
-    (the box still grows as if it had drawn)."""
-    from mocap.render import _raster
-    src = textwrap.dedent(inspect.getsource(_raster._rasterize.py_func))
-    marker = "        part_id = np.uint8(triangle_part[t] + 1)\n"
-    assert marker in src
-    src = src.replace(marker, marker + "        if n_rows > 0:\n"
-                      "            bx0 = min(bx0, px0)\n            by0 = min(by0, py0)\n"
-                      "            bx1 = max(bx1, px1)\n            by1 = max(by1, py1)\n            continue\n")
-    src = src.replace("@jit\n", "").replace("def _rasterize(", "def _rasterize_setup(")
-    namespace = dict(vars(_raster))
-    exec(compile(src, "<setup-only rasterizer>", "exec"), namespace)
-    return numba.njit(nogil=True)(namespace["_rasterize_setup"])
-
-
 def _stage_loops():
     from mocap.body.kinematics import segment_transforms_into
     from mocap.cost import edge_cost_kernel, region_cost_kernel
-    from mocap.render import _raster
-    setup_only = _setup_only_rasterizer()
+    from mocap.render.profile import clear_drawn, project_vertices, rasterize_triangles, setup_only_rasterizer
+    setup_only = setup_only_rasterizer()
 
     @numba.njit(nogil=True)
     def loop(stage, poses, region_args, edge_args):
@@ -70,18 +52,18 @@ def _stage_loops():
                 continue
             if stage >= 1 and stage <= 3:
                 segment_transforms_into(pose, scene.offsets, buffers.transforms)
-                _raster._project_vertices(buffers.transforms, scene.vertices, scene.vertex_segment, scene.camera,
-                                          buffers.vertex_x, buffers.vertex_y, buffers.vertex_inverse_depth)
+                project_vertices(buffers.transforms, scene.vertices, scene.vertex_segment, scene.camera,
+                                 buffers.vertex_x, buffers.vertex_y, buffers.vertex_inverse_depth)
                 if stage == 2:
                     setup_only(buffers.vertex_x, buffers.vertex_y, buffers.vertex_inverse_depth, scene.triangles,
                                scene.triangle_part, scene.width, scene.height, True, buffers.part_ids,
                                buffers.inverse_depth, buffers.triangle_ids, buffers.coverage, buffers.box)
                 elif stage == 3:
-                    _raster._rasterize(buffers.vertex_x, buffers.vertex_y, buffers.vertex_inverse_depth,
-                                       scene.triangles, scene.triangle_part, scene.width, scene.height, True,
-                                       buffers.part_ids, buffers.inverse_depth, buffers.triangle_ids,
-                                       buffers.coverage, buffers.box)
-                    _raster._clear(buffers.part_ids, buffers.inverse_depth, scene.width, buffers.box)
+                    rasterize_triangles(buffers.vertex_x, buffers.vertex_y, buffers.vertex_inverse_depth,
+                                        scene.triangles, scene.triangle_part, scene.width, scene.height, True,
+                                        buffers.part_ids, buffers.inverse_depth, buffers.triangle_ids,
+                                        buffers.coverage, buffers.box)
+                    clear_drawn(buffers.part_ids, buffers.inverse_depth, scene.width, buffers.box)
                 total += buffers.vertex_x[0]
             elif stage == 4:
                 total += region_cost_kernel(pose, region_args)

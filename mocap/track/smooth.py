@@ -129,6 +129,7 @@ class Smoother:
         self._mean: np.ndarray | None = None    # (23, 2): filtered value and velocity of the last frame written
         self._cov: np.ndarray | None = None     # (23, 2, 2)
         self._joints: np.ndarray | None = None  # (10, 3): that frame's decoded joints
+        self._written: np.ndarray | None = None  # (23,): the last pose written (an empty frame's too)
 
     def weights(self, confidence) -> np.ndarray:
         """Each parameter's observation weight on a frame, shape (23,), in [min_weight, 1]: 1
@@ -151,7 +152,7 @@ class Smoother:
         jumps = np.linalg.norm(np.diff(chain, axis=0), axis=2).max(axis=1) > self.config.break_m
         return jumps if self._joints is not None else np.r_[True, jumps]
 
-    def smooth(self, poses, joints, weights, count: int = 1) -> np.ndarray:
+    def smooth(self, poses, joints, weights, count: int = 1, empty=None) -> np.ndarray:
         """The written poses of the first ``count`` frames of a window; the state moves past them.
 
         Parameters
@@ -164,6 +165,9 @@ class Smoother:
             Observation weights (:meth:`weights`), in (0, 1].
         count : int
             Frames to write, 1 to n.
+        empty : array_like, shape (n,), bool, optional
+            Frames with nobody in view: their written pose is the one written before them (the
+            pose kept, as the tracker keeps it), while the filter goes on through the kept pose.
 
         Returns
         -------
@@ -208,20 +212,30 @@ class Smoother:
             smoothed[k] = later[:, 0]
         self._mean, self._cov = filtered_m[count - 1].copy(), filtered_p[count - 1].copy()
         self._joints = np.array(joints[count - 1], dtype=np.float64)
-        return np.clip(smoothed[:count], JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1])
+        written = np.clip(smoothed[:count], JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1])
+        kept = np.zeros(n, dtype=bool) if empty is None else np.asarray(empty, dtype=bool)
+        if kept.shape != (n,):
+            raise ValueError(f"empty must have shape ({n},), got {kept.shape}")
+        for k in range(count):
+            if kept[k] and self._written is not None:
+                written[k] = self._written
+            self._written = written[k].copy()
+        return written
 
     # -- exact state -------------------------------------------------------------------------
     def state(self) -> dict:
         """The filtered state of the last frame written, as JSON-able lists (exact)."""
         if self._mean is None:
             return {}
-        return {"mean": self._mean.tolist(), "cov": self._cov.tolist(), "joints": self._joints.tolist()}
+        return {"mean": self._mean.tolist(), "cov": self._cov.tolist(), "joints": self._joints.tolist(),
+                "written": self._written.tolist()}
 
     def restore(self, state: dict) -> None:
         """Continue from a :meth:`state`."""
         if not state:
-            self._mean = self._cov = self._joints = None
+            self._mean = self._cov = self._joints = self._written = None
             return
         self._mean = np.array(state["mean"], dtype=np.float64).reshape(N_PARAMETERS, 2)
         self._cov = np.array(state["cov"], dtype=np.float64).reshape(N_PARAMETERS, 2, 2)
         self._joints = np.array(state["joints"], dtype=np.float64).reshape(len(JOINT_NAMES), 3)
+        self._written = np.array(state["written"], dtype=np.float64).reshape(N_PARAMETERS)

@@ -231,7 +231,7 @@ class Tracker:
         weights = np.array([self.smoother.weights(None if f.evidence is None or f.evidence.keypoints is None
                                                   else f.evidence.keypoints[:, 2]) for f in frames])
         poses = self.smoother.smooth(np.array([h.pose for h in chosen]), np.array([h.joints for h in chosen]),
-                                     weights, count)
+                                     weights, count, empty=[f.empty for f in frames])
         return [self._written(self._window.popleft(), int(path[i]), poses[i]) for i in range(count)]
 
     def _written(self, frame: _Frame, k: int, pose: np.ndarray) -> FrameResult:

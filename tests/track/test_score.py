@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from mocap.track.smooth import SmootherConfig
 from mocap.track import ScoredCandidate, TrackerConfig
 from mocap.track.score import (MOTION, MOTION_CAP, MOTION_SIGMA_M, REGION_WEIGHT, TERM_NAMES, TERMS, UNARY_TERMS,
                                WEIGHT_FIELDS, motion_term, weighted_sum, weights, with_weights)
@@ -90,4 +91,4 @@ def test_the_papers_method_switches_off_the_terms_beyond_the_paper():
     assert (paper.edge_weight, paper.motion_weight) == (TrackerConfig().edge_weight, TrackerConfig().motion_weight)
     assert paper == TrackerConfig(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
                                   gradient_step=False, mirrors=False, prior_weight=0.0, keypoint_weight=0.0,
-                                  lifter_weight=0.0)
+                                  lifter_weight=0.0, smoothing=SmootherConfig(on=False))

@@ -132,6 +132,22 @@ def test_the_state_resumes_bit_for_bit():
     np.testing.assert_array_equal(np.array(out), whole)
 
 
+def test_an_empty_frame_writes_the_pose_written_before_it():
+    # nobody in view: the tracker keeps the pose, and so does what is written (the reference:
+    # the smoother's own previous output), while the frames after it are smoothed as before
+    values = 0.5 + 0.02 * np.arange(12)
+    poses, joints = elbow_trajectory(values)
+    smoother = Smoother(SmootherConfig())
+    empty = np.zeros(len(values), dtype=bool)
+    empty[5] = True
+    written = [smoother.smooth(poses[i:i + 3], joints[i:i + 3], np.ones((3, N_PARAMETERS)), 1,
+                               empty=empty[i:i + 3])[0] for i in range(len(values) - 2)]
+    np.testing.assert_array_equal(written[5], written[4])
+    assert written[6][ELBOW] != written[5][ELBOW]
+    with pytest.raises(ValueError, match="empty"):
+        smoother.smooth(poses[:3], joints[:3], np.ones((3, N_PARAMETERS)), 1, empty=[True])
+
+
 @pytest.mark.parametrize("bad", [{"angle_noise_deg": 0.0}, {"break_m": -1.0}, {"min_weight": 1.5}, {"on": 1}])
 def test_bad_settings_are_value_errors(bad):
     with pytest.raises(ValueError):
