@@ -297,7 +297,7 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
 
 class SmootherCalls:
     """A :class:`mocap.track.smooth.Smoother` that keeps every window it is given (the decoded
-    path's tentative poses, joints and weights, and how many frames were written): replayed
+    path's tentative poses, joints, weights and empty frames, and how many frames were written): replayed
     through a smoother of other settings, they give exactly the poses it would have written
     (the decoding does not depend on the smoother)."""
 
@@ -307,9 +307,10 @@ class SmootherCalls:
     def weights(self, confidence):
         return self.smoother.weights(confidence)
 
-    def smooth(self, poses, joints, weights, count: int = 1):
-        self.calls.append((np.array(poses), np.array(joints), np.array(weights), count))
-        return self.smoother.smooth(poses, joints, weights, count)
+    def smooth(self, poses, joints, weights, count: int = 1, empty=None):
+        empty = np.zeros(len(poses), dtype=bool) if empty is None else np.array(empty, dtype=bool)
+        self.calls.append((np.array(poses), np.array(joints), np.array(weights), count, empty))
+        return self.smoother.smooth(poses, joints, weights, count, empty=empty)
 
     def save(self, path: Path) -> None:
         """All windows, concatenated, with each one's length and count (``np.savez``)."""
@@ -317,6 +318,7 @@ class SmootherCalls:
         np.savez(path, poses=np.concatenate([c[0] for c in self.calls]),
                  joints=np.concatenate([c[1] for c in self.calls]),
                  weights=np.concatenate([c[2] for c in self.calls]),
+                 empty=np.concatenate([c[4] for c in self.calls]),
                  lengths=np.array([len(c[0]) for c in self.calls]), counts=np.array([c[3] for c in self.calls]))
 
 
