@@ -66,6 +66,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments import RESULTS_DIR
+from experiments.config import sequence_list
 from experiments.units import (EXTENSIONS, PREPARED_FILE, PREPARED_FILE_PAPER, DataSpec, load_prepared, load_sequence,
                                prepare_data, prepared_file)
 from mocap.body import JOINT_NAMES
@@ -600,10 +601,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
-    names = tuple(s for s in args.sequences.split(",") if s)
-    unknown = [s for s in names if s not in SEQUENCES]
-    if unknown or not names:
-        print(f"error: unknown sequence(s) {unknown}; choose from {', '.join(SEQUENCE_NAMES)}", file=sys.stderr)
+    try:
+        names = sequence_list(args.sequences)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
         return 2
     config = TrackerConfig.from_json(args.config) if args.config is not None else TrackerConfig()
     if args.evaluations is not None:

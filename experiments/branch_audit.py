@@ -55,6 +55,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments import RESULTS_DIR
+from experiments.config import sequence_list
 from mocap.body.jumps import ARM_JUMPS, SIDES
 from mocap.body.pose import clamp_to_limits
 from mocap.body.skeleton import JOINT_INDEX, JOINT_NAMES
@@ -724,10 +725,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
-    names = tuple(s for s in args.sequences.split(",") if s)
-    unknown = [s for s in names if s not in SEQUENCES]
-    if unknown or not names:
-        print(f"error: unknown sequence(s) {unknown}; choose from {', '.join(SEQUENCE_NAMES)}", file=sys.stderr)
+    try:
+        names = sequence_list(args.sequences)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
         return 2
     try:
         seeds = tuple(int(v) for v in args.seeds.split(",") if v.strip())

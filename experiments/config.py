@@ -25,6 +25,21 @@ POLICY_LABELS = MappingProxyType({"auto": "auto (paper)", "1:1": "50/50", "1:0":
 PRESETS: tuple[str, ...] = ("full", "quick")
 
 
+def sequence_list(text: str) -> tuple[str, ...]:
+    """The synthetic sequences a comma-separated ``--sequences`` names, in its order.
+
+    Raises
+    ------
+    ValueError
+        None named, or a name not of :data:`mocap.synth.SEQUENCE_NAMES` (one line naming them).
+    """
+    names = tuple(s.strip() for s in text.split(",") if s.strip())
+    unknown = [s for s in names if s not in SEQUENCE_NAMES]
+    if unknown or not names:
+        raise ValueError(f"unknown sequence(s) {unknown}; choose from {', '.join(SEQUENCE_NAMES)}")
+    return names
+
+
 def _int_tuple(name: str, values, *, minimum: int = 0, allow_empty: bool = False) -> tuple[int, ...]:
     if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
         raise ValueError(f"{name} must be a list of integers, got {values!r}")

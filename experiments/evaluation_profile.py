@@ -79,30 +79,18 @@ STAGES = ("transforms", "project", "setup", "render_clear", "region", "edge")
 
 def _record(size, frames, seed=0):
     """(costs per frame, recorded trial poses per frame, region/edge start simplices)."""
-    from mocap.body.mesh import resolution_for_image
+    from mocap.bench import BenchSequence
     from mocap.body.pose import JOINT_LIMITS
-    from mocap.calibrate import Calibration, colour_model_from_pose
     from mocap.cost import EdgeCost, RegionCost
     from mocap.imaging import prepare_frame
-    from mocap.io.pose_table import PoseTable
-    from mocap.io.sequence import find_sequence
-    from mocap.io.video import iter_frames, read_image
     from mocap.optimize import initial_simplex, minimize
-    from mocap.synth import generate_sequence
     from mocap.track import TrackerConfig
 
     out = []
     with tempfile.TemporaryDirectory() as tmp:
-        seq = find_sequence(generate_sequence("gestures-1", tmp, frames=frames + 1, seed=seed, size=size,
-                                              progress=False))
-        calibration = Calibration.from_json(seq.calibration)
-        model = calibration.body_model(resolution_for_image(*size))
-        camera = calibration.camera
-        images = list(iter_frames(seq.frames))
-        background = read_image(seq.background)
-        colour = colour_model_from_pose(images[0], background, model, camera, calibration.initial_pose)
-        model = model.with_class_names(colour.names)
-        truth = PoseTable.read(seq.ground_truth).poses
+        bench = BenchSequence.make(tmp, size, frames + 1, seed=seed)
+        model, camera, images, truth = bench.model, bench.camera, bench.images, bench.poses
+        background, colour = bench.background, bench.colour
         config = TrackerConfig.paper(evaluations=500)
         lower, upper = JOINT_LIMITS[:, 0], JOINT_LIMITS[:, 1]
         for k in range(1, frames + 1):

@@ -29,8 +29,6 @@ def main(summary: dict, out: str | Path, name: str = "ext_branch_audit") -> list
     out : str or Path
         Output folder.
     """
-    from experiments.branch_audit import COLUMNS
-
     pooled = summary.get("pooled", {})
     with style_context():
         fig = new_figure(9.0, 3.4)
@@ -39,16 +37,17 @@ def main(summary: dict, out: str | Path, name: str = "ext_branch_audit") -> list
             placeholder(left, "no pairs")
             placeholder(right, "no pairs")
             return save(fig, out, name)
-        x = np.arange(len(COLUMNS))
         bars = [(pooled[st]["pair_truth_better"], st) for st in summary["stages"]]
+        columns = list(bars[0][0])          # the cues in the summary's order: the figure reads the data alone
+        x = np.arange(len(columns))
         if "leader" in summary["stages"]:
             bars.append((pooled["leader"]["window_truth_better"], f"leader, {summary['settings']['window']}-frame sums"))
         width = 0.8 / len(bars)
         for k, (shares, label) in enumerate(bars):
-            values = [100.0 * shares[c] for c in COLUMNS]
+            values = [100.0 * shares.get(c, math.nan) for c in columns]
             left.bar(x + (k - (len(bars) - 1) / 2) * width, [0.0 if math.isnan(v) else v for v in values], width,
                      label=label)
-        left.set_xticks(x, COLUMNS, rotation=35, ha="right")
+        left.set_xticks(x, columns, rotation=35, ha="right")
         left.set_ylabel("pairs with the truth better (%)")
         left.set_ylim(0, 100)
         left.axhline(50, color="k", lw=0.5, ls=":")

@@ -163,6 +163,25 @@ def record_paths(out: Path, sequences: list[str], seeds: list[int]) -> list[Path
     return paths
 
 
+def record_arrays(out: Path, sequences: list[str], seeds: list[int], names: tuple[str, ...],
+                  what: str) -> tuple[list[Path], list[dict[str, np.ndarray]]] | None:
+    """The records of every (seed, sequence) (:func:`record_paths`) and the arrays ``names`` of
+    each; None, the problem said on stderr in one line, when a record is missing or lacks one of
+    them (``what``: those arrays in words, "joints")."""
+    paths = record_paths(out, sequences, seeds)
+    if paths is None:
+        return None
+    arrays = []
+    for path in paths:
+        with np.load(path) as z:
+            lacking = [name for name in names if name not in z.files]
+            if lacking:
+                print(f"error: {path} has no {what} (recorded before they were kept)", file=sys.stderr)
+                return None
+            arrays.append({name: z[name] for name in names})
+    return paths, arrays
+
+
 def load_records(paths: list[Path]) -> Candidates:
     """Read records (:func:`experiments.fit_score.record.record_sequence`) into one :class:`Candidates`, frame ids made unique."""
     parts, offset = [], 0

@@ -7,11 +7,11 @@ weights, caps and lifter weights, against the tracker's own online decisions.
 from __future__ import annotations
 
 import argparse
-import sys
 
 import numpy as np
 
-from experiments.fit_score.candidates import TERMS, Candidates, default_weights, groups, load_records, record_paths
+from experiments.fit_score.candidates import (TERMS, Candidates, default_weights, groups, load_records,
+                                              record_arrays)
 from mocap.track import score
 
 #: Default seeds of the records decoded.
@@ -58,16 +58,13 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 def run(args, sequences: list[str], seeds: list[int]) -> int:
     """The subcommand: one table row per (motion weight, cap, lifter weight) and the tracker's own."""
-    paths = record_paths(args.out, sequences, seeds)
-    if paths is None:
+    found = record_arrays(args.out, sequences, seeds, ("joints", "tracked_error_mm", "tracked_camera_error_mm"),
+                          "joints")
+    if found is None:
         return 2
-    loaded = []
-    for path in paths:
-        with np.load(path) as z:
-            if "joints" not in z.files:
-                print(f"error: {path} has no joints (recorded before they were kept)", file=sys.stderr)
-                return 2
-            loaded.append((load_records([path]), z["joints"], z["tracked_error_mm"], z["tracked_camera_error_mm"]))
+    paths, arrays = found
+    loaded = [(load_records([path]), a["joints"], a["tracked_error_mm"], a["tracked_camera_error_mm"])
+              for path, a in zip(paths, arrays)]
     tracked = np.concatenate([t for *_, t, _ in loaded])
     tracked_cam = np.concatenate([c for *_, c in loaded])
     print(f"records: seeds {args.seeds}; {len(paths)} sequences, {len(tracked)} frames\n")

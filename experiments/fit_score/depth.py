@@ -7,11 +7,10 @@ neck moved to the true neck's depth: what depth alone can give).
 from __future__ import annotations
 
 import argparse
-import sys
 
 import numpy as np
 
-from experiments.fit_score.candidates import record_paths
+from experiments.fit_score.candidates import record_arrays
 
 #: Default seeds of the records measured.
 SEEDS = "0,1"
@@ -52,18 +51,13 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 def run(args, sequences: list[str], seeds: list[int]) -> int:
     """The subcommand: one table row per window and the true depth's bound."""
-    paths = record_paths(args.out, sequences, seeds)
-    if paths is None:
+    found = record_arrays(args.out, sequences, seeds, ("tracked_joints", "truth"), "tracked joints")
+    if found is None:
         return 2
     from mocap.metrics import mpjpe
 
-    tracks = []
-    for path in paths:
-        with np.load(path) as z:
-            if "tracked_joints" not in z.files:
-                print(f"error: {path} has no tracked joints (recorded before they were kept)", file=sys.stderr)
-                return 2
-            tracks.append((z["tracked_joints"], z["truth"][: len(z["tracked_joints"])]))
+    paths, arrays = found
+    tracks = [(a["tracked_joints"], a["truth"][: len(a["tracked_joints"])]) for a in arrays]
     print(f"records: seeds {args.seeds}; {len(paths)} sequences\n\n| window (frames) | mean MPJPE mm | median of "
           "the sequences' MPJPE mm | > 100 mm |\n|---|---|---|---|")
     for window in (int(v) for v in args.windows.split(",")):

@@ -44,32 +44,32 @@ def run(args: argparse.Namespace) -> int:
     # the background and the keypoints as track chooses them (given, the sequence folder's own, frames, none or auto)
     chosen = own_video_options(args)
     opened = RunInput.open(args.video, chosen)
-    choices = RunChoices.of(chosen, opened.sequence_background)
-    keypoints = choices.keypoint_source
-    print(f"keypoints: {choices.keypoints_line}")
-    source, background = opened.frames, opened.background
-    source.damaged_frames(args.allow_damaged)
-    if background is not None and args.height is None:
-        index = args.frame or 0
-        frame = next(source.frames(index, index + 1), None)
-        if frame is None:
-            raise ValueError(f"{source.name} has no frame {index}")
-        camera = Camera.default(frame.shape[1], frame.shape[0], hfov_deg=args.hfov)
-        found = None if keypoints is None else keypoints.keypoints(index, frame)    # input size = camera size
-        calibration = auto_calibrate(frame, read_image(background), camera, keypoints=found)
-        how = f"frame {index} against the background image"
-    else:
-        if args.frame is not None:
-            raise ValueError("--frame needs --background IMG (without one the first usable frame is found)")
-        request = SetupRequest(background_mode=choices.background_mode,
-                               background_image=read_image(background) if background is not None else None,
-                               background_frames=args.background_frames, hfov_deg=args.hfov, height_m=args.height,
-                               keypoints=keypoints)
-        setup = find_setup(source, request).setup
-        camera = setup.calibration.camera.enlarged(setup.factor, source.width, source.height)
-        calibration = Calibration(setup.calibration.dims, setup.calibration.initial_pose, camera)
-        note = setup.record
-        how = f"frame {note.calibration.frame}, background {note.background_mode} ({note.background.reason})"
+    with RunChoices.of(chosen, opened.sequence_background) as choices:    # its detector's process ends with it
+        keypoints = choices.keypoint_source
+        print(f"keypoints: {choices.keypoints_line}")
+        source, background = opened.frames, opened.background
+        source.damaged_frames(args.allow_damaged)
+        if background is not None and args.height is None:
+            index = args.frame or 0
+            frame = next(source.frames(index, index + 1), None)
+            if frame is None:
+                raise ValueError(f"{source.name} has no frame {index}")
+            camera = Camera.default(frame.shape[1], frame.shape[0], hfov_deg=args.hfov)
+            found = None if keypoints is None else keypoints.keypoints(index, frame)    # input size = camera size
+            calibration = auto_calibrate(frame, read_image(background), camera, keypoints=found)
+            how = f"frame {index} against the background image"
+        else:
+            if args.frame is not None:
+                raise ValueError("--frame needs --background IMG (without one the first usable frame is found)")
+            request = SetupRequest(background_mode=choices.background_mode,
+                                   background_image=read_image(background) if background is not None else None,
+                                   background_frames=args.background_frames, hfov_deg=args.hfov, height_m=args.height,
+                                   keypoints=keypoints)
+            setup = find_setup(source, request).setup
+            camera = setup.calibration.camera.enlarged(setup.factor, source.width, source.height)
+            calibration = Calibration(setup.calibration.dims, setup.calibration.initial_pose, camera)
+            note = setup.record
+            how = f"frame {note.calibration.frame}, background {note.background_mode} ({note.background.reason})"
     calibration.to_json(args.out)
     q = calibration.initial_pose
     print(f"calibration written to {args.out} ({how}): actor at {q[2]:.2f} m, torso "

@@ -21,6 +21,12 @@ What can go wrong, and what it leaves behind:
 * The child dies (killed, out of memory): :meth:`~KeypointProcess.take` (or
   :meth:`~KeypointProcess.submit`) raises :class:`DetectorEnded`, one line saying so, and the
   run stops there (its journal and checkpoint are kept: the same command resumes it, exactly).
+* The child hangs: stopped (SIGSTOP, or a debugger's), or silent for ``hung_after_s`` seconds
+  while a frame waits (a deadlock, a detector that never returns): :meth:`~KeypointProcess.take`
+  kills it and raises :class:`DetectorHung` (a :class:`DetectorEnded`), one line saying which,
+  and the run stops there as above; the same command resumes it exactly. A stopped child is
+  seen by its state (Linux's ``/proc``), at once, whatever the machine's speed; the time-out is
+  the fallback for a child that runs but never answers.
 * The parent dies, even by SIGKILL: the child's socket closes, its next read ends, and it exits
   (no orphan); the shared memory is unlinked by the parent's resource tracker, which ends too.
 * Ctrl-C: the child ignores SIGINT (the terminal sends it to both), the parent decides.
@@ -46,14 +52,25 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["DetectorEnded", "KeypointProcess"]
+__all__ = ["DetectorEnded", "DetectorHung", "KeypointProcess", "HUNG_AFTER_S"]
 
 #: Seconds :meth:`KeypointProcess.close` waits for the child to end before killing it.
 _CLOSE_WAIT_S = 10.0
+#: Default seconds a frame (or the detector's start) may wait for the child's answer before it
+#: counts as hung: MediaPipe's start (its import and graph) takes 2-4 s on an idle core, a frame
+#: 20-40 ms; this leaves room for a machine loaded many times over.
+HUNG_AFTER_S = 120.0
+#: Seconds between two looks at the child's state while :meth:`KeypointProcess.take` waits.
+_LOOK_EVERY_S = 0.25
 
 
 class DetectorEnded(ValueError):
     """The detector's process ended while the run needed it (one line: which frame, how)."""
+
+
+class DetectorHung(DetectorEnded):
+    """The detector's process was stopped, or answered nothing for too long: it was killed (one
+    line: which frame, how)."""
 
 
 class KeypointProcess:
@@ -72,6 +89,9 @@ class KeypointProcess:
         Frames in flight at most (submitted, not yet taken; >= 1): the shared memory slots.
     description : str
         What ``run.json`` ``settings.keypoints`` says of the source.
+    hung_after_s : float, seconds
+        How long :meth:`take` waits for one answer of a running child before it counts as hung
+        (:data:`HUNG_AFTER_S`); a stopped child counts at once.
 
     Attributes
     ----------
@@ -82,10 +102,14 @@ class KeypointProcess:
     """
 
     def __init__(self, make: Callable[[], object], convert: Callable, *, depth: int = 3,
-                 description: str = "a keypoint detector in its own process") -> None:
+                 description: str = "a keypoint detector in its own process",
+                 hung_after_s: float = HUNG_AFTER_S) -> None:
         if isinstance(depth, bool) or not isinstance(depth, int) or depth < 1:
             raise ValueError(f"depth must be a positive integer, got {depth!r}")
+        if isinstance(hung_after_s, bool) or not isinstance(hung_after_s, (int, float)) or not hung_after_s > 0:
+            raise ValueError(f"hung_after_s must be a positive number of seconds, got {hung_after_s!r}")
         self.convert, self.depth, self.description = convert, depth, description
+        self.hung_after_s = float(hung_after_s)
         self.milliseconds: list[float] = []
         self._order: collections.deque[tuple[int, int, int]] = collections.deque()   # (index, height, width)
         self._slots: list[shared_memory.SharedMemory | None] = [None] * depth
@@ -148,10 +172,7 @@ class KeypointProcess:
             raise ValueError(f"frame {index} is not the next frame of the keypoint process "
                              f"(next: {self._order[0][0] if self._order else None})")
         self._wait_ready(index)
-        try:
-            done, ok, result, milliseconds = self._conn.recv()
-        except (EOFError, OSError):
-            raise self._ended(index) from None
+        done, ok, result, milliseconds = self._receive(index)
         _, height, width = self._order.popleft()
         if done != index:
             raise RuntimeError(f"the keypoint process answered frame {done} for frame {index}")
@@ -172,14 +193,36 @@ class KeypointProcess:
         """The child's first word: its detector made, or why not (raised)."""
         if self._ready:
             return
-        try:
-            ok, error = self._conn.recv()
-        except (EOFError, OSError):
-            raise self._ended(index) from None
+        ok, error = self._receive(index)
         if not ok:
             self.close()
             raise error
         self._ready = True
+
+    def _receive(self, index: int):
+        """The child's next message, waited for while it runs: :class:`DetectorEnded` if it
+        ends, :class:`DetectorHung` (the child killed) if it is stopped or silent for
+        :attr:`hung_after_s`."""
+        waited_since = time.monotonic()
+        while True:
+            try:
+                if self._conn.poll(_LOOK_EVERY_S):
+                    return self._conn.recv()
+            except (EOFError, OSError):
+                raise self._ended(index) from None
+            if self._process.poll() is not None:
+                raise self._ended(index)
+            if _stopped(self._process.pid):
+                raise self._hung(index, "was stopped (SIGSTOP)")
+            if time.monotonic() - waited_since > self.hung_after_s:
+                raise self._hung(index, f"answered nothing for {self.hung_after_s:g} s")
+
+    def _hung(self, index: int, how: str) -> DetectorHung:
+        self._process.kill()              # a stopped process dies of SIGKILL too
+        self._process.wait()
+        self.close()
+        return DetectorHung(f"the keypoint detector's process {how} before frame {index}'s keypoints and was "
+                            "killed: the run stops here (its frames so far are kept; the same command resumes it)")
 
     def _ended(self, index: int) -> DetectorEnded:
         try:
@@ -225,6 +268,16 @@ def _end(process: subprocess.Popen, conn: Connection, slots: list) -> None:
             memory.close()
             memory.unlink()
             slots[k] = None
+
+
+def _stopped(pid: int) -> bool:
+    """Process ``pid`` is stopped by a signal or a tracer (its ``/proc`` state ``T`` or ``t``;
+    False where there is no ``/proc``: the time-out alone then tells a hang)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return False
+    return state in ("T", "t")
 
 
 def _attach(name: str) -> shared_memory.SharedMemory:

@@ -340,6 +340,27 @@ def track_many(inputs: list[str | Path], out: str | Path, options: OwnVideoOptio
         Bad inputs (missing, name clashes), a per-video option, a folder tracked with other
         options, a bad worker count or hang timeout, Dask missing for ``workers > 0``.
     """
+    options, overwrite, workers = _checked(options, workers, hung_after_s)
+    items = expand_inputs([str(i) for i in inputs])
+    out = Path(out)
+    started = time.perf_counter()
+    _check_options(out, options.to_dict(), overwrite)
+    rows, todo = _plan(items, out, overwrite)
+    summary = ManySummary(out, skipped=len(rows))
+    bar = _ManyBar(out, items, rows, options, progress)
+    try:
+        summary.backend = _track_all(todo, out, options, rows, bar, workers=workers, scheduler=scheduler,
+                                     hung_after_s=hung_after_s)
+    finally:
+        bar.close()
+    return _summarise(summary, items, rows, time.perf_counter() - started)
+
+
+def _checked(options: OwnVideoOptions | None, workers: int | None,
+             hung_after_s: float) -> tuple[OwnVideoOptions, bool, int]:
+    """The options every video is tracked with (``overwrite`` taken out: a task run again after
+    a lost worker resumes), whether to overwrite, and the worker count; ValueError (one line)
+    for a bad worker count or hang timeout and for a per-video option."""
     options = OwnVideoOptions() if options is None else options
     workers = default_workers() if workers is None else workers
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 0:
@@ -351,12 +372,12 @@ def track_many(inputs: list[str | Path], out: str | Path, options: OwnVideoOptio
     if per_video:
         raise ValueError(f"{', '.join(per_video)}: not for many videos (a sequence folder brings its own "
                          "background.png, calibration.json, ground_truth.csv)")
-    overwrite = options.overwrite
-    options = replace(options, overwrite=False)     # a task run again after a lost worker resumes
-    items = expand_inputs([str(i) for i in inputs])
-    out = Path(out)
-    started = time.perf_counter()
-    _check_options(out, options.to_dict(), overwrite)
+    return replace(options, overwrite=False), options.overwrite, workers
+
+
+def _plan(items: list[tuple[Path, str]], out: Path, overwrite: bool) -> tuple[dict[str, dict], list[tuple[Path, str]]]:
+    """Which inputs ``(path, name)`` are still to track: the summary rows of those finished
+    before (by name), and the others in order. ``overwrite``: every folder is cleared first."""
     rows: dict[str, dict] = {}
     todo: list[tuple[Path, str]] = []
     for path, name in items:
@@ -366,28 +387,37 @@ def track_many(inputs: list[str | Path], out: str | Path, options: OwnVideoOptio
             rows[name] = summary_row(path, out / name)
         else:
             todo.append((path, name))
-    summary = ManySummary(out, skipped=len(rows))
-    bar = _ManyBar(out, items, rows, options, progress)
+    return rows, todo
+
+
+def _track_all(todo: list[tuple[Path, str]], out: Path, options: OwnVideoOptions, rows: dict[str, dict],
+               bar: "_ManyBar", *, workers: int, scheduler: str | None, hung_after_s: float) -> str:
+    """Track each of ``todo`` into ``out/<name>``, adding its summary row to ``rows`` as it
+    finishes: one after another in this process (``workers == 0`` and no scheduler), else one
+    Dask task each on a local cluster of ``workers`` processes or the ``scheduler``'s, set up
+    here and closed at the end. Returns how (``ManySummary.backend``)."""
+    if not todo:
+        return "nothing to track"
+    if workers == 0 and scheduler is None:
+        for path, name in todo:
+            rows[name] = {**track_input(str(path.resolve()), str((out / name).resolve()), options), "input": str(path)}
+            bar.update(rows, running=0)
+        return "this process"
+    client, backend = _dask_client(workers, scheduler)
     try:
-        if not todo:
-            summary.backend = "nothing to track"
-        elif workers == 0 and scheduler is None:
-            summary.backend = "this process"
-            for path, name in todo:
-                rows[name] = {**track_input(str(path.resolve()), str((out / name).resolve()), options),
-                              "input": str(path)}
-                bar.update(rows, running=0)
-        else:
-            client, summary.backend = _dask_client(workers, scheduler)
-            try:
-                _run_on_dask(client, todo, out, options, rows, bar, HungWorkers(hung_after_s))
-            finally:
-                _close_client(client, scheduler)
+        _run_on_dask(client, todo, out, options, rows, bar, HungWorkers(hung_after_s))
     finally:
-        bar.close()
+        _close_client(client, scheduler)
+    return backend
+
+
+def _summarise(summary: ManySummary, items: list[tuple[Path, str]], rows: dict[str, dict],
+               wall_s: float) -> ManySummary:
+    """``summary`` with every input's row in the inputs' order and the wall time (seconds);
+    ``summary.csv`` and ``summary.png`` written into its folder."""
     summary.rows = [rows[name] for _, name in items]
-    summary.wall_s = time.perf_counter() - started
-    write_summary(out, summary.rows)
+    summary.wall_s = wall_s
+    write_summary(summary.out, summary.rows)
     return summary
 
 

@@ -185,6 +185,12 @@ class RunChoices:
         if close is not None:
             close()
 
+    def __enter__(self) -> "RunChoices":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
     @property
     def keypoint_cue(self) -> str | None:
         """``keypoints``, None for ``"none"`` (:class:`mocap.run.advice.RunFacts`)."""

@@ -68,7 +68,8 @@ def segment(video: Path, out: Path | None, options: OwnVideoOptions, own: Segmen
     ``background_frames``, ``no_background``: segment has no automatic one), ``work_width``,
     ``start``, ``max_frames``, ``allow_damaged`` and ``keypoints`` (drawn on the frame panel of
     ``segment.mp4``); the rest is not used. ``choices``: what they mean here (default
-    :meth:`RunChoices.of` ``options``, made once the options are checked).
+    :meth:`RunChoices.of` ``options``, made once the options are checked and closed at the end:
+    its keypoint detector's process ends with the call; one given is the caller's to close).
 
     Raises
     ------
@@ -79,7 +80,10 @@ def segment(video: Path, out: Path | None, options: OwnVideoOptions, own: Segmen
     if options.background_mode() == "auto":
         raise ValueError("give --background IMG, --background-frames A:B (median of empty "
                          "frames of VIDEO) or --no-background")
-    choices = RunChoices.of(options) if choices is None else choices    # a bad keypoint file stops here
+    if choices is None:
+        with RunChoices.of(options) as made:    # a bad keypoint file stops here; its detector ended after
+            segment(video, out, options, own, made)
+        return
     print(f"keypoints: {choices.keypoints_line}")
     source = VideoSource(video)
     source.damaged_frames(options.allow_damaged)

@@ -21,8 +21,11 @@ def tiny_config() -> SweepConfig:
 
 @pytest.fixture(scope="session")
 def tiny_results(tmp_path_factory):
-    """Results folder of the tiny sweep, run on two local worker processes."""
+    """Results folder of the tiny sweep, run in this process (``workers=0``): the suite's own
+    workers keep both cores busy, so two more processes only added their start and kernel
+    loading (117 s against about 12 s; the local process pool is tested by test_sweep.py's
+    ``--workers 1`` run, Dask by test_sweep_cluster.py)."""
     out = tmp_path_factory.mktemp("tiny") / "results"
-    summary = run_sweep(TINY, out, workers=2, progress=False)
+    summary = run_sweep(TINY, out, workers=0, progress=False)
     assert not summary.errors, summary.errors
     return out

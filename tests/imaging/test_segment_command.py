@@ -153,3 +153,27 @@ def test_a_segmentation_resumed_after_the_keypoints_extra_came_is_refused_with_w
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "made with keypoints None, this one's would be 'mediapipe'" in err
     assert "the optional extra 'keypoints' was installed or removed" in err and "another --out" in err
+
+
+@pytest.mark.parametrize("command", ["segment", "calibrate"])
+def test_segment_and_calibrate_end_their_keypoint_detectors_process(clip, monkeypatch, command):
+    """The keypoint source (a detector in a process of its own) is closed when the command
+    returns, whether it succeeded or stopped with its one-line error: its child has ended."""
+    import mocap.run.options
+    from mocap.io.keypoint_process import KeypointProcess
+    from tests.io.detectors import BrightestPixel, to_keypoints
+
+    root, scene = clip
+    made = []
+
+    def source(resolved, auto):
+        made.append(KeypointProcess(BrightestPixel, to_keypoints))
+        return made[-1]
+
+    monkeypatch.setattr(mocap.run.options, "_source", source)
+    out = ["--out", str(root / ("o" if command == "segment" else "calibration.json"))]
+    extra = _boxes(scene) if command == "segment" else []
+    main([command, str(root / "frames"), "--background", str(root / "background.png"), "--keypoints", "mediapipe",
+          *out, *extra])
+    assert len(made) == 1
+    assert made[0]._process.poll() is not None, f"{command} left its keypoint detector's process running"

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import signal
+import time
 
 import numpy as np
 
@@ -15,18 +16,25 @@ class BrightestPixel:
     """Joints spread about the image's brightest pixel, scaled by its mean brightness.
 
     ``fail_on``: ``detect`` calls (counted from 1) that raise; ``die_on``: the call on which the
-    process kills itself (SIGKILL), as an out-of-memory kill would; ``broken``: the constructor
-    raises (as a missing MediaPipe does)."""
+    process kills itself (SIGKILL), as an out-of-memory kill would; ``stop_on``: the call on which
+    it stops itself (SIGSTOP); ``hang_on``: the call that never returns (it sleeps); ``broken``:
+    the constructor raises (as a missing MediaPipe does)."""
 
-    def __init__(self, fail_on: tuple[int, ...] = (), die_on: int | None = None, broken: bool = False) -> None:
+    def __init__(self, fail_on: tuple[int, ...] = (), die_on: int | None = None, broken: bool = False,
+                 stop_on: int | None = None, hang_on: int | None = None) -> None:
         if broken:
             raise ValueError("the stand-in detector cannot open")
         self.fail_on, self.die_on, self.calls = fail_on, die_on, 0
+        self.stop_on, self.hang_on = stop_on, hang_on
 
     def detect(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         self.calls += 1
         if self.calls == self.die_on:
             os.kill(os.getpid(), signal.SIGKILL)
+        if self.calls == self.stop_on:
+            os.kill(os.getpid(), signal.SIGSTOP)
+        if self.calls == self.hang_on:
+            time.sleep(3600)
         if self.calls in self.fail_on:
             raise RuntimeError(f"the detector failed on its call {self.calls}")
         h, w = image.shape[:2]

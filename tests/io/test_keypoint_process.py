@@ -89,6 +89,39 @@ def test_a_dead_detector_stops_with_one_line_saying_so():
     assert isinstance(info.value, ValueError)           # the commands' one-line errors
 
 
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a stopped process is told by /proc (Linux)")
+def test_a_stopped_detector_is_killed_and_stops_the_run_with_one_line():
+    """SIGSTOP on the second frame: take() does not hang; it kills the child and says so."""
+    from mocap.io.keypoint_process import DetectorHung
+    images = _images(3)
+    process = KeypointProcess(functools.partial(BrightestPixel, stop_on=2), to_keypoints, depth=2)
+    with process:
+        process.submit(0, images[0])
+        process.submit(1, images[1])
+        process.take(0)
+        with pytest.raises(DetectorHung) as info:
+            process.take(1)
+    message = str(info.value)
+    assert "\n" not in message and "stopped (SIGSTOP)" in message and "frame 1" in message
+    assert isinstance(info.value, DetectorEnded)           # the run layer treats it as an ended detector
+    assert process._process.returncode == -signal.SIGKILL
+    with pytest.raises(ValueError, match="closed"):
+        process.submit(2, images[2])
+
+
+def test_a_detector_that_never_answers_is_killed_after_the_time_out():
+    """A child that runs but never answers (not stopped): the time-out. Whatever the machine's
+    speed, the answer never comes, so the outcome does not depend on it."""
+    from mocap.io.keypoint_process import DetectorHung
+    with pytest.raises(ValueError, match="positive number of seconds"):
+        KeypointProcess(BrightestPixel, to_keypoints, hung_after_s=0)
+    with KeypointProcess(functools.partial(BrightestPixel, hang_on=1), to_keypoints, hung_after_s=1.0) as process:
+        process.submit(0, _images(1)[0])
+        with pytest.raises(DetectorHung, match="answered nothing for 1 s before frame 0"):
+            process.take(0)
+    assert process._process.returncode == -signal.SIGKILL
+
+
 ORPHAN_SCRIPT = textwrap.dedent("""
     import sys, time
     import numpy as np
@@ -170,6 +203,13 @@ def test_a_run_with_the_detector_in_its_process_writes_what_one_with_it_here_wri
     assert "\n" not in str(info.value) and "SIGKILL" in str(info.value)
     assert (tmp_path / "resumed" / mocap.run.journal.STATE_FILE).is_file()       # a checkpoint to resume from
     run("resumed", KeypointProcess(BrightestPixel, to_keypoints))
-    here, process, resumed = (_outputs(tmp_path / name) for name in ("here", "process", "resumed"))
-    assert here[0] == process[0] == resumed[0] and len(here[0]) == 11
-    assert here[1:] == process[1:] == resumed[1:] and here[4] is not None
+    names = ["here", "process", "resumed"]
+    if sys.platform.startswith("linux"):          # a hung (stopped) detector: the same, from its checkpoint
+        with pytest.raises(DetectorEnded, match="stopped"):
+            run("after-hang", KeypointProcess(functools.partial(BrightestPixel, stop_on=9), to_keypoints))
+        run("after-hang", KeypointProcess(BrightestPixel, to_keypoints))
+        names.append("after-hang")
+    here, *others = (_outputs(tmp_path / name) for name in names)
+    assert len(here[0]) == 11 and here[4] is not None
+    for other in others:
+        assert other[0] == here[0] and other[1:] == here[1:]

@@ -119,3 +119,46 @@ def test_missing_extra_is_one_clear_line(monkeypatch):
     with pytest.raises(ValueError, match="pip install 'mocap\\[keypoints\\]'") as info:
         MediaPipeKeypoints()
     assert "\n" not in str(info.value) and str(info.value) == MISSING_EXTRA
+
+
+def test_enlargement_factor_and_its_pixel_mapping():
+    """The factor is the least integer bringing the longer side to the minimum; the enlarged
+    image keeps pixel centres: a bright pixel at (u, v) (centre u + 0.5) has its centroid at
+    k (u + 0.5) in the result, so normalised coordinates are the same in both."""
+    pytest.importorskip("cv2", reason="OpenCV comes with MediaPipe (the optional extra 'keypoints')")
+    from mocap.io.mediapipe_pose import enlarged, enlargement
+
+    assert [enlargement(h, w, 640) for h, w in ((120, 160), (240, 320), (480, 640), (720, 1280), (100, 170))] == \
+        [4, 2, 1, 1, 4]
+    assert enlargement(120, 160, 1) == 1
+    with pytest.raises(ValueError, match="positive"):
+        enlargement(0, 160)
+    image = np.zeros((30, 40, 3), np.uint8)
+    image[7, 29] = 255
+    big = enlarged(image, 160)
+    assert big.shape == (120, 160, 3) and enlarged(big, 160) is big
+    rows, cols = np.nonzero(big[..., 0])
+    weight = big[rows, cols, 0].astype(float)
+    assert (weight @ (cols + 0.5)) / weight.sum() == pytest.approx(4 * 29.5)
+    assert (weight @ (rows + 0.5)) / weight.sum() == pytest.approx(4 * 7.5)
+
+
+@pytest.mark.mediapipe
+def test_a_small_frame_is_enlarged_and_its_joints_come_back_in_input_pixels(tmp_path, mediapipe_available):
+    """On a 160x120 render, the detector's joints (input pixels) are within 0.5 px of a direct
+    detection on the frame already enlarged (its joints divided by the factor); and the
+    description a resume compares says so."""
+    from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
+    from mocap.io.mediapipe_pose import enlarged
+    from mocap.io.video import iter_frames
+    from mocap.synth import generate_sequence
+
+    seq = generate_sequence("gestures-1", tmp_path / "seq", frames=3, seed=7, progress=False)
+    small = list(iter_frames(seq / "frames"))
+    with MediaPipeKeypoints(min_side_px=640) as enlarging, MediaPipeKeypoints(min_side_px=1) as direct:
+        assert "enlarged to a side of 640 px" in enlarging.description and "enlarged" not in direct.description
+        for i, frame in enumerate(small):
+            ours = enlarging.keypoints(i, frame)
+            theirs = direct.keypoints(i, enlarged(frame, 640))
+            assert ours.present.sum() >= 8 and np.array_equal(ours.present, theirs.present)
+            assert np.abs(ours.uv[ours.present] - theirs.uv[theirs.present] / 4).max() < 0.5
