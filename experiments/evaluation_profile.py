@@ -10,7 +10,7 @@ those poses, each adding one stage of an evaluation:
 - ``transforms``: the segment transforms of the pose;
 - ``project``: + the vertices transformed and projected;
 - ``setup``: + every triangle's set-up in the rasterizer (culling, box, edge functions, depth
-  plane; no pixel touched: an instrumented copy of the rasterizer that stops before the fill);
+  plane; no pixel touched: the rasterizer's stage switch ``fill=False``);
 - ``render_clear``: + the spans filled (the label and depth writes), then the box cleared;
 - ``region`` / ``edge``: the render, then the region count or the edge sum (each clearing the
   box as it goes), as :func:`mocap.cost.region_cost_kernel` / :func:`mocap.cost.edge_cost_kernel`;
@@ -37,8 +37,7 @@ import numpy as np
 def _stage_loops():
     from mocap.body.kinematics import segment_transforms_into
     from mocap.cost import edge_cost_kernel, region_cost_kernel
-    from mocap.render.profile import clear_drawn, project_vertices, rasterize_triangles, setup_only_rasterizer
-    setup_only = setup_only_rasterizer()
+    from mocap.render.rasterize import clear_drawn, project_vertices, rasterize_triangles
 
     @numba.njit(nogil=True)
     def loop(stage, poses, region_args, edge_args):
@@ -55,9 +54,10 @@ def _stage_loops():
                 project_vertices(buffers.transforms, scene.vertices, scene.vertex_segment, scene.camera,
                                  buffers.vertex_x, buffers.vertex_y, buffers.vertex_inverse_depth)
                 if stage == 2:
-                    setup_only(buffers.vertex_x, buffers.vertex_y, buffers.vertex_inverse_depth, scene.triangles,
-                               scene.triangle_part, scene.width, scene.height, True, buffers.part_ids,
-                               buffers.inverse_depth, buffers.triangle_ids, buffers.coverage, buffers.box)
+                    rasterize_triangles(buffers.vertex_x, buffers.vertex_y, buffers.vertex_inverse_depth,
+                                        scene.triangles, scene.triangle_part, scene.width, scene.height, True,
+                                        buffers.part_ids, buffers.inverse_depth, buffers.triangle_ids,
+                                        buffers.coverage, buffers.box, False)      # set-up only: no fill
                 elif stage == 3:
                     rasterize_triangles(buffers.vertex_x, buffers.vertex_y, buffers.vertex_inverse_depth,
                                         scene.triangles, scene.triangle_part, scene.width, scene.height, True,

@@ -78,8 +78,14 @@ def _floor_div(w, m, inv_m):
 
 @jit
 def _rasterize(xs, ys, iz, triangles, triangle_part, width, height, cull,
-               part_buf, depth_buf, tri_buf, count_buf, bbox):
+               part_buf, depth_buf, tri_buf, count_buf, bbox, fill=True):
     """Z-buffered rasterization of every triangle into the flat buffers, row span by row span.
+
+    ``fill=False`` is a stage switch for profiles (``experiments.evaluation_profile``): every
+    triangle is set up (culled, boxed, its edge functions and depth plane made, its rows cut)
+    and ``bbox`` grows by its box as if it had been drawn (so it holds the drawn box), but no
+    pixel is touched. Left out, the argument
+    is a compile-time constant (Numba's omitted default), so the renders pay nothing for it.
 
     With ``cull`` only front-facing triangles (counter-clockwise from outside, i.e. negative
     signed area in y-down pixel coordinates) are drawn. ``bbox`` (int64[4]) receives the
@@ -191,6 +197,13 @@ def _rasterize(xs, ys, iz, triangles, triangle_part, width, height, cull,
         n_rows = py1 - py0 + 1
         z_row = z0 + (dzdx * (sx - xs[i0]) + dzdy * (sy - ys[i0])) / S
         part_id = np.uint8(triangle_part[t] + 1)
+        if not fill:
+            if n_rows > 0:
+                bx0 = min(bx0, px0)
+                by0 = min(by0, py0)
+                bx1 = max(bx1, px1)
+                by1 = max(by1, py1)
+            continue
         drawn = False
         if n < _NARROW and not (want_tri or want_count):
             # narrow box: testing every pixel of the row is cheaper than finding the run's ends

@@ -14,6 +14,19 @@ from mocap.body.skeleton import SEGMENT_NAMES
 from mocap.render import _raster
 from mocap.render.camera import Camera
 
+#: The rasterizer's compiled stages, for a profile that runs them one at a time inside a
+#: compiled loop of its own (``experiments.evaluation_profile``; the renders above call them in
+#: this order). ``project_vertices(transforms, vertices, vertex_segment, camera, vertex_x,
+#: vertex_y, vertex_inverse_depth)`` poses and projects the vertices;
+#: ``rasterize_triangles(vertex_x, vertex_y, vertex_inverse_depth, triangles, triangle_part,
+#: width, height, cull, part_ids, inverse_depth, triangle_ids, coverage, box[, fill])`` draws
+#: the triangles (``fill=False``: sets them up and grows ``box`` without drawing: the stage
+#: switch, tested in tests/render/test_rasterize.py); ``clear_drawn(part_ids, inverse_depth,
+#: width, box)`` clears the drawn box. The buffers are those of :class:`Buffers`.
+project_vertices = _raster._project_vertices
+rasterize_triangles = _raster._rasterize
+clear_drawn = _raster._clear
+
 #: Depth gap (metres) between a pixel and its 4-neighbour of another part above which the
 #: boundary between them is an occluding contour (an arm in front of the chest) rather than a
 #: crease where adjacent parts meet.

@@ -231,3 +231,32 @@ def test_any_pose_and_size_renders_without_crashing(seed, w, h):
 def test_bad_render_input_raises(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_fill_switch_sets_up_every_triangle_and_touches_no_pixel(seed):
+    """``rasterize_triangles(..., fill=False)`` (the profile's stage switch) leaves the part and
+    depth buffers untouched and grows the box over every triangle it set up: it holds the drawn
+    box, which the filled render gives exactly (the bounds of its covered pixels)."""
+    from mocap.body.kinematics import segment_transforms_into
+    from mocap.render.rasterize import Buffers, Scene, project_vertices, rasterize_triangles
+
+    q = random_pose(np.random.default_rng(100 + seed))
+    scene, boxes = Scene.of(MODEL, CAMERA), {}
+    for fill in (True, False):
+        b = Buffers.of(MODEL, CAMERA)
+        segment_transforms_into(q, scene.offsets, b.transforms)
+        project_vertices(b.transforms, scene.vertices, scene.vertex_segment, scene.camera, b.vertex_x, b.vertex_y,
+                         b.vertex_inverse_depth)
+        rasterize_triangles(b.vertex_x, b.vertex_y, b.vertex_inverse_depth, scene.triangles, scene.triangle_part,
+                            scene.width, scene.height, True, b.part_ids, b.inverse_depth, b.triangle_ids, b.coverage,
+                            b.box, fill)
+        boxes[fill] = b.box.copy()
+        if fill:
+            rows, cols = np.nonzero(b.part_ids.reshape(CAMERA.height, CAMERA.width))
+            assert list(boxes[True]) == [cols.min(), rows.min(), cols.max(), rows.max()]
+        else:
+            assert not b.part_ids.any() and not b.inverse_depth.any()
+    drawn, set_up = boxes[True], boxes[False]
+    assert set_up[0] <= drawn[0] and set_up[1] <= drawn[1] and set_up[2] >= drawn[2] and set_up[3] >= drawn[3]
+    assert set_up[0] >= 0 and set_up[1] >= 0 and set_up[2] < CAMERA.width and set_up[3] < CAMERA.height
