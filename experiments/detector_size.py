@@ -6,7 +6,7 @@
 On renders with ground truth, at each input size, MediaPipe Pose (the run's detector,
 :class:`mocap.io.mediapipe_pose.PoseLandmarks`, image mode) is handed each frame enlarged to a
 longer side of at least each of ``--sides`` pixels (0: as it is; an integer factor, bilinear:
-:func:`mocap.io.mediapipe_pose.enlargement`), and its arm joints (shoulders, elbows, wrists, as
+:func:`enlarged`), and its arm joints (shoulders, elbows, wrists, as
 :func:`mocap.io.mediapipe_keypoints.keypoints_of_landmarks` makes them) are compared with the
 truth's projection, in input pixels:
 
@@ -24,6 +24,11 @@ with ``--only cmu`` or by default the CMU-driven clips of ``experiments.peers --
 skipped with a line when absent). Writes ``OUT/results.json`` and ``OUT/detector_size.md``
 (default ``experiments/results/detector_size``); a clip's rows are kept in ``OUT/rows/`` as it
 ends, and the same command skips those (resume).
+
+Measured on 2026-11-28 (docs/research-log.md): no side paid. MediaPipe crops the person's box
+from the frame it is given and resamples it to its landmark model's input itself, so a frame
+enlarged beforehand brings no detail, only another interpolation; the run's detector is handed
+the input frame as it is.
 """
 from __future__ import annotations
 
@@ -64,6 +69,24 @@ def label_swapped(detected: np.ndarray, truth: np.ndarray) -> np.ndarray:
     return np.nan_to_num(exchanged, nan=np.inf) < np.nan_to_num(as_given, nan=np.inf)
 
 
+def enlargement(height: int, width: int, side: int) -> int:
+    """The least integer factor bringing the longer of ``width`` x ``height`` to ``side``
+    pixels (1 for a frame that large already, and for ``side`` 0)."""
+    return max(1, -(-side // max(height, width)))
+
+
+def enlarged(image: np.ndarray, side: int) -> np.ndarray:
+    """``image`` (H, W, 3) uint8 enlarged by :func:`enlargement`'s factor, bilinear (OpenCV,
+    which comes with MediaPipe), pixel centres kept: a point at ``(u, v)`` is at ``(k u, k v)``,
+    so MediaPipe's normalised landmarks are the same in both."""
+    factor = enlargement(image.shape[0], image.shape[1], side)
+    if factor == 1:
+        return image
+    import cv2
+
+    return cv2.resize(image, (image.shape[1] * factor, image.shape[0] * factor), interpolation=cv2.INTER_LINEAR)
+
+
 def measure(frames: list[np.ndarray], truth_uv: np.ndarray, side: int) -> dict:
     """MediaPipe on ``frames`` (each (H, W, 3) uint8) enlarged to a longer side of ``side``
     pixels (0: as they are), against ``truth_uv`` (N, 6, 2) input pixels: the row's figures."""
@@ -72,14 +95,14 @@ def measure(frames: list[np.ndarray], truth_uv: np.ndarray, side: int) -> dict:
     from mocap.io.mediapipe_pose import PoseLandmarks
 
     index = [JOINT_NAMES.index(j) for j in ARMS]
-    pose = PoseLandmarks(image_mode=True, min_side_px=max(side, 1))
+    pose = PoseLandmarks(image_mode=True)
     detected, ms = [], []
     try:
         for frame in frames:
             t0 = time.perf_counter()
-            landmarks = pose.detect(frame)
+            landmarks = pose.detect(enlarged(frame, side))
             ms.append(1e3 * (time.perf_counter() - t0))
-            keypoints = keypoints_of_landmarks(landmarks, *frame.shape[:2])
+            keypoints = keypoints_of_landmarks(landmarks, *frame.shape[:2])    # normalised: input pixels
             uv = keypoints.uv[index].copy()
             uv[~keypoints.present[index]] = np.nan
             detected.append(uv)

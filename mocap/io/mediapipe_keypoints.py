@@ -3,10 +3,8 @@
 MediaPipe Pose's legacy solution (``mediapipe.solutions.pose``, BlazePose GHUM 3D, Apache 2.0)
 in image mode (``static_image_mode``) with model complexity 1, whose landmark model ``pose_landmark_full.tflite`` the
 pinned wheel (``mediapipe==0.10.14``) bundles: nothing is downloaded at run time. It runs on the
-input RGB frame, enlarged first where its longer side is under
-:data:`~mocap.io.mediapipe_pose.MIN_DETECTION_SIDE_PX` (by an integer factor, bilinear);
-landmarks come back normalised to the frame, so ``u = x * width`` and ``v = y * height`` in
-input pixels, the confidence is the landmark's ``visibility``.
+input-resolution RGB frame; landmarks come back normalised to the frame, so ``u = x * width``
+and ``v = y * height`` in input pixels, the confidence is the landmark's ``visibility``.
 
 Image mode finds the person afresh in every frame: a frame's keypoints depend on that frame
 alone, so a run resumed at any frame (or re-run on another worker) gets the keypoints of an
@@ -42,10 +40,9 @@ import numpy as np
 from mocap.body.skeleton import JOINT_NAMES
 from mocap.io.keypoint_process import KeypointProcess
 from mocap.io.keypoints import Keypoints
-from mocap.io.mediapipe_pose import (MIN_DETECTION_SIDE_PX, MISSING_EXTRA, N_LANDMARKS, NATIVE_NOISE, PoseLandmarks,
-                                     describe)
+from mocap.io.mediapipe_pose import MISSING_EXTRA, N_LANDMARKS, NATIVE_NOISE, PoseLandmarks, describe
 
-__all__ = ["MEDIAPIPE_LANDMARKS", "MIN_DETECTION_SIDE_PX", "MISSING_EXTRA", "MIN_WORLD_VISIBILITY", "MediaPipeKeypoints", "N_LANDMARKS",
+__all__ = ["MEDIAPIPE_LANDMARKS", "MISSING_EXTRA", "MIN_WORLD_VISIBILITY", "MediaPipeKeypoints", "N_LANDMARKS",
            "NATIVE_NOISE", "available", "keypoints_of_landmarks", "mediapipe_process", "world_joints"]
 
 #: MediaPipe Pose landmark indices averaged into each joint (absent joints have none).
@@ -144,8 +141,7 @@ def keypoints_of_landmarks(landmarks: tuple[np.ndarray | None, np.ndarray | None
     return Keypoints(flat.uv, flat.confidence, xyz)
 
 
-def mediapipe_process(*, depth: int = 3, image_mode: bool = True,
-                      min_side_px: int = MIN_DETECTION_SIDE_PX) -> KeypointProcess:
+def mediapipe_process(*, depth: int = 3, image_mode: bool = True) -> KeypointProcess:
     """MediaPipe Pose in a process of its own (the run's detector; see the module), started now:
     its import and graph overlap what the caller does next.
 
@@ -154,9 +150,6 @@ def mediapipe_process(*, depth: int = 3, image_mode: bool = True,
     depth : int
         Frames in flight at most (:class:`~mocap.io.keypoint_process.KeypointProcess`).
     image_mode : bool
-    min_side_px : int, pixels
-        Frames with a shorter longer side are enlarged before detection
-        (:class:`~mocap.io.mediapipe_pose.PoseLandmarks`); the keypoints are in input pixels.
 
     Raises
     ------
@@ -165,8 +158,8 @@ def mediapipe_process(*, depth: int = 3, image_mode: bool = True,
     """
     if not _installed():
         raise ValueError(MISSING_EXTRA)
-    make = functools.partial(PoseLandmarks, image_mode=image_mode, min_side_px=min_side_px)
-    return KeypointProcess(make, keypoints_of_landmarks, depth=depth, description=describe(image_mode, min_side_px))
+    make = PoseLandmarks if image_mode else functools.partial(PoseLandmarks, image_mode=False)
+    return KeypointProcess(make, keypoints_of_landmarks, depth=depth, description=describe(image_mode))
 
 
 class MediaPipeKeypoints:
@@ -181,8 +174,6 @@ class MediaPipeKeypoints:
     ----------
     image_mode : bool
         Image mode (the run's: exact resumes), else video mode.
-    min_side_px : int, pixels
-        Frames with a shorter longer side are enlarged before detection (as the run's).
 
     Attributes
     ----------
@@ -195,10 +186,10 @@ class MediaPipeKeypoints:
         When the extra is not installed (:data:`MISSING_EXTRA`).
     """
 
-    def __init__(self, *, image_mode: bool = True, min_side_px: int = MIN_DETECTION_SIDE_PX) -> None:
-        self._pose = PoseLandmarks(image_mode=image_mode, min_side_px=min_side_px)
+    def __init__(self, *, image_mode: bool = True) -> None:
+        self._pose = PoseLandmarks(image_mode=image_mode)
         self.milliseconds: list[float] = []
-        self.description = describe(image_mode, min_side_px)
+        self.description = describe(image_mode)
 
     def keypoints(self, frame_index: int, image: np.ndarray | None) -> Keypoints:
         """Keypoints of one frame (:func:`keypoints_of_landmarks`).

@@ -28,14 +28,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
-__all__ = ["MIN_DETECTION_SIDE_PX", "MISSING_EXTRA", "NATIVE_NOISE", "N_LANDMARKS", "PoseLandmarks", "describe",
-           "enlargement", "mediapipe_version"]
-
-#: The longer side (pixels) below which a frame is enlarged before MediaPipe sees it: by the
-#: smallest integer factor that reaches it (:func:`enlargement`). MediaPipe finds people at
-#: 160x120 only now and then and places their arm joints 6-16 % of the width off; measured by
-#: ``experiments.detector_size`` (docs/research-log.md, 2026-11-28).
-MIN_DETECTION_SIDE_PX = 640
+__all__ = ["MISSING_EXTRA", "NATIVE_NOISE", "N_LANDMARKS", "PoseLandmarks", "describe", "mediapipe_version"]
 
 #: What to install for ``--keypoints mediapipe``.
 MISSING_EXTRA = ("--keypoints mediapipe needs MediaPipe Pose, the optional extra 'keypoints': "
@@ -58,21 +51,9 @@ def mediapipe_version() -> str | None:
         return None
 
 
-def describe(image_mode: bool, min_side_px: int = MIN_DETECTION_SIDE_PX) -> str:
-    """What ``run.json`` ``settings.keypoints`` says of MediaPipe Pose in this mode (a resume
-    compares it: keypoints found on frames enlarged otherwise are not the same)."""
-    return (f"mediapipe {mediapipe_version()} pose, model complexity 1, {'image' if image_mode else 'video'} mode"
-            + (f", frames enlarged to a side of {min_side_px} px" if min_side_px > 1 else ""))
-
-
-def enlargement(height: int, width: int, min_side_px: int = MIN_DETECTION_SIDE_PX) -> int:
-    """The integer factor a ``width`` x ``height`` frame is enlarged by before detection: the
-    smallest that brings its longer side to ``min_side_px`` pixels, 1 for a frame already that
-    large (``min_side_px`` <= 1: never)."""
-    if height < 1 or width < 1:
-        raise ValueError(f"a frame's size must be positive, got {width}x{height}")
-    longer = max(height, width)
-    return max(1, -(-int(min_side_px) // longer))
+def describe(image_mode: bool) -> str:
+    """What ``run.json`` ``settings.keypoints`` says of MediaPipe Pose in this mode."""
+    return f"mediapipe {mediapipe_version()} pose, model complexity 1, {'image' if image_mode else 'video'} mode"
 
 
 class PoseLandmarks:
@@ -82,23 +63,14 @@ class PoseLandmarks:
     ----------
     image_mode : bool
         Image mode (every frame on its own: exact resumes), else video mode (frames in order).
-    min_side_px : int, pixels
-        A frame whose longer side is shorter is enlarged (bilinear, OpenCV's ``resize``, pixel
-        centres kept) by :func:`enlargement`'s integer factor before detection
-        (:data:`MIN_DETECTION_SIDE_PX`; 1: never). MediaPipe's landmarks are normalised to the
-        image, so they map back to the input frame's pixels exactly as they are.
 
     Raises
     ------
     ValueError
-        When MediaPipe does not import (:data:`MISSING_EXTRA`), or ``min_side_px`` is not a
-        positive integer.
+        When MediaPipe does not import (:data:`MISSING_EXTRA`).
     """
 
-    def __init__(self, *, image_mode: bool = True, min_side_px: int = MIN_DETECTION_SIDE_PX) -> None:
-        if isinstance(min_side_px, bool) or not isinstance(min_side_px, int) or min_side_px < 1:
-            raise ValueError(f"min_side_px must be a positive integer, got {min_side_px!r}")
-        self.min_side_px = min_side_px
+    def __init__(self, *, image_mode: bool = True) -> None:
         try:
             from mediapipe.python.solutions import pose as mp_pose
         except ImportError:
@@ -131,24 +103,12 @@ class PoseLandmarks:
         if image is None or image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
             raise ValueError(f"MediaPipe needs an RGB uint8 frame (H, W, 3), got "
                              f"{getattr(image, 'shape', None)} {getattr(image, 'dtype', None)}")
-        result = self._pose.process(np.ascontiguousarray(enlarged(image, self.min_side_px)))
+        result = self._pose.process(np.ascontiguousarray(image))
         return _array(result.pose_landmarks), _array(result.pose_world_landmarks)
 
     def close(self) -> None:
         """Release MediaPipe's graph."""
         self._pose.close()
-
-
-def enlarged(image: np.ndarray, min_side_px: int = MIN_DETECTION_SIDE_PX) -> np.ndarray:
-    """``image`` (H, W, 3) uint8 enlarged by :func:`enlargement`'s factor (bilinear; itself when
-    the factor is 1). A point at ``(u, v)`` of ``image`` (pixel centres at half-integers) is at
-    ``(k u, k v)`` of the result: normalised coordinates are the same in both."""
-    factor = enlargement(image.shape[0], image.shape[1], min_side_px)
-    if factor == 1:
-        return image
-    import cv2      # OpenCV comes with MediaPipe (opencv-contrib-python)
-
-    return cv2.resize(image, (image.shape[1] * factor, image.shape[0] * factor), interpolation=cv2.INTER_LINEAR)
 
 
 def _array(landmarks) -> np.ndarray | None:
