@@ -7,34 +7,42 @@ and the test extra includes it)::
 
     python -m experiments.peers --out experiments/peers
 
-Two comparisons, on the same frames:
+Three comparisons, on the same frames:
 
 * **synthetic** (ground truth): PA-MPJPE of shoulders, elbows and wrists (millimetres, every
   frame aligned by the best similarity transform, so MediaPipe's hip-centred world landmarks
-  and our camera-frame joints compare) on the 160x120 benchmark clips, MediaPipe fed the
-  frames upscaled 4x (it does not find people at 160x120); our tracker with the clip's true
+  and our camera-frame joints compare) on the benchmark clips rendered at ``--size`` (default
+  160x120), MediaPipe (video mode) fed the frames as they are; our tracker with the clip's true
   calibration and background.
 * **real** (no ground truth; MediaPipe as reference): ``python -m mocap track CLIP --keypoints
   none`` (the silhouette alone; the command's default ``auto`` is the keypoint run below where
   MediaPipe is installed) on the clips of ``../shared/data/video/``, and the share of our projected
   shoulders, elbows and wrists (``poses.csv``'s ``_u``/``_v``) within half of MediaPipe's
   shoulder width of its 2D landmarks (:func:`mocap.metrics.pck_2d`).
-
-With keypoints (issue 23), ours again given MediaPipe's 2D joints as a cue: on the real clips
-``python -m mocap track CLIP --keypoints mediapipe``, measured by the share of frames whose six
-arm joints are all within a quarter of MediaPipe's shoulder width of its 2D landmarks (and the
-failed frames where MediaPipe found the person); on the synthetic clips (too small for MediaPipe
-at their own size) a keypoint file of MediaPipe's 2D arm joints found on the enlarged frames
-(``--keypoints FILE``), measured by arm PA-MPJPE against MediaPipe's own 3D.
-
 * **cmu** (issue 34, item 5; ground truth): the toolkit's generator
   (:func:`mocap.synth.generate_sequence` with ``motion=``) driven by trials of ONE training subject
   of ``../shared/data/mocap/train`` (``--subject``, default 14: boxing, jumping jacks, side twists,
-  directing traffic), MediaPipe's 2D arm joints (frames enlarged 4x) as ``--keypoints FILE``, and
-  the tracker given a lifter trained without that subject (``--lifter FILE``, the tracker's
-  ``lifter_file``; ``python -m experiments.fit_lifter --trials-from experiments/fit_lifter.json
-  --exclude-subject 14 --out experiments/peers/work/lifter_no14.npz``, never shipped). Arm PA-MPJPE
-  of ours and of MediaPipe's own 3D per clip, and their ratio.
+  directing traffic), rendered at ``--size``, and the tracker given a lifter trained without that
+  subject (``--lifter FILE``, the tracker's ``lifter_file``; ``python -m experiments.fit_lifter
+  --trials-from experiments/fit_lifter.json --exclude-subject 14 --out
+  experiments/peers/work/lifter_no14.npz``, never shipped).
+
+With keypoints (issues 23 and 44), ours runs as a user runs it, ``python -m mocap track CLIP
+--keypoints mediapipe``: the run's own detector (image mode) on the same frames MediaPipe alone
+sees, at the same size (MediaPipe crops and resamples the person itself: enlarging the frames
+first brought nothing, ``experiments.detector_size``). On the real clips it is measured by the
+share of frames whose six arm joints are all within a quarter of MediaPipe's shoulder width of
+its 2D landmarks (and the failed frames where MediaPipe found the person). On the synthetic and
+CMU-driven clips, against the truth (:func:`scored_clip`):
+
+- the detector (the run's ``keypoints.csv``): the share of frames it labels the person's left
+  arm right and back (``detector_swapped``) and its arm joints' 2D error against the truth's
+  projection (px, each frame under its better labelling);
+- ours and MediaPipe's own 3D: arm PA-MPJPE; the arms' error about their centre with no
+  rotation (:func:`mocap.metrics.centred_mpjpe`: PA-MPJPE hides a body turned around); the
+  acceleration error of the aligned arms (mm/frame², over runs of found frames); the share of
+  frames whose arms carry the right labels; and the ratios ours / MediaPipe's of PA-MPJPE and
+  of the acceleration error (issue 44's targets: at most 1 and 0.5).
 
 Speed: our ``ms_total`` per frame (image side and registration, as ``run.json``) and
 MediaPipe's ``process`` time per frame, both wall-clock on this machine as loaded.
@@ -44,13 +52,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import time
 from pathlib import Path
 
 import numpy as np
 
 from mocap.io.mediapipe_keypoints import MEDIAPIPE_LANDMARKS
-from mocap.metrics import pa_mpjpe, pck_2d
+from mocap.metrics import acceleration_error, centred_mpjpe, pa_mpjpe, pck_2d
 from mocap.run.files import POSES_CSV, RUN_JSON
 
 #: Joints compared (ours), in order.
@@ -67,6 +76,8 @@ REAL = ("intel_asl_no.mkv", "intel_asl_sister.mkv", "intel_asl_book.mkv")
 CMU_TRIALS = {"14": ("14_02", "14_06", "14_20", "14_24")}
 CMU_SCENES = ("gestures-2", "turning", "arms-crossing", "not-facing")
 CMU_FRAMES = 150
+#: Default size (width, height, pixels) the synthetic and CMU-driven clips are rendered at.
+SIZE = (160, 120)
 
 
 def arm_indices() -> np.ndarray:
@@ -150,29 +161,6 @@ def ours_uv(table) -> np.ndarray:
     return np.stack([np.stack([table.extra[f"{j}_u"], table.extra[f"{j}_v"]], axis=1) for j in ARM_JOINTS], axis=1)
 
 
-def keypoint_file(uv: np.ndarray, path: Path, mp: dict | None = None) -> Path:
-    """Write MediaPipe's arm joints (N, 6, 2), input pixels, NaN where not found, as a keypoint
-    file (confidence 1) for ``--keypoints FILE``; with ``mp`` (:func:`run_mediapipe`'s result),
-    its world joints too (:func:`mocap.io.mediapipe_keypoints.world_joints` of ``world33``, the
-    file's ``x,y,z``), as ``--keypoints mediapipe`` gives them to the tracker."""
-    from mocap.body.skeleton import JOINT_NAMES
-    from mocap.io.keypoints import Keypoints, write_keypoints
-    from mocap.io.mediapipe_keypoints import world_joints
-
-    frames = {}
-    for i, frame_uv in enumerate(uv):
-        full = np.full((len(JOINT_NAMES), 2), np.nan)
-        full[arm_indices()] = frame_uv
-        world = None
-        if mp is not None:
-            found = np.isfinite(mp["world33"][i]).all()
-            world = world_joints(mp["world33"][i], mp["visibility33"][i])[0] if found else \
-                np.full((len(JOINT_NAMES), 3), np.nan)
-        frames[i] = Keypoints(full, np.where(np.isfinite(full).all(axis=1), 1.0, 0.0), world)
-    write_keypoints(path, frames)
-    return path
-
-
 def within_quarter(ours: np.ndarray, ref: np.ndarray) -> dict:
     """PCK at a quarter of MediaPipe's shoulder width, and the share of frames (of those where
     MediaPipe found the person) whose six arm joints are all that close."""
@@ -183,49 +171,133 @@ def within_quarter(ours: np.ndarray, ref: np.ndarray) -> dict:
             "frames_all_within_quarter": float(close[found].all(axis=1).mean()) if found.any() else float("nan")}
 
 
-def synthetic_row(name: str, work: Path, seed: int) -> dict:
+def _runs_of_found(found: np.ndarray) -> list[slice]:
+    """The maximal runs of consecutive True frames of ``found`` (N,) at least 3 long."""
+    runs, start = [], None
+    for i, f in enumerate(list(found) + [False]):
+        if f and start is None:
+            start = i
+        elif not f and start is not None:
+            if i - start >= 3:
+                runs.append(slice(start, i))
+            start = None
+    return runs
+
+
+def arm_accel(pred: np.ndarray, true: np.ndarray) -> float:
+    """Acceleration error (mm/frame²) of the six arm joints, each frame aligned as
+    :func:`mocap.metrics.pa_mpjpe` aligns it, over the runs of at least three consecutive frames
+    where ``pred`` (N, 6, 3) is found (finite), weighted by their inner frames; NaN without."""
+    found = np.isfinite(pred).all(axis=(1, 2))
+    values = [acceleration_error(pred[r], true[r], align="procrustes", per_frame=True) for r in _runs_of_found(found)]
+    return float(np.concatenate(values).mean()) if values else float("nan")
+
+
+def arm_figures(pred: np.ndarray, true: np.ndarray) -> dict:
+    """Arm PA-MPJPE, the error about the arms' centre with no rotation (a body turned around
+    shows there: :func:`mocap.metrics.centred_mpjpe`), the acceleration error and the share of
+    frames whose arms carry the right labels (nearer the truth about their centre than with left
+    and right exchanged), over the frames where ``pred`` (N, 6, 3) is found; ``true`` (N, 6, 3)."""
+    from experiments.detector_size import label_swapped
+
+    found = np.isfinite(pred).all(axis=(1, 2))
+    if not found.any():
+        return {"pa_mpjpe_mm": float("nan"), "centred_mm": float("nan"), "accel": float("nan"),
+                "labels_right": float("nan")}
+    p, t = pred[found], true[found]
+    centre = lambda x: x - x.mean(axis=1, keepdims=True)
+    return {"pa_mpjpe_mm": pa_mpjpe(p, t), "centred_mm": centred_mpjpe(p, t), "accel": arm_accel(pred, true),
+            "labels_right": float(1.0 - label_swapped(centre(p), centre(t)).mean())}
+
+
+def detector_figures(run: Path, truth_uv: np.ndarray) -> dict:
+    """The tracker's detector (``run``'s ``keypoints.csv``: its own labels, input pixels) against
+    the truth's projection ``truth_uv`` (N, 6, 2): the share of frames it found the arms, the
+    share of those it labelled left and right swapped, and its median arm joint error (px, each
+    frame under its better labelling)."""
+    from mocap.io.keypoints import read_keypoints
+    from mocap.run.files import KEYPOINTS_CSV
+
+    from experiments.detector_size import OTHER_SIDE, label_swapped
+
+    stored = read_keypoints(run / KEYPOINTS_CSV)
+    uv = np.full(truth_uv.shape, np.nan)
+    for i in range(len(truth_uv)):
+        if i in stored:
+            k = stored[i]
+            present = k.present[arm_indices()]
+            uv[i][present] = k.uv[arm_indices()][present]
+    found = np.isfinite(uv).all(axis=(1, 2))
+    swapped = label_swapped(uv, truth_uv)
+    better = np.where(swapped[:, None, None], uv[:, OTHER_SIDE], uv)
+    errors = np.linalg.norm(better - truth_uv, axis=2)[found]
+    return {"detector_found": float(found.mean()),
+            "detector_swapped": float(swapped[found].mean()) if found.any() else float("nan"),
+            "detector_error_px": float(np.median(errors)) if errors.size else float("nan")}
+
+
+def scored_clip(seq: Path, run: Path, table, mp: dict, frames: int) -> dict:
+    """Ours with MediaPipe's keypoints (``run``, ``table`` its ``poses.csv``) and MediaPipe's own
+    3D (``mp``: :func:`run_mediapipe`) on the clip ``seq``, against its ground truth."""
+    from mocap.calibrate import Calibration
+    from mocap.io.pose_table import PoseTable
+
+    truth = PoseTable.read(seq / "ground_truth.csv").joints[:frames, arm_indices()]
+    camera = Calibration.from_json(seq / "calibration.json").camera
+    truth_uv = camera.project(truth.reshape(-1, 3)).reshape(truth.shape[0], len(ARM_JOINTS), 2)
+    ours = {f"ours_keypoints_{k}": v for k, v in arm_figures(table.joints[:frames, arm_indices()], truth).items()}
+    theirs = {f"mediapipe_{k}": v for k, v in arm_figures(mp["world"][:frames], truth).items()}
+    return {**ours, **theirs, **detector_figures(run, truth_uv),
+            "pa_ratio": ours["ours_keypoints_pa_mpjpe_mm"] / theirs["mediapipe_pa_mpjpe_mm"],
+            "accel_ratio": ours["ours_keypoints_accel"] / theirs["mediapipe_accel"],
+            "mediapipe_found": float(np.isfinite(mp["world"][:frames]).all(axis=(1, 2)).mean()),
+            "ours_keypoints_ms": float(np.median(table.extra["ms_total"][1:])),
+            "mediapipe_ms": float(np.median(mp["ms"][1:]))}
+
+
+def synthetic_row(name: str, work: Path, seed: int, size: tuple[int, int] = SIZE) -> dict:
+    """One synthetic clip at ``size``: ours without keypoints, ours with ``--keypoints mediapipe``
+    (the run's own detector on the frames as they are) and MediaPipe alone (video mode, the same
+    frames: it crops and resamples the person itself, so enlarging them first brings nothing,
+    ``experiments.detector_size``)."""
     from mocap.io.pose_table import PoseTable
     from mocap.io.video import iter_frames
     from mocap.synth import generate_sequence
 
-    seq = generate_sequence(name, work / name, frames=SYNTHETIC_FRAMES, seed=seed, size=(160, 120), progress=False)
-    table = _track(seq, work / f"{name}-run", overlay=False)
+    tag = "" if size == SIZE else f"-{size[0]}x{size[1]}"
+    seq = generate_sequence(name, work / f"{name}{tag}", frames=SYNTHETIC_FRAMES, seed=seed, size=size, progress=False)
+    table = _track(seq, work / f"{name}{tag}-run", overlay=False)
     truth = PoseTable.read(seq / "ground_truth.csv").joints[:, arm_indices()]
-    mp = run_mediapipe(list(iter_frames(seq / "frames")), upscale=4)
-    np.savez(work / f"{name}-mediapipe.npz", **mp)          # for later analyses
-    keyed = _track(seq, work / f"{name}-keypoints-run", overlay=False,
-                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv", mp)))
-    return {"clip": name, "frames": len(table),
-            "ours_pa_mpjpe_mm": arm_pa_mpjpe(table.joints[:, arm_indices()], truth),
-            "ours_keypoints_pa_mpjpe_mm": arm_pa_mpjpe(keyed.joints[:, arm_indices()], truth),
-            "mediapipe_pa_mpjpe_mm": arm_pa_mpjpe(mp["world"], truth),
-            "mediapipe_found": float(np.isfinite(mp["world"]).all(axis=(1, 2)).mean()),
-            "ours_ms": float(np.median(table.extra["ms_total"][1:])), "mediapipe_ms": float(np.median(mp["ms"][1:]))}
+    mp = run_mediapipe(list(iter_frames(seq / "frames")))
+    np.savez(work / f"{name}{tag}-mediapipe.npz", **mp)          # for later analyses
+    keyed = _track(seq, work / f"{name}{tag}-keypoints-run", overlay=False, keypoints="mediapipe")
+    n = min(len(table), len(keyed), len(truth))
+    return {"clip": name, "size": f"{size[0]}x{size[1]}", "frames": n,
+            "ours_pa_mpjpe_mm": arm_pa_mpjpe(table.joints[:n, arm_indices()], truth[:n]),
+            **scored_clip(seq, work / f"{name}{tag}-keypoints-run", keyed, mp, n),
+            "ours_ms": float(np.median(table.extra["ms_total"][1:]))}
 
 
 def cmu_row(trial: str, scene: str, work: Path, *, train: Path, seed: int, frames: int,
-            lifter: Path | None) -> dict:
-    """One CMU-driven clip: ``trial``'s motion (``train/cmu_<trial>.amc``) rendered in ``scene``'s
-    setting, tracked with MediaPipe's 2D arm joints as keypoints and the lifter file ``lifter``;
-    arm PA-MPJPE of ours and of MediaPipe's 3D. MediaPipe's landmarks are kept in
-    ``work/<trial>-mediapipe.npz`` (with ``world33``/``visibility33``) for later analyses."""
-    from mocap.io.pose_table import PoseTable
+            lifter: Path | None, size: tuple[int, int] = SIZE) -> dict:
+    """One CMU-driven clip: ``trial``'s motion (``train/cmu_<trial>.amc``) rendered at ``size`` in
+    ``scene``'s setting, tracked with ``--keypoints mediapipe`` (the run's detector) and the
+    lifter file ``lifter``, beside MediaPipe's own 3D on the same frames. MediaPipe's landmarks
+    are kept in ``work/<trial>-mediapipe.npz`` (with ``world33``/``visibility33``)."""
     from mocap.io.video import iter_frames
     from mocap.synth import generate_sequence
 
+    tag = "" if size == SIZE else f"-{size[0]}x{size[1]}"
     name = f"cmu_{trial}"
-    seq = generate_sequence(scene, work / name, frames=frames, seed=seed, motion=train / f"{name}.amc", progress=False)
-    truth = PoseTable.read(seq / "ground_truth.csv").joints[:, arm_indices()]
-    mp = run_mediapipe(list(iter_frames(seq / "frames")), upscale=4)
-    np.savez(work / f"{trial}-mediapipe.npz", **mp)
-    keyed = _track(seq, work / f"{name}-keypoints-run", overlay=False,
-                   keypoints=str(keypoint_file(mp["uv"], work / f"{name}-keypoints.csv", mp)), lifter=lifter)
-    ours, theirs = arm_pa_mpjpe(keyed.joints[:, arm_indices()], truth), arm_pa_mpjpe(mp["world"], truth)
-    return {"clip": trial, "scene": scene, "frames": len(keyed), "lifter": None if lifter is None else lifter.name,
-            "ours_keypoints_pa_mpjpe_mm": ours, "mediapipe_pa_mpjpe_mm": theirs, "ratio": ours / theirs,
-            "mediapipe_found": float(np.isfinite(mp["world"]).all(axis=(1, 2)).mean()),
-            "ours_keypoints_ms": float(np.median(keyed.extra["ms_total"][1:])),
-            "mediapipe_ms": float(np.median(mp["ms"][1:]))}
+    seq = generate_sequence(scene, work / f"{name}{tag}", frames=frames, seed=seed, size=size,
+                            motion=train / f"{name}.amc", progress=False)
+    mp = run_mediapipe(list(iter_frames(seq / "frames")))
+    np.savez(work / f"{trial}{tag}-mediapipe.npz", **mp)
+    run = work / f"{name}{tag}-keypoints-run"
+    keyed = _track(seq, run, overlay=False, keypoints="mediapipe", lifter=lifter)
+    n = min(len(keyed), len(mp["world"]))
+    return {"clip": trial, "scene": scene, "size": f"{size[0]}x{size[1]}", "frames": n,
+            "lifter": None if lifter is None else lifter.name, **scored_clip(seq, run, keyed, mp, n)}
 
 
 def real_row(video: Path, work: Path, out: Path) -> dict:
@@ -289,12 +361,41 @@ def _still(frame: np.ndarray, ours: np.ndarray, ref: np.ndarray, path: Path) -> 
     plt.close(fig)
 
 
+#: The columns of the tables of ours with MediaPipe's keypoints against MediaPipe's own 3D (keys, headings).
+KEYED_COLUMNS = (("detector_swapped", "detector: labels swapped"), ("detector_error_px", "detector: arms 2D error px"),
+                 ("ours_keypoints_pa_mpjpe_mm", "ours PA-MPJPE arms mm"), ("mediapipe_pa_mpjpe_mm", "MediaPipe's 3D"),
+                 ("pa_ratio", "PA ratio"), ("ours_keypoints_centred_mm", "ours arms about their centre mm"),
+                 ("mediapipe_centred_mm", "MediaPipe's"), ("ours_keypoints_accel", "ours Accel mm/frame²"),
+                 ("mediapipe_accel", "MediaPipe's"), ("accel_ratio", "Accel ratio"),
+                 ("ours_keypoints_labels_right", "ours arms labelled right"))
+
+
+def _keyed_table(rows: list[dict], first: str) -> list[str]:
+    """The keyed comparison of ``rows`` (synthetic or CMU), a row a clip."""
+    def cell(key, value):
+        if isinstance(value, float) and math.isnan(value):
+            return "–"
+        if key in ("detector_swapped", "ours_keypoints_labels_right"):
+            return f"{100 * value:.0f} %"
+        if key.endswith("ratio"):
+            return f"**{value:.2f}**"
+        return f"{value:.1f}" if key.endswith("_px") else f"{value:.0f}"
+
+    lines = ["| " + first + " | size | " + " | ".join(h for _, h in KEYED_COLUMNS) + " |",
+             "|---|---|" + "---|" * len(KEYED_COLUMNS)]
+    for r in rows:
+        lines.append(f"| {r['clip']} | {r.get('size', '160x120')} | "
+                     + " | ".join(cell(k, r.get(k, float("nan"))) for k, _ in KEYED_COLUMNS) + " |")
+    return lines
+
+
 def markdown(results: dict) -> str:
-    lines = ["| synthetic clip (60 frames, 160x120) | ours PA-MPJPE arms (mm) | MediaPipe PA-MPJPE arms (mm) "
-             "| MediaPipe found | ours ms/frame | MediaPipe ms/frame |", "|---|---|---|---|---|---|"]
+    lines = ["| synthetic clip (60 frames) | size | ours PA-MPJPE arms (mm) | MediaPipe PA-MPJPE arms (mm) "
+             "| MediaPipe found | ours ms/frame | MediaPipe ms/frame |", "|---|---|---|---|---|---|---|"]
     for r in results["synthetic"]:
-        lines.append(f"| {r['clip']} | {r['ours_pa_mpjpe_mm']:.0f} | {r['mediapipe_pa_mpjpe_mm']:.0f} | "
-                     f"{100 * r['mediapipe_found']:.0f} % | {r['ours_ms']:.1f} | {r['mediapipe_ms']:.1f} |")
+        lines.append(f"| {r['clip']} | {r.get('size', '160x120')} | {r['ours_pa_mpjpe_mm']:.0f} | "
+                     f"{r['mediapipe_pa_mpjpe_mm']:.0f} | {100 * r['mediapipe_found']:.0f} % | {r['ours_ms']:.1f} | "
+                     f"{r['mediapipe_ms']:.1f} |")
     lines += ["", "| real clip (640x480) | frames | background chosen | PCK@0.5 shoulder width vs MediaPipe | "
               "per joint (r/l shoulder, elbow, wrist) | ours ms/frame | MediaPipe ms/frame |",
               "|---|---|---|---|---|---|---|"]
@@ -307,16 +408,10 @@ def markdown(results: dict) -> str:
     keyed_synthetic = [r for r in results["synthetic"] if "ours_keypoints_pa_mpjpe_mm" in r]
     keyed_real = [r for r in results["real"] if "ours_keypoints_frames_all_within_quarter" in r]
     if keyed_synthetic:
-        lines += ["", "| synthetic clip, with MediaPipe's 2D as keypoints | ours PA-MPJPE arms (mm) | ratio to "
-                  "MediaPipe's 3D |", "|---|---|---|"]
-        lines += [f"| {r['clip']} | {r['ours_keypoints_pa_mpjpe_mm']:.0f} | "
-                  f"{r['ours_keypoints_pa_mpjpe_mm'] / r['mediapipe_pa_mpjpe_mm']:.2f} |" for r in keyed_synthetic]
+        lines += ["", *_keyed_table(keyed_synthetic, "synthetic clip, `--keypoints mediapipe`")]
     if results.get("cmu"):
-        lines += ["", "| CMU-driven clip (subject held out of the lifter), MediaPipe's 2D as keypoints | scene "
-                  "| frames | lifter | ours PA-MPJPE arms (mm) | MediaPipe's 3D (mm) | ratio |", "|---|---|---|---|---|---|---|"]
-        lines += [f"| {r['clip']} | {r['scene']} | {r['frames']} | {r['lifter'] or 'shipped'} | "
-                  f"{r['ours_keypoints_pa_mpjpe_mm']:.0f} | {r['mediapipe_pa_mpjpe_mm']:.0f} | **{r['ratio']:.2f}** |"
-                  for r in results["cmu"]]
+        lines += ["", *_keyed_table(results["cmu"], "CMU-driven clip (subject held out of the lifter), "
+                                                    "`--keypoints mediapipe`")]
     if keyed_real:
         lines += ["", "| real clip | frames with all six arm joints within 1/4 shoulder width of MediaPipe: ours | "
                   "ours with `--keypoints mediapipe` | failed frames where MediaPipe found the person | "
@@ -340,7 +435,7 @@ def report_section(folder: Path, rel: str = "peers") -> list[str]:
          "What a user with their own video would otherwise pick: MediaPipe Pose 0.10.14 (BlazePose, model "
          "complexity 1, video mode), on the same frames. Synthetic: PA-MPJPE of shoulders, elbows and wrists "
          "against the ground truth, our tracker with the clip's true calibration and background, MediaPipe's "
-         "world landmarks from the frames enlarged 4x. Real: `python -m mocap track CLIP` with no other option "
+         "world landmarks from the same frames (MediaPipe resamples the person itself). Real: `python -m mocap track CLIP` with no other option "
          "(no background plate, automatic calibration, working resolution chosen by the tracker); the share of "
          "our projected shoulders, elbows and wrists (`poses.csv` `_u`/`_v`) within half of MediaPipe's "
          "shoulder width of its 2D landmarks, MediaPipe taken as the reference. One view cannot tell size from "
@@ -377,7 +472,17 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--cmu-frames", type=int, default=CMU_FRAMES, help="cmu: frames per clip (25 fps)")
     p.add_argument("--lifter", type=Path, default=None,
                    help="cmu: the lifter file, trained without --subject (default: the shipped one, which saw it)")
+    p.add_argument("--size", default=f"{SIZE[0]}x{SIZE[1]}",
+                   help="synthetic and cmu: the clips' size WxH in pixels, for MediaPipe alone and the tracker alike "
+                        f"(default {SIZE[0]}x{SIZE[1]})")
     args = p.parse_args(argv)
+    try:
+        size = tuple(int(v) for v in args.size.lower().split("x"))
+        if len(size) != 2 or min(size) < 16:
+            raise ValueError
+    except ValueError:
+        print(f"error: --size takes WxH in pixels (at least 16 each), got {args.size!r}")
+        return 2
     try:
         import mediapipe  # noqa: F401
     except ImportError:
@@ -398,10 +503,10 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         train = args.train or args.data / "mocap" / "train"
         results["cmu"] = [cmu_row(t, CMU_SCENES[i % len(CMU_SCENES)], work, train=train, seed=args.seed,
-                                  frames=args.cmu_frames, lifter=args.lifter)
+                                  frames=args.cmu_frames, lifter=args.lifter, size=size)
                           for i, t in enumerate(trials)]
     if args.only in (None, "synthetic"):
-        results["synthetic"] = [synthetic_row(name, work, args.seed) for name in SYNTHETIC]
+        results["synthetic"] = [synthetic_row(name, work, args.seed, size) for name in SYNTHETIC]
     if args.only in (None, "real"):
         results["real"] = [real_row(args.data / "video" / clip, work, args.out) for clip in REAL]
     (args.out / "results.json").write_text(json.dumps(results, indent=2))

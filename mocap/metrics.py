@@ -40,7 +40,7 @@ from mocap.body.skeleton import JOINT_NAMES
 from mocap.render.camera import Camera
 
 __all__ = ["ACCELERATION_ALIGNMENTS", "DEFAULT_FAILURE_MM", "ROOT_JOINT", "SUMMARY_KEYS", "acceleration_error",
-           "failure_rate", "joint_angle_error", "mpjpe",
+           "centred_mpjpe", "failure_rate", "joint_angle_error", "mpjpe",
            "pa_mpjpe", "pck_2d", "reprojection_error", "root_relative_mpjpe", "summary"]
 
 #: Frames whose MPJPE exceeds this many millimetres count as failures (docs/design.md section 5).
@@ -119,6 +119,27 @@ def root_relative_mpjpe(pred, true, *, per_frame: bool = False):
         raise ValueError(f"root-relative errors need the {len(JOINT_NAMES)} named joints, got {p.shape[1]}")
     r = JOINT_NAMES.index(ROOT_JOINT)
     return mpjpe(p - p[:, r:r + 1], t - t[:, r:r + 1], per_frame=per_frame)
+
+
+def centred_mpjpe(pred, true, *, per_frame: bool = False):
+    """Mean per-joint position error with each skeleton moved to put the centroid of its joints
+    at 0, and no rotation: a body turned around (its left arm where the right should be, as after
+    a detector's left/right swap) keeps its full error here, where :func:`pa_mpjpe`'s rotation
+    hides it.
+
+    Parameters
+    ----------
+    pred, true : array_like, shape (N, J, 3), metres
+        Any joints in the same order (e.g. the arms' alone).
+    per_frame : bool
+        Return the error of each frame instead of the mean.
+
+    Returns
+    -------
+    float or ndarray of shape (N,), millimetres
+    """
+    p, t = _joint_pair(pred, true)
+    return mpjpe(p - p.mean(axis=1, keepdims=True), t - t.mean(axis=1, keepdims=True), per_frame=per_frame)
 
 
 def _procrustes_align(p: np.ndarray, t: np.ndarray) -> np.ndarray:

@@ -7,8 +7,8 @@ from scipy.spatial.transform import Rotation
 
 from mocap.body.pose import PARAMETER_INDEX, neutral_pose
 from mocap.body.skeleton import JOINT_NAMES
-from mocap.metrics import (SUMMARY_KEYS, acceleration_error, failure_rate, joint_angle_error, mpjpe, pa_mpjpe,
-                           reprojection_error, root_relative_mpjpe, summary)
+from mocap.metrics import (SUMMARY_KEYS, acceleration_error, centred_mpjpe, failure_rate, joint_angle_error, mpjpe,
+                           pa_mpjpe, reprojection_error, root_relative_mpjpe, summary)
 from mocap.render.camera import Camera
 
 
@@ -163,3 +163,15 @@ def test_summary_has_exactly_the_run_json_keys():
 def test_bad_input_is_a_value_error(call):
     with pytest.raises(ValueError):
         call()
+
+
+def test_centred_mpjpe_ignores_a_shift_but_not_a_body_turned_around():
+    """Two points 0.4 m apart (the hands): shifted, no error; their labels swapped (the body
+    turned around about its centre), each is 0.4 m off, which PA-MPJPE's rotation undoes."""
+    true = np.array([[[-0.2, 0.0, 2.0], [0.2, 0.0, 2.0], [0.0, 0.3, 2.0]]])
+    assert centred_mpjpe(true + [0.1, -0.05, 0.3], true) == pytest.approx(0.0, abs=1e-9)
+    turned = true[:, [1, 0, 2]]
+    assert centred_mpjpe(turned, true) == pytest.approx(1000.0 * (0.4 + 0.4 + 0.0) / 3)
+    assert pa_mpjpe(turned, true) < 1.0
+    np.testing.assert_allclose(centred_mpjpe(np.concatenate([true, turned]), np.concatenate([true, true]),
+                                             per_frame=True), [0.0, 800.0 / 3], atol=1e-9)

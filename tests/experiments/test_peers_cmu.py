@@ -34,9 +34,23 @@ def test_the_cmu_group_renders_the_held_out_subjects_trial_and_passes_the_lifter
                 "world33": np.zeros((n, 33, 3)), "visibility33": np.ones((n, 33))}
 
     def fake_track(video, out, *, overlay, keypoints="none", lifter=None):
+        """The truth as ours; as the run's detector, the truth projected, left and right
+        exchanged on frame 1 and shifted 3 px on frame 2, nothing found on frame 3."""
+        from mocap.calibrate import Calibration
+        from mocap.io.keypoints import Keypoints, write_keypoints
+
         seen["sequence"], seen["lifter"], seen["keypoints"] = video, lifter, keypoints
         table = PoseTable.read(video / "ground_truth.csv")
         table.extra["ms_total"] = np.ones(len(table))
+        camera = Calibration.from_json(video / "calibration.json").camera
+        frames = {}
+        for i, joints in enumerate(table.joints):
+            k = Keypoints(camera.project(joints), np.ones(len(joints)))
+            frames[i] = {1: _swapped(k),
+                         2: Keypoints(k.uv + [3.0, 0.0], k.confidence),
+                         3: Keypoints.empty()}.get(i, k)
+        out.mkdir(parents=True, exist_ok=True)
+        write_keypoints(out / "keypoints.csv", frames)
         return table
 
     real_generate = __import__("mocap.synth", fromlist=["generate_sequence"]).generate_sequence
@@ -53,19 +67,40 @@ def test_the_cmu_group_renders_the_held_out_subjects_trial_and_passes_the_lifter
     out = tmp_path / "out"
     assert peers.main(["--only", "cmu", "--data", str(shared_data), "--trials", "14_24", "--cmu-frames", "4",
                        "--lifter", str(lifter), "--out", str(out)]) == 0
-    assert seen["motion"].name == "cmu_14_24.amc" and seen["frames"] == 4 and seen["upscale"] == 4
-    assert seen["lifter"] == lifter and seen["keypoints"].endswith("cmu_14_24-keypoints.csv")
+    assert seen["motion"].name == "cmu_14_24.amc" and seen["frames"] == 4 and seen["upscale"] == 1
+    assert seen["lifter"] == lifter and seen["keypoints"] == "mediapipe"     # the run's own detector
     (row,) = json.loads((out / "results.json").read_text())["cmu"]
     truth = PoseTable.read(seen["sequence"] / "ground_truth.csv").joints[:, peers.arm_indices()]
     moved = truth.copy()
     moved[:, 0] += offset / 1.3
     assert row["clip"] == "14_24" and row["frames"] == 4 and row["lifter"] == lifter.name
     assert row["ours_keypoints_pa_mpjpe_mm"] == pytest.approx(0.0, abs=1e-6)
+    assert row["ours_keypoints_centred_mm"] == pytest.approx(0.0, abs=1e-6)
+    assert row["ours_keypoints_labels_right"] == 1.0
     assert row["mediapipe_pa_mpjpe_mm"] == pytest.approx(pa_mpjpe(moved, truth), rel=1e-6)
-    assert row["ratio"] == pytest.approx(0.0, abs=1e-6)
+    assert row["pa_ratio"] == pytest.approx(0.0, abs=1e-6)
+    # MediaPipe's 3D about its centre: scaled by 1.3 (no alignment undoes it) and one joint moved
+    centre = lambda x: x - x.mean(axis=1, keepdims=True)
+    world = 1.3 * truth + 0.5
+    world[:, 0] += offset
+    assert row["mediapipe_centred_mm"] == pytest.approx(
+        1e3 * np.linalg.norm(centre(world) - centre(truth), axis=2).mean(), rel=1e-6)
+    # the detector: found on 3 of 4 frames, swapped on 1 of those 3, 2D error the median of
+    # 0 px (frames 0, 1 under the better labelling) and 3 px (frame 2) over the 18 joints
+    assert row["detector_found"] == pytest.approx(0.75) and row["detector_swapped"] == pytest.approx(1 / 3)
+    assert row["detector_error_px"] == pytest.approx(0.0, abs=1e-6)
     assert "14_24" in (out / "peers.md").read_text()
     # trials of another subject than the held-out one are refused
     assert peers.main(["--only", "cmu", "--data", str(shared_data), "--trials", "02_01", "--out", str(out)]) == 2
+
+
+def _swapped(k):
+    """``k`` with every right joint's row given to its left twin and back."""
+    from mocap.body.skeleton import JOINT_NAMES
+    from mocap.io.keypoints import Keypoints
+
+    twin = [JOINT_NAMES.index({"r_": "l_", "l_": "r_"}.get(n[:2], n[:2]) + n[2:]) for n in JOINT_NAMES]
+    return Keypoints(k.uv[twin], k.confidence[twin])
 
 
 def test_track_hands_the_lifter_file_to_the_tracker_config(tmp_path, monkeypatch):
