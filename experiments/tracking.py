@@ -168,8 +168,9 @@ def jitter_table(rows: dict[str, list[dict]]) -> str:
     and of the PA-aligned arms (mm/frame^2) and median per-frame errors about the neck and in the
     camera (mm): written (smoothed) / decoded (before the smoother) / naive baseline; and how far
     the written poses stray from the decoded ones: the largest mean joint distance over the frames
-    (``FrameResult.smoothed_mm``) and the largest distance of any one joint (mm), and the largest step of the written chest heading from one frame to the next (degrees; issue
-    44, :func:`experiments.ambiguity.written_against_decoded`)."""
+    (``FrameResult.smoothed_mm``) and the largest distance of any one joint (mm), and the largest
+    step of the written chest heading from one frame to the next (degrees; issue 44,
+    :func:`experiments.ambiguity.written_against_decoded`)."""
     lines = ["| configuration | sequence | seed | accel about the neck | accel arms (PA) | median about the neck | "
              "median in the camera | written from decoded, max mm (mean joint / worst joint) | heading step, max ° |",
              "|---|---|---|---|---|---|---|---|---|"]

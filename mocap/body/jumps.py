@@ -252,7 +252,8 @@ def turned_mirror(pose) -> np.ndarray:
 
     The chest heading ``yaw`` becomes the 2π-equivalent of ``pi - yaw`` nearest ``yaw``
     (:func:`mocap.body.pose.nearest_heading`: the turned body continues the heading it came from,
-    whatever number of turns that holds; issue 44); the sideways lean and the head's tilt and turn change sign; each arm takes the other arm's angles.
+    whatever number of turns that holds; issue 44); the sideways lean and the head's tilt and turn
+    change sign; each arm takes the other arm's angles.
 
     Parameters
     ----------

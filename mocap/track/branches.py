@@ -11,9 +11,9 @@ keeps every bone's length, so a keypoint distance cannot tell the two apart; the
 edges, the prior and time may.
 
 The exact geometry is :func:`mocap.body.jumps.flipped_arm_joints` (the kinematic jumps' too); this
-module places the arm on it and prunes. Stateless: a pose, the model and the camera in, typed records out. The tracker makes the depth
-alternatives of its converged leader candidates every frame (:mod:`mocap.track.tracker`);
-``experiments.branch_audit`` scores the truth against its own.
+module places the arm on it and prunes. Stateless: a pose, the model and the camera in, typed
+records out. The tracker makes the depth alternatives of its converged leader candidates every
+frame (:mod:`mocap.track.tracker`); ``experiments.branch_audit`` scores the truth against its own.
 """
 from __future__ import annotations
 
@@ -54,7 +54,8 @@ class DepthAlternative:
     side : str
         ``"r"`` or ``"l"``: the actor's arm that changed.
     flipped : tuple of str
-        The bones whose depth was flipped about their parent joint (:data:`~mocap.body.jumps.ARM_BONES` names).
+        The bones whose depth was flipped about their parent joint
+        (:data:`~mocap.body.jumps.ARM_BONES` names).
     pose : ndarray, shape (23,), float64
         The alternative pose (metres, radians, inside the joint limits); only ``side``'s seven arm
         angles differ from the pose it came from.
@@ -79,8 +80,8 @@ def depth_alternatives(pose, model: BodyModel, camera: Camera, *, sides=("r", "l
                        min_change_m: float = MIN_CHANGE_M) -> list[DepthAlternative]:
     """The depth alternatives of ``pose`` that the joint limits allow, per arm and flip.
 
-    For each side and each set of flipped bones, :func:`~mocap.body.jumps.flipped_arm_joints` gives the exact
-    joints and :func:`mocap.body.ik.place_arm` places the arm on them from ``pose``. An alternative
+    For each side and each set of flipped bones, :func:`~mocap.body.jumps.flipped_arm_joints` gives
+    the exact joints and :func:`mocap.body.ik.place_arm` places the arm on them from ``pose``. An alternative
     is kept when some arm joint moved at least ``min_change_m``, the placed joints are within
     ``max_miss_m`` of the exact ones and every joint projects within ``max_shift_px`` of
     ``pose``'s.
