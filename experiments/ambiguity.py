@@ -69,7 +69,7 @@ from experiments import RESULTS_DIR
 from experiments.config import sequence_list
 from experiments.units import (EXTENSIONS, PREPARED_FILE, PREPARED_FILE_PAPER, DataSpec, load_prepared, load_sequence,
                                prepare_data, prepared_file)
-from mocap.body import JOINT_NAMES
+from mocap.body import JOINT_NAMES, PARAMETER_INDEX
 from mocap.io.files import read_json, write_json
 from mocap.metrics import (DEFAULT_FAILURE_MM, acceleration_error, failure_rate, mpjpe, pa_mpjpe, reprojection_error,
                            root_relative_mpjpe)
@@ -293,6 +293,7 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
             "flip_oracle_reprojection_px": reprojection_error(oracle, truth, camera),
             "cost_equivalent_failure_rate": equivalent, "cost_equivalent_both_rate": equivalent_both,
             **jitter(joints, decoded, truth),
+            **written_against_decoded(np.array([r.pose for r in results]), joints, decoded),
             "decoded_poses": np.array([r.decoded_pose for r in results]).tolist()}
 
 
@@ -346,6 +347,24 @@ def jitter(joints: np.ndarray, decoded: np.ndarray, truth: np.ndarray) -> dict:
         row[f"{name}median_frame_mm"] = float(np.median(mpjpe(x, truth, per_frame=True)))
         row[f"{name}median_frame_root_relative_mm"] = float(np.median(root_relative_mpjpe(x, truth, per_frame=True)))
     return row
+
+
+def written_against_decoded(written_poses: np.ndarray, joints: np.ndarray, decoded: np.ndarray) -> dict:
+    """How far the written trajectory strays from the decoded one (issue 44: a heading brought
+    360 degrees away made the smoother sweep the body through a turn).
+
+    ``written_decoded_mm``: the largest distance of any joint of a written pose from the same
+    joint of its frame's decoded pose, over all frames (mm); ``written_decoded_mean_mm``: the
+    largest over frames of the mean joint distance (``FrameResult.smoothed_mm``; mm);
+    ``heading_step_deg``: the largest change of the written chest heading (``chest_yaw``, as
+    written: unwrapped) from one frame to the next (degrees). Arrays: written poses (N, 23),
+    metres and radians; written and decoded joints (N, 10, 3), metres.
+    """
+    distance = np.linalg.norm(np.asarray(joints) - np.asarray(decoded), axis=2)        # (N, 10), metres
+    yaw = np.asarray(written_poses)[:, PARAMETER_INDEX["chest_yaw"]]
+    return {"written_decoded_mm": 1e3 * float(distance.max(initial=0.0)),
+            "written_decoded_mean_mm": 1e3 * float(distance.mean(axis=1).max(initial=0.0)),
+            "heading_step_deg": math.degrees(float(np.abs(np.diff(yaw)).max(initial=0.0)))}
 
 
 def register_from_truth(prepared, model, camera, true_poses: np.ndarray, config: TrackerConfig, lag: int,

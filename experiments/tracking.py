@@ -8,7 +8,9 @@ generator seed, through :func:`experiments.ambiguity.measure`: MPJPE, root-relat
 the acceleration error of the written poses (about the neck; issue 39) beside the decoded
 poses' (before the smoother) and the naive baseline's (a centred mean over +-4 frames of the
 decoded joints), and the tracking time per frame on one core. A second table gives each
-sequence's acceleration errors and per-frame median errors, written / decoded / naive.
+sequence's acceleration errors and per-frame median errors, written / decoded / naive, and how far
+the written poses stray from the decoded ones (the largest joint distance, and the largest step of
+the written heading from one frame to the next: issue 44).
 
 One JSON file per (configuration, sequence, seed) under ``--out`` (written atomically: an
 interrupted run resumes where it stopped). Prints the Markdown table (medians over sequences,
@@ -164,15 +166,22 @@ def table(summaries: dict[str, dict]) -> str:
 def jitter_table(rows: dict[str, list[dict]]) -> str:
     """Markdown table of each (configuration, sequence, seed)'s acceleration errors about the neck
     and of the PA-aligned arms (mm/frame^2) and median per-frame errors about the neck and in the
-    camera (mm): written (smoothed) / decoded (before the smoother) / naive baseline."""
+    camera (mm): written (smoothed) / decoded (before the smoother) / naive baseline; and how far
+    the written poses stray from the decoded ones: the largest mean joint distance over the frames
+    (``FrameResult.smoothed_mm``) and the largest distance of any one joint (mm), and the largest
+    step of the written chest heading from one frame to the next (degrees; issue 44,
+    :func:`experiments.ambiguity.written_against_decoded`)."""
     lines = ["| configuration | sequence | seed | accel about the neck | accel arms (PA) | median about the neck | "
-             "median in the camera |", "|---|---|---|---|---|---|---|"]
+             "median in the camera | written from decoded, max mm (mean joint / worst joint) | heading step, max ° |",
+             "|---|---|---|---|---|---|---|---|---|"]
     three = lambda r, key: " / ".join(f"{r.get(p + key, math.nan):.1f}" for p in ("", "decoded_", "naive_"))
     for name, rs in rows.items():
         for r in rs:
             lines.append(f"| {name} | {r['sequence']} | {r.get('seed', '')} | {three(r, 'accel_mm')} | "
                          f"{three(r, 'accel_arms_pa_mm')} | {three(r, 'median_frame_root_relative_mm')} | "
-                         f"{three(r, 'median_frame_mm')} |")
+                         f"{three(r, 'median_frame_mm')} | {r.get('written_decoded_mean_mm', math.nan):.0f} / "
+                         f"{r.get('written_decoded_mm', math.nan):.0f} | "
+                         f"{r.get('heading_step_deg', math.nan):.1f} |")
     return "\n".join(lines)
 
 

@@ -8,7 +8,8 @@ joint perpendicular to the ray, so reflecting the distal joint in that plane kee
 projection exactly and changes its depth. A tracker that holds one branch can *jump* to the
 other instead of hoping a local search crosses the ridge between them.
 
-For an arm this gives (stateless: pose and skeleton in, new poses out):
+The geometry is :func:`flipped_arm_joints` (also the tracker's exact depth alternatives,
+:mod:`mocap.track.branches`). For an arm this gives (stateless: pose and skeleton in, new poses out):
 
 * ``"forearm"``: the wrist reflected about the plane through the elbow perpendicular to the
   ray through the wrist (shoulder, elbow and wrist project where they did);
@@ -35,11 +36,14 @@ import numpy as np
 
 from mocap.body.ik import reach_arm
 from mocap.body.kinematics import Skeleton, joint_positions, segment_transforms
-from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX, check_pose, clamp_to_limits
+from mocap.body.pose import HEADING, JOINT_LIMITS, PARAMETER_INDEX, check_pose, clamp_to_limits, nearest_heading
 from mocap.body.skeleton import JOINT_INDEX, SEGMENT_NAMES
 
 #: Names of the arm jumps, in the order :func:`arm_jumps` returns them.
 ARM_JUMPS: tuple[str, ...] = ("upper_arm", "forearm", "both")
+#: The bones (:data:`ARM_BONES` names) each arm jump flips (:func:`flipped_arm_joints`).
+_JUMP_BONES: dict[str, tuple[str, ...]] = {"upper_arm": ("upper_arm",), "forearm": ("forearm",),
+                                           "both": ("upper_arm", "forearm")}
 #: Sides of the body, as in the parameter names.
 SIDES: tuple[str, ...] = ("r", "l")
 _SEGMENT = {name: i for i, name in enumerate(SEGMENT_NAMES)}
@@ -70,22 +74,69 @@ def ray_sphere_depths(direction, centre, radius: float) -> np.ndarray:
     return np.array([mid - half, mid + half])
 
 
-def reflect_on_ray(point, pivot) -> np.ndarray:
-    """Reflect ``point`` about the plane through ``pivot`` perpendicular to the ray through ``point``.
+#: An arm's bones in chain order, each with its parent and child joint (:data:`JOINT_INDEX` names
+#: without the side).
+ARM_BONES: tuple[tuple[str, str, str], ...] = (("upper_arm", "shoulder", "elbow"), ("forearm", "elbow", "wrist"),
+                                               ("hand", "wrist", "hand"))
+
+
+def flipped_arm_joints(joints, side: str, flipped) -> np.ndarray:
+    """The joints with some of one arm's bones taken to their other depth branch (exact geometry).
+
+    Going down the arm (:data:`ARM_BONES`), each child joint is put on its own camera ray (the ray
+    from the camera centre through its current position) at its bone's length from its parent's
+    new position (:func:`ray_sphere_depths`): on the other crossing than now for a flipped bone,
+    on the same one (nearer or farther than the ray's closest point to the parent) for the others.
+    For a flipped bone whose parent did not move, that is the child reflected about the plane
+    through the parent perpendicular to the child's ray. Where the moved parent leaves the ray out
+    of the bone's reach, the child goes to the ray's closest point to the parent (its bone length
+    then changes: :func:`arm_jumps` drops such a jump, and
+    :func:`mocap.track.branches.depth_alternatives` prunes it by its projection).
 
     Parameters
     ----------
-    point, pivot : array_like, shape (3,), metres, camera coordinates
+    joints : array_like, shape (10, 3), metres
+        Camera coordinates of the joints (:data:`~mocap.body.skeleton.JOINT_NAMES` order), z > 0.
+    side : {"r", "l"}
+    flipped : iterable of str
+        Bone names of :data:`ARM_BONES`.
 
     Returns
     -------
-    ndarray, shape (3,), metres
-        On the same camera ray as ``point`` (same projection) and the same distance from
-        ``pivot``: the ray's other crossing of the sphere about ``pivot``.
+    ndarray, shape (10, 3), float64
+        Only ``side``'s elbow, wrist and hand rows change.
     """
-    p, c = np.asarray(point, dtype=np.float64), np.asarray(pivot, dtype=np.float64)
-    n = p / np.linalg.norm(p)
-    return p - 2.0 * float((p - c) @ n) * n
+    return _flip_chain(joints, side, flipped)[0]
+
+
+def _flip_chain(joints, side: str, flipped) -> tuple[np.ndarray, frozenset[str]]:
+    """:func:`flipped_arm_joints`, and the bones whose child's ray missed the bone's sphere."""
+    if side not in SIDES:
+        raise ValueError(f"side must be 'r' or 'l', got {side!r}")
+    flips = set(flipped)
+    unknown = flips - {b for b, _, _ in ARM_BONES}
+    if unknown:
+        raise ValueError(f"unknown bones {sorted(unknown)}; the arm's bones are {[b for b, _, _ in ARM_BONES]}")
+    old = np.asarray(joints, dtype=np.float64)
+    if old.shape != (len(JOINT_INDEX), 3) or not np.all(np.isfinite(old)) or np.any(old[:, 2] <= 0):
+        raise ValueError(f"joints must be ({len(JOINT_INDEX)}, 3) finite points in front of the camera")
+    new = old.copy()
+    missed = set()
+    for bone, parent_name, child_name in ARM_BONES:
+        parent, child = JOINT_INDEX[f"{side}_{parent_name}"], JOINT_INDEX[f"{side}_{child_name}"]
+        length = float(np.linalg.norm(old[child] - old[parent]))
+        distance = float(np.linalg.norm(old[child]))
+        ray = old[child] / distance
+        far = distance >= float(ray @ old[parent])           # the child beyond the ray's closest point
+        if bone in flips:
+            far = not far
+        depths = ray_sphere_depths(ray, new[parent], length)
+        if len(depths):
+            new[child] = depths[1 if far else 0] * ray
+        else:
+            missed.add(bone)
+            new[child] = float(ray @ new[parent]) * ray
+    return new, frozenset(missed)
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -182,19 +233,12 @@ def arm_jumps(pose, skeleton: Skeleton, side: str) -> dict[str, np.ndarray]:
     """
     q = check_pose(pose)
     joints = joint_positions(q, skeleton)
-    s, e, w = (joints[JOINT_INDEX[f"{side}_{j}"]] for j in ("shoulder", "elbow", "wrist"))
+    elbow, wrist = JOINT_INDEX[f"{side}_elbow"], JOINT_INDEX[f"{side}_wrist"]
     out = {}
-    w_forearm = reflect_on_ray(w, e)
-    out["forearm"] = arm_angles_for_points(q, skeleton, side, e, w_forearm)
-    e_upper = reflect_on_ray(e, s)
-    ray_w = _unit(w)
-    forearm_length = float(np.linalg.norm(w - e))
-    depths = ray_sphere_depths(ray_w, e_upper, forearm_length)
-    if len(depths):
-        near_side = float(ray_w @ w) < float(ray_w @ e)          # wrist nearer than the elbow's ray point
-        w_upper = depths[0 if near_side else 1] * ray_w
-        out["upper_arm"] = arm_angles_for_points(q, skeleton, side, e_upper, w_upper)
-        out["both"] = arm_angles_for_points(q, skeleton, side, e_upper, reflect_on_ray(w_upper, e_upper))
+    for name, bones in _JUMP_BONES.items():
+        moved, missed = _flip_chain(joints, side, bones)
+        if name == "forearm" or not missed & {"upper_arm", "forearm"}:   # (the forearm's flip keeps the elbow)
+            out[name] = arm_angles_for_points(q, skeleton, side, moved[elbow], moved[wrist])
     return {name: out[name] for name in ARM_JUMPS if name in out}
 
 
@@ -206,8 +250,10 @@ def turned_mirror(pose) -> np.ndarray:
     """The torso's front/back mirror without re-posing: the body reflected through the plane
     facing the camera at its root (its silhouette under an orthographic camera is unchanged).
 
-    The chest heading ``yaw`` becomes ``pi - yaw`` (or ``-pi - yaw``, whichever is nearer); the
-    sideways lean and the head's tilt and turn change sign; each arm takes the other arm's angles.
+    The chest heading ``yaw`` becomes the 2π-equivalent of ``pi - yaw`` nearest ``yaw``
+    (:func:`mocap.body.pose.nearest_heading`: the turned body continues the heading it came from,
+    whatever number of turns that holds; issue 44); the sideways lean and the head's tilt and turn
+    change sign; each arm takes the other arm's angles.
 
     Parameters
     ----------
@@ -220,8 +266,8 @@ def turned_mirror(pose) -> np.ndarray:
     """
     q = check_pose(pose)
     out = q.copy()
-    yaw = q[PARAMETER_INDEX["chest_yaw"]]
-    out[PARAMETER_INDEX["chest_yaw"]] = min((math.pi - yaw, -math.pi - yaw), key=lambda y: abs(y - yaw))
+    yaw = q[PARAMETER_INDEX[HEADING]]
+    out[PARAMETER_INDEX[HEADING]] = nearest_heading(math.pi - yaw, yaw)
     for name in _MIRRORED_SIGNS:
         out[PARAMETER_INDEX[name]] = -q[PARAMETER_INDEX[name]]
     for name, i in PARAMETER_INDEX.items():

@@ -182,6 +182,61 @@ def within_limits(pose, limits: np.ndarray = JOINT_LIMITS) -> bool:
     return bool(np.all(arr >= limits[:, 0]) and np.all(arr <= limits[:, 1]))
 
 
+#: The chest's heading: the one angle that turns the whole body about the vertical (unwrapped).
+HEADING: str = "chest_yaw"
+
+
+def nearest_heading(yaw, reference):
+    """The 2π-equivalent of a chest heading nearest a reference heading, inside the heading's limits.
+
+    Headings 2π apart put every joint in the same place; the tracker keeps the heading unwrapped
+    (limits ±720°) so that a turning actor is followed continuously, and a heading that comes
+    wrapped (a lifter's proposal, a jump) must be brought next to the heading it continues
+    (issue 44). A tie (exactly π away) goes to the even number of turns (``numpy.round``).
+
+    Parameters
+    ----------
+    yaw : float or array_like
+        Headings, radians.
+    reference : float or array_like
+        Headings to come nearest (broadcast against ``yaw``), radians.
+
+    Returns
+    -------
+    float or ndarray, radians
+        ``yaw + 2πk`` with integer ``k``: nearest ``reference`` among those inside the limits of
+        :data:`HEADING` (:data:`JOINT_LIMITS`; a ``yaw`` outside them is first brought inside).
+    """
+    lo, hi = JOINT_LIMITS[PARAMETER_INDEX[HEADING]]
+    y, r = np.asarray(yaw, dtype=np.float64), np.asarray(reference, dtype=np.float64)
+    out = y + 2.0 * math.pi * np.round((r - y) / (2.0 * math.pi))
+    out = np.where(out > hi, out - 2.0 * math.pi * np.ceil((out - hi) / (2.0 * math.pi)), out)
+    out = np.where(out < lo, out + 2.0 * math.pi * np.ceil((lo - out) / (2.0 * math.pi)), out)
+    return float(out) if out.ndim == 0 else out
+
+
+def heading_near(pose, reference: float) -> np.ndarray:
+    """A pose with its chest heading brought to the 2π-equivalent nearest ``reference``.
+
+    Parameters
+    ----------
+    pose : array_like, shape (23,)
+        Metres and radians.
+    reference : float
+        The heading it continues (the parent hypothesis's, a prediction's), radians.
+
+    Returns
+    -------
+    ndarray, shape (23,), float64
+        A new array; only :data:`HEADING` changes, by a whole number of turns
+        (:func:`nearest_heading`), so every joint stays where it was.
+    """
+    out = check_pose(pose)
+    i = PARAMETER_INDEX[HEADING]
+    out[i] = nearest_heading(out[i], reference)
+    return out
+
+
 def pose_to_dict(pose, *, degrees: bool = False) -> dict[str, float]:
     """Pose as ``{name: value}``; angles in degrees when ``degrees`` (for files people read)."""
     arr = check_pose(pose)

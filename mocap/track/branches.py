@@ -10,9 +10,10 @@ now moved parent, and places the arm onto the body within the joint limits
 keeps every bone's length, so a keypoint distance cannot tell the two apart; the silhouette, the
 edges, the prior and time may.
 
-Stateless: a pose, the model and the camera in, typed records out. The tracker makes the depth
-alternatives of its converged leader candidates every frame (:mod:`mocap.track.tracker`);
-``experiments.branch_audit`` scores the truth against its own.
+The exact geometry is :func:`mocap.body.jumps.flipped_arm_joints` (the kinematic jumps' too); this
+module places the arm on it and prunes. Stateless: a pose, the model and the camera in, typed
+records out. The tracker makes the depth alternatives of its converged leader candidates every
+frame (:mod:`mocap.track.tracker`); ``experiments.branch_audit`` scores the truth against its own.
 """
 from __future__ import annotations
 
@@ -21,15 +22,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from mocap.body.ik import ARM_JOINTS, place_arm
+from mocap.body.jumps import flipped_arm_joints
 from mocap.body.kinematics import joint_positions
 from mocap.body.model import BodyModel
 from mocap.body.pose import check_pose
 from mocap.body.skeleton import JOINT_INDEX
 from mocap.render.camera import Camera
 
-#: An arm's bones in chain order, each with its parent and child joint.
-ARM_BONES: tuple[tuple[str, str, str], ...] = (("upper_arm", "shoulder", "elbow"), ("forearm", "elbow", "wrist"),
-                                               ("hand", "wrist", "hand"))
 #: The flips tried per arm by default: the upper arm, the forearm, both.
 DEFAULT_FLIPS: tuple[tuple[str, ...], ...] = (("upper_arm",), ("forearm",), ("upper_arm", "forearm"))
 #: Default largest move of any joint's projection (pixels) for an alternative to be kept.
@@ -55,7 +54,8 @@ class DepthAlternative:
     side : str
         ``"r"`` or ``"l"``: the actor's arm that changed.
     flipped : tuple of str
-        The bones whose depth was flipped about their parent joint (:data:`ARM_BONES` names).
+        The bones whose depth was flipped about their parent joint
+        (:data:`~mocap.body.jumps.ARM_BONES` names).
     pose : ndarray, shape (23,), float64
         The alternative pose (metres, radians, inside the joint limits); only ``side``'s seven arm
         angles differ from the pose it came from.
@@ -75,62 +75,13 @@ class DepthAlternative:
     miss_m: float
 
 
-def flipped_arm_joints(joints, side: str, flipped) -> np.ndarray:
-    """The joints with some of one arm's bones taken to their other depth branch (exact geometry).
-
-    Going down the arm (:data:`ARM_BONES`), each child joint is put on its own camera ray (the ray
-    from the camera centre through its current position) at its bone's length from its parent's
-    new position: on the other intersection than now for a flipped bone, on the same one (nearer or
-    farther than the ray's closest point to the parent) for the others. Where the moved parent
-    leaves the ray out of the bone's reach, the child goes to the ray's closest point to the
-    parent, moved along the ray to keep the length as nearly as it can (its projection then
-    moves: :func:`depth_alternatives` prunes it).
-
-    Parameters
-    ----------
-    joints : array_like, shape (10, 3), metres
-        Camera coordinates of the joints (:data:`~mocap.body.skeleton.JOINT_NAMES` order), z > 0.
-    side : {"r", "l"}
-    flipped : iterable of str
-        Bone names of :data:`ARM_BONES`.
-
-    Returns
-    -------
-    ndarray, shape (10, 3), float64
-        Only ``side``'s elbow, wrist and hand rows change.
-    """
-    if side not in ("r", "l"):
-        raise ValueError(f"side must be 'r' or 'l', got {side!r}")
-    flips = set(flipped)
-    unknown = flips - {b for b, _, _ in ARM_BONES}
-    if unknown:
-        raise ValueError(f"unknown bones {sorted(unknown)}; the arm's bones are {[b for b, _, _ in ARM_BONES]}")
-    old = np.asarray(joints, dtype=np.float64)
-    if old.shape != (len(JOINT_INDEX), 3) or not np.all(np.isfinite(old)) or np.any(old[:, 2] <= 0):
-        raise ValueError(f"joints must be ({len(JOINT_INDEX)}, 3) finite points in front of the camera")
-    new = old.copy()
-    for bone, parent_name, child_name in ARM_BONES:
-        parent, child = JOINT_INDEX[f"{side}_{parent_name}"], JOINT_INDEX[f"{side}_{child_name}"]
-        length = float(np.linalg.norm(old[child] - old[parent]))
-        distance = float(np.linalg.norm(old[child]))
-        ray = old[child] / distance
-        far = distance >= float(ray @ old[parent])           # the child beyond the ray's closest point
-        if bone in flips:
-            far = not far
-        p = new[parent]
-        closest = float(ray @ p)
-        half_chord = np.sqrt(max(closest ** 2 - (float(p @ p) - length ** 2), 0.0))
-        new[child] = (closest + half_chord if far else closest - half_chord) * ray
-    return new
-
-
 def depth_alternatives(pose, model: BodyModel, camera: Camera, *, sides=("r", "l"), flips=DEFAULT_FLIPS,
                        max_shift_px: float = MAX_SHIFT_PX, max_miss_m: float = MAX_MISS_M,
                        min_change_m: float = MIN_CHANGE_M) -> list[DepthAlternative]:
     """The depth alternatives of ``pose`` that the joint limits allow, per arm and flip.
 
-    For each side and each set of flipped bones, :func:`flipped_arm_joints` gives the exact
-    joints and :func:`mocap.body.ik.place_arm` places the arm on them from ``pose``. An alternative
+    For each side and each set of flipped bones, :func:`~mocap.body.jumps.flipped_arm_joints` gives
+    the exact joints and :func:`mocap.body.ik.place_arm` places the arm on them from ``pose``. An alternative
     is kept when some arm joint moved at least ``min_change_m``, the placed joints are within
     ``max_miss_m`` of the exact ones and every joint projects within ``max_shift_px`` of
     ``pose``'s.
@@ -145,7 +96,7 @@ def depth_alternatives(pose, model: BodyModel, camera: Camera, *, sides=("r", "l
         The camera the projections are compared in (pixels).
     sides : iterable of {"r", "l"}
     flips : iterable of tuple of str
-        Sets of bones (:data:`ARM_BONES` names) to flip, each tried on every side.
+        Sets of bones (:data:`~mocap.body.jumps.ARM_BONES` names) to flip, each tried on every side.
     max_shift_px, max_miss_m, min_change_m : float
         The pruning thresholds (pixels, metres, metres); see the module's constants.
 
@@ -181,4 +132,4 @@ def depth_alternatives(pose, model: BodyModel, camera: Camera, *, sides=("r", "l
     return out
 
 
-__all__ = ["ARM_BONES", "DEFAULT_FLIPS", "DepthAlternative", "depth_alternatives", "flipped_arm_joints"]
+__all__ = ["DEFAULT_FLIPS", "DepthAlternative", "depth_alternatives"]

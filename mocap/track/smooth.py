@@ -20,6 +20,11 @@ A depth branch switch is not blended: where any joint of the decoded path moves 
 (its pose, velocity 0) and the backward recursion stops there, so no written pose lies between
 two branches.
 
+The chest's heading is kept unwrapped (limits ±720°) and a decoded heading may come a whole turn
+away from the one before it with the same joints: each observed heading is brought to the
+2π-equivalent nearest its prediction (the filtered heading of the frame before, moved on by its
+velocity; at a restart too), so the filter never sweeps the body through a turn (issue 44).
+
 :meth:`Smoother.state` and :meth:`Smoother.restore` carry the filtered state exactly (floats in
 JSON round-trip bit for bit).
 """
@@ -30,11 +35,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mocap.body.pose import JOINT_LIMITS, N_PARAMETERS, PARAMETER_NAMES
+from mocap.body.pose import HEADING, JOINT_LIMITS, N_PARAMETERS, PARAMETER_INDEX, PARAMETER_NAMES, nearest_heading
 from mocap.body.skeleton import JOINT_INDEX, JOINT_NAMES
 from mocap.config import JsonConfig
 
 __all__ = ["MOVED_JOINTS", "Smoother", "SmootherConfig"]
+
+#: Index of the chest's heading in the pose vector.
+_HEADING = PARAMETER_INDEX[HEADING]
 
 
 def _moved(name: str) -> tuple[str, ...]:
@@ -174,7 +182,7 @@ class Smoother:
         ndarray, shape (count, 23)
             Smoothed, within the joint limits.
         """
-        y = np.asarray(poses, dtype=np.float64)
+        y = np.array(poses, dtype=np.float64)       # a copy: its headings are unwrapped below
         w = np.asarray(weights, dtype=np.float64)
         n = len(y)
         if y.shape != (n, N_PARAMETERS) or w.shape != (n, N_PARAMETERS) or not 1 <= count <= n:
@@ -185,12 +193,14 @@ class Smoother:
         predicted_m, predicted_p = np.empty_like(filtered_m), np.empty_like(filtered_p)
         for k in range(n):
             r = self._r / w[k]
+            m0, p0 = (self._mean, self._cov) if k == 0 else (filtered_m[k - 1], filtered_p[k - 1])
+            if m0 is not None:      # the observed heading on the circle: nearest its prediction (issue 44)
+                y[k, _HEADING] = nearest_heading(y[k, _HEADING], m0[_HEADING, 0] + m0[_HEADING, 1])
             if restart[k]:
                 m = np.stack([y[k], np.zeros(N_PARAMETERS)], axis=1)
                 p = np.zeros((N_PARAMETERS, 2, 2))
                 p[:, 0, 0], p[:, 1, 1] = r, 2.0 * r
             else:
-                m0, p0 = (self._mean, self._cov) if k == 0 else (filtered_m[k - 1], filtered_p[k - 1])
                 m = m0 @ _F.T
                 p = _F @ p0 @ _F.T + self._q
             predicted_m[k], predicted_p[k] = m, p

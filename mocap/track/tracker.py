@@ -18,7 +18,12 @@ them. The terms, their weights and the motion term are :mod:`mocap.track.score`'
 candidates and their terms before the weights stay readable in :attr:`Tracker.scored`
 (:class:`ScoredCandidate`; ``experiments.fit_score`` fits the weights on them). The forward
 Viterbi recursion (:func:`~mocap.track.decode.viterbi_step`) gives each candidate the cost of
-the best path to it; near-duplicates are merged and the ``beam`` cheapest survive, and beside them
+the best path to it, and its predecessor on that path: its *parent*. Every candidate's chest heading
+(kept unwrapped, limits ±720°) is then brought to the 2π-equivalent nearest its parent's
+(:func:`mocap.body.pose.heading_near`), whatever brought it (a lifter's proposal, a jump, a
+re-acquisition: any of them may bring a heading wrapped to ±180°); the score and the motion term
+see joints only, so this changes no cost, and the decoded path never turns a whole turn from one
+frame to the next (issue 44). Near-duplicates are merged and the ``beam`` cheapest survive, and beside them
 the frame's mirrors: decoder states that the next frame does not register, so that a mirrored
 branch's path runs through the previous frame's same mirror (a small motion term) and a switch of
 branch is decided by the evidence summed over the lag rather than by one frame's margin.
@@ -50,7 +55,7 @@ from typing import Sequence
 import numpy as np
 
 from mocap.body.model import BodyModel
-from mocap.body.pose import check_pose, clamp_to_limits
+from mocap.body.pose import HEADING, PARAMETER_INDEX, check_pose, clamp_to_limits, heading_near
 from mocap.body.prior import PosePrior, default_prior
 from mocap.cost import EdgeCost, KeypointCost, RegionCost
 from mocap.render.camera import Camera
@@ -63,6 +68,10 @@ from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource
 from mocap.track.registration import Registration, failed_residuals, register
 from mocap.track.score import MOTION, UNARY_TERMS, ScoredCandidate, motion_term, weighted_sum, weights
 from mocap.track.smooth import Smoother
+
+#: Index of the chest's heading in the pose vector.
+_HEADING = PARAMETER_INDEX[HEADING]
+
 
 @dataclass(kw_only=True)
 class FrameResult:
@@ -334,14 +343,16 @@ class Tracker:
                  for (reg, _), j in zip(candidates, joints)]
         hypotheses = [self._hypothesis(reg, origin, j, t)
                       for (reg, origin), j, t in zip(candidates, joints, terms)]
-        self.candidates = [(h.origin, h.pose) for h in hypotheses]
         motion = motion_term([h.joints for h in self._beam], [h.joints for h in hypotheses])
-        self.scored = [ScoredCandidate.from_terms(h.origin, h.pose, h.joints, t, motion[:, j], h.unary)
-                       for j, (h, t) in enumerate(zip(hypotheses, terms))]
-        self.lifted = lifted
         motion_weight = self.weights[MOTION]
         transition = motion if motion_weight == 1.0 else motion_weight * motion
         cost, back = viterbi_step(self._cost, transition, np.array([h.unary for h in hypotheses]))
+        for h, parent in zip(hypotheses, back):     # the heading on the circle (issue 44)
+            h.pose = heading_near(h.pose, self._beam[parent].pose[_HEADING])
+        self.candidates = [(h.origin, h.pose) for h in hypotheses]
+        self.scored = [ScoredCandidate.from_terms(h.origin, h.pose, h.joints, t, motion[:, j], h.unary)
+                       for j, (h, t) in enumerate(zip(hypotheses, terms))]
+        self.lifted = lifted
         keep = self._select(hypotheses, cost)
         timings["beam"] = 1e3 * (time.perf_counter() - t2)
         timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)

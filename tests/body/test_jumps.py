@@ -1,9 +1,11 @@
-"""Kinematic jumps: projections kept exactly, depth changed, involutions, closed-form arm angles."""
+"""Kinematic jumps: the depth mirrors' geometry against the ray-sphere quadratic, projections kept exactly,
+depth changed, involutions, closed-form arm angles."""
 import numpy as np
 import pytest
 
 from mocap.body import PARAMETER_INDEX as P, BodyModel, JOINT_NAMES, neutral_pose
-from mocap.body.jumps import ARM_JUMPS, arm_angles_for_points, arm_jumps, ray_sphere_depths, reflect_on_ray, torso_flip
+from mocap.body.jumps import (ARM_JUMPS, arm_angles_for_points, arm_jumps, flipped_arm_joints, ray_sphere_depths,
+                              torso_flip)
 from mocap.render import Camera
 
 MODEL = BodyModel.build(resolution=8)
@@ -26,20 +28,63 @@ def random_pose(rng):
     return q
 
 
-def test_reflection_keeps_the_ray_and_the_distance():
-    rng = np.random.default_rng(0)
-    for _ in range(50):
-        point, pivot = rng.uniform([-1, -1, 1], [1, 1, 3]), rng.uniform([-1, -1, 1], [1, 1, 3])
-        r = reflect_on_ray(point, pivot)
-        assert np.linalg.norm(np.cross(r, point)) < 1e-12                 # same ray
-        assert np.linalg.norm(r - pivot) == pytest.approx(np.linalg.norm(point - pivot), abs=1e-12)
-        np.testing.assert_allclose(reflect_on_ray(r, pivot), point, atol=1e-12)
-        # both crossings of the ray with the sphere, the original among them
-        ray = point / np.linalg.norm(point)
-        depths = ray_sphere_depths(ray, pivot, np.linalg.norm(point - pivot))
-        assert len(depths) == 2                    # signed distances along the ray
-        np.testing.assert_allclose(sorted(depths), sorted([point @ ray, r @ ray]), atol=1e-9)
+def other_root(ray, parent, length, depth):
+    """The independent reference: the two depths ``t`` of ``t * ray`` at ``length`` from ``parent``
+    are the roots of ``t**2 - 2 (ray . parent) t + |parent|**2 - length**2``; the one that is not
+    ``depth`` (numpy's polynomial roots; None where the ray misses the sphere)."""
+    roots = np.roots([1.0, -2.0 * ray @ parent, parent @ parent - length ** 2])
+    if np.iscomplexobj(roots) and np.any(np.abs(roots.imag) > 1e-12):
+        return None
+    roots = roots.real
+    return roots[np.argmax(np.abs(roots - depth))]
+
+
+@pytest.mark.parametrize("side", ["r", "l"])
+def test_flipped_arm_joints_are_the_other_root_of_the_ray_and_the_bone_sphere(side):
+    """Each flipped bone's child moves to the other crossing of its camera ray with the sphere of
+    the bone's length about its parent (the quadratic's other root), each bone below it keeps its
+    own side of the crossing about the moved parent: every joint projects where it did, every bone
+    keeps its length, the rest of the body stays, and the same flip again gives the joints back."""
+    rng = np.random.default_rng(7)
+    rows = {j: JOINT_NAMES.index(f"{side}_{j}") for j in ("shoulder", "elbow", "wrist", "hand")}
+    chain = [("upper_arm", "shoulder", "elbow"), ("forearm", "elbow", "wrist"), ("hand", "wrist", "hand")]
+    checked = 0
+    for _ in range(20):
+        joints = MODEL.joint_positions(random_pose(rng))
+        for flip in (("upper_arm",), ("forearm",), ("upper_arm", "forearm")):
+            new = flipped_arm_joints(joints, side, flip)
+            expected = joints.copy()
+            for bone, parent, child in chain:
+                p, c = rows[parent], rows[child]
+                ray = joints[c] / np.linalg.norm(joints[c])
+                length = np.linalg.norm(joints[c] - joints[p])
+                # the original child: which crossing about its original parent (the other root farther?)
+                other = other_root(ray, joints[p], length, np.linalg.norm(joints[c]))
+                beyond = np.linalg.norm(joints[c]) >= other
+                if bone in flip:
+                    beyond = not beyond
+                roots = np.sort(np.roots([1.0, -2.0 * ray @ expected[p], expected[p] @ expected[p] - length ** 2]))
+                if np.iscomplexobj(roots):             # the moved parent leaves the ray out of reach
+                    break
+                expected[c] = roots[1 if beyond else 0] * ray
+            else:
+                checked += 1
+                np.testing.assert_allclose(new, expected, atol=1e-9)
+                np.testing.assert_allclose(CAMERA.project(new), CAMERA.project(joints), atol=1e-9)
+                for _, parent, child in chain:
+                    assert np.linalg.norm(new[rows[child]] - new[rows[parent]]) == pytest.approx(
+                        np.linalg.norm(joints[rows[child]] - joints[rows[parent]]), abs=1e-9)
+                np.testing.assert_allclose(flipped_arm_joints(new, side, flip), joints, atol=1e-9)
+                first = next(b for b in ("upper_arm", "forearm") if b in flip)        # its parent did not move
+                moved = rows["elbow" if first == "upper_arm" else "wrist"]
+                assert abs(new[moved, 2] - joints[moved, 2]) > 1e-6
+    assert checked >= 30              # (38 of 60 here: elsewhere the moved wrist leaves the hand out of reach)
+    # where the ray misses the sphere there is no crossing at all
     assert len(ray_sphere_depths(np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 2.0]), 0.5)) == 0
+    with pytest.raises(ValueError, match="side"):
+        flipped_arm_joints(joints, "x", ())
+    with pytest.raises(ValueError, match="unknown bones"):
+        flipped_arm_joints(joints, side, ("femur",))
 
 
 def test_arm_angles_in_closed_form_reproduce_the_arm():

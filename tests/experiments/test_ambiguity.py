@@ -249,3 +249,23 @@ def test_choice_rates_count_frames_missed_while_a_lifter_hypothesis_was_within()
     assert missed == pytest.approx(1 / 5)           # frame 1 only
     with pytest.raises(ValueError):
         choice_rates(tracked, lifter[:4])
+
+
+def test_written_against_decoded_reports_the_largest_stray_and_heading_step():
+    """Hand-made trajectories: one joint of one written frame 0.3 m off its decoded place (the
+    worst joint 300 mm, the mean over the 10 joints 30 mm), and written headings 0, 0.1, 0.5 rad
+    (the largest step 0.4 rad)."""
+    import math
+
+    from experiments.ambiguity import written_against_decoded
+    from mocap.body import PARAMETER_INDEX, neutral_pose
+
+    decoded = np.zeros((3, 10, 3))
+    written = decoded.copy()
+    written[1, 4] = [0.0, 0.3, 0.0]
+    poses = np.tile(neutral_pose(), (3, 1))
+    poses[:, PARAMETER_INDEX["chest_yaw"]] = [0.0, 0.1, 0.5]
+    row = written_against_decoded(poses, written, decoded)
+    assert row["written_decoded_mm"] == pytest.approx(300.0)
+    assert row["written_decoded_mean_mm"] == pytest.approx(30.0)
+    assert row["heading_step_deg"] == pytest.approx(math.degrees(0.4))

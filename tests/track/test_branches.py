@@ -5,7 +5,7 @@ import pytest
 
 from mocap.body import JOINT_LIMITS, JOINT_NAMES, PARAMETER_INDEX as P, BodyModel, neutral_pose
 from mocap.render.camera import Camera
-from mocap.track.branches import DepthAlternative, depth_alternatives, flipped_arm_joints
+from mocap.track.branches import DepthAlternative, depth_alternatives
 
 MODEL = BodyModel.build(resolution=6)
 CAMERA = Camera.default()
@@ -61,32 +61,8 @@ def test_a_depth_alternative_keeps_every_projection_and_bone_length():
     assert kept >= 30            # about 2.5 a pose: the limits allow many
 
 
-def test_flipped_joints_are_exact_geometry():
-    """On the rays, at the bone lengths, and the flip of a flip is the pose itself."""
-    rng = np.random.default_rng(2)
-    for _ in range(20):
-        joints = MODEL.joint_positions(random_pose(rng))
-        for flip in (("upper_arm",), ("forearm",), ("upper_arm", "forearm")):
-            new = flipped_arm_joints(joints, "r", flip)
-            rows = [JOINT_NAMES.index(f"r_{j}") for j in ("elbow", "wrist", "hand")]
-            if np.any(np.isclose(np.linalg.norm(new[rows], axis=1), 0)):
-                continue
-            unit_old = joints[rows] / np.linalg.norm(joints[rows], axis=1)[:, None]
-            unit_new = new[rows] / np.linalg.norm(new[rows], axis=1)[:, None]
-            np.testing.assert_allclose(unit_new, unit_old, atol=1e-12)
-            np.testing.assert_array_equal(np.delete(new, rows, axis=0), np.delete(joints, rows, axis=0))
-        once = flipped_arm_joints(joints, "l", ("upper_arm",))
-        a, b = JOINT_NAMES.index("l_shoulder"), JOINT_NAMES.index("l_elbow")
-        np.testing.assert_allclose(np.linalg.norm(once[b] - once[a]), np.linalg.norm(joints[b] - joints[a]))
-        np.testing.assert_allclose(flipped_arm_joints(once, "l", ("upper_arm",))[b], joints[b], atol=1e-9)
-
-
 def test_bad_input():
     q = neutral_pose()
-    with pytest.raises(ValueError, match="side"):
-        flipped_arm_joints(MODEL.joint_positions(q), "x", ())
-    with pytest.raises(ValueError, match="unknown bones"):
-        flipped_arm_joints(MODEL.joint_positions(q), "r", ("femur",))
     with pytest.raises(ValueError, match="max_shift_px"):
         depth_alternatives(q, MODEL, CAMERA, max_shift_px=-1.0)
 
