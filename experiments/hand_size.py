@@ -55,7 +55,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments import RESULTS_DIR
-from experiments.branch_audit import DISTINCT_M, max_joint_distance, mirror_alternatives, truth_better
+from experiments.branch_audit import DISTINCT_M, TIE_RELATIVE, WINDOW, max_joint_distance, mirror_alternatives, truth_better
 from mocap.body.skeleton import JOINT_INDEX, SEGMENT_NAMES
 from mocap.synth import SEQUENCE_NAMES
 
@@ -441,7 +441,7 @@ def main(argv=None) -> int:
                     print(f"{stage} {name} s{seed}: {len(unit['frame'])} compared ({time.perf_counter() - t:.1f} s)",
                           file=sys.stderr, flush=True)
         if units:
-            summary["stages"][stage] = summarise(units)
+            summary["stages"][stage] = {"stage": stage, **summarise(units)}
     if not summary["stages"]:
         print("error: no stored units; run measure first", file=sys.stderr)
         return 2
@@ -497,6 +497,53 @@ def combined_share(p: dict, base: str, cue: str, level: int, weight: float) -> f
     t = p[f"truth_{base}"] + weight * p[f"truth_{cue}"][:, level]
     a = p[f"alt_{base}"] + weight * p[f"alt_{cue}"][:, level]
     return _share(t, a)
+
+
+def pair_diffs(p: dict, levels, weights: dict | None = None) -> tuple[list[str], np.ndarray]:
+    """Per pair the differences (alternative minus truth) of each column: ``score``, ``prior``,
+    ``points@<level>`` and ``span@<level>``, and with ``weights`` ({level: w}) ``score+points@<level>``."""
+    names, cols = ["score", "prior"], [p["alt_score"] - p["truth_score"], p["alt_prior"] - p["truth_prior"]]
+    for cue in CUE_KINDS:
+        for k, level in enumerate(levels):
+            names.append(f"{cue}@{level:g}")
+            cols.append(p[f"alt_{cue}"][:, k] - p[f"truth_{cue}"][:, k])
+    for k, level in enumerate(levels):
+        if weights is not None and level in weights:
+            names.append(f"score+points@{level:g}")
+            cols.append(cols[0] + weights[level] * (p["alt_points"][:, k] - p["truth_points"][:, k]))
+    return names, np.stack(cols, axis=1)
+
+
+def window_shares(units: dict, keys, levels, weights: dict | None = None, window: int = WINDOW) -> dict:
+    """Evidence summed over the lag (as :func:`experiments.branch_audit.window_rates`): per unit and
+    mirror slot (a branch followed through time), windows of ``window`` frames starting at every
+    audited frame, kept when the slot is compared on at least half the window's audited frames; per
+    column of :func:`pair_diffs` the share of windows whose summed difference favours the truth."""
+    rows, names = [], None
+    for key in keys:
+        u = units[key]
+        if len(u["frame"]) == 0:
+            continue
+        stride = int(np.min(np.diff(np.unique(u["frame"])))) if len(np.unique(u["frame"])) > 1 else 1
+        names, diff = pair_diffs(u, levels, weights)
+        n = int(u["frame"].max()) + 1
+        audited = max(1, -(-window // stride))
+        for slot in np.unique(u["slot"]):
+            sel = u["slot"] == slot
+            d = np.full((n, diff.shape[1]), np.nan)
+            d[u["frame"][sel]] = diff[sel]
+            present = np.isfinite(d[:, 1])
+            for start in range(0, max(n - window + 1, 0), stride):
+                if present[start:start + window].sum() * 2 < audited:
+                    continue
+                block = d[start:start + window]
+                total = np.nansum(block, axis=0)
+                margin = TIE_RELATIVE * np.maximum(1.0, np.nansum(np.abs(block), axis=0))
+                rows.append(total > margin)
+    if not rows:
+        return {"windows": 0}
+    r = np.array(rows)
+    return {"windows": int(len(r)), **{c: float(r[:, i].mean()) for i, c in enumerate(names)}}
 
 
 def summarise(units: dict) -> dict:
@@ -563,6 +610,11 @@ def summarise(units: dict) -> dict:
                         row["unseen_curve"] = [combined_share(merged["unseen"], base, cue, li, x) for x in COMBINE_WEIGHTS]
                     out["combined"].append(row)
     out["combine_weights"] = list(COMBINE_WEIGHTS)
+    chosen = {r["noise_px"]: r["weight"] for r in out["combined"] if r["base"] == "score" and r["cue"] == "points"}
+    out["window"] = WINDOW
+    for g, keys in groups.items():
+        if keys:
+            out["groups"][g]["windows"] = window_shares(units, keys, levels, chosen or None)
     return out
 
 
@@ -594,6 +646,15 @@ def tables(summary: dict) -> str:
             f"{k}: hand points move {s['move_px']:.1f} px, palm width {s['span_change_px'][0]:.1f} px, "
             f"length {s['span_change_px'][1]:.1f} px, hand depth {100 * s['hand_dz_m']:.0f} cm"
             for k, s in data["signal"].items()), ""]
+    windows = {g: d["windows"] for g, d in summary["groups"].items() if d.get("windows", {}).get("windows")}
+    if windows:
+        columns = [c for c in next(iter(windows.values())) if c != "windows"]
+        lines += [f"### evidence summed over {summary['window']} frames per mirror branch: share of windows with the "
+                  "truth better (%); score+points: the per-pair weight below", "",
+                  "| column | " + " | ".join(f"{g} ({w['windows']} windows)" for g, w in windows.items()) + " |",
+                  "|---|" + "---|" * len(windows)]
+        lines += [f"| {c} | " + " | ".join(pct(w.get(c, math.nan)) for w in windows.values()) + " |" for c in columns]
+        lines.append("")
     if summary["combined"]:
         lines += ["### base + w * hand cue: w chosen on the fit seeds, judged on the unseen seed (%)", "",
                   "| base | cue | σ px | w | fit: base | fit: combined | unseen: base | unseen: combined | gain |",

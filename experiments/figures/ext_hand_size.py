@@ -40,6 +40,8 @@ def main(summary: dict, out: str | Path, name: str = "ext_hand_size") -> list[Pa
             for ax in (left, middle, right):
                 placeholder(ax, "no pairs")
             return save(fig, out, name)
+        if "stage" in summary:
+            fig.suptitle(f"stage: {summary['stage']}", fontsize=8)
         styles = {"fit": "-", "unseen": "--"}
         for g, data in groups.items():
             seeds = (",".join(map(str, settings.get("fit_seeds", []))) if g == "fit"
