@@ -73,9 +73,10 @@ def main(summary: dict, out: str | Path, name: str = "ext_hand_size") -> list[Pa
                           fontsize=6)
         middle.set_xlabel("hand's depth change (cm), pairs")
         middle.set_ylabel("points cue: truth better (%)")
-        middle.set_ylim(0, 100)
+        middle.set_ylim(0, 118)
+        middle.set_yticks(range(0, 101, 20))
         middle.axhline(50, color="k", lw=0.5, ls=":")
-        middle.legend(fontsize=5)
+        middle.legend(fontsize=5, ncol=3, loc="upper center")
 
         weights = summary.get("combine_weights", [])
         rows = [r for r in summary.get("combined", []) if r["base"] == "score" and r["cue"] == "points"]
