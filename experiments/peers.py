@@ -483,9 +483,9 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError:
         print(f"error: --size takes WxH in pixels (at least 16 each), got {args.size!r}")
         return 2
-    try:
-        import mediapipe  # noqa: F401
-    except ImportError:
+    from mocap.io.mediapipe_keypoints import available
+
+    if not available():
         print("error: mediapipe is not installed: pip install -e .[keypoints]")
         return 2
     work = args.work or args.out / "work"

@@ -60,6 +60,7 @@ def test_the_cmu_group_renders_the_held_out_subjects_trial_and_passes_the_lifter
         seen["motion"] = options["motion"]
         return real_generate(name, out_dir, **options)
 
+    monkeypatch.setattr("mocap.io.mediapipe_keypoints.available", lambda: True)     # stood in for: any Python
     monkeypatch.setattr(peers, "run_mediapipe", fake_mediapipe)
     monkeypatch.setattr(peers, "_track", fake_track)
     monkeypatch.setattr("mocap.synth.generate_sequence", generate)
