@@ -211,6 +211,10 @@ class KeypointKernelArgs(NamedTuple):
         Segment of each keypoint's joint under the swapped labelling (its twin on the other side).
     swapped_local : ndarray, shape (n, 3), float64, metres
         That joint in its segment's frame.
+    swapped_order : ndarray, shape (n,), int64
+        The keypoints in the order of their twins' joints (:data:`~mocap.body.skeleton.JOINT_NAMES`
+        order): the swapped labelling's sum runs in the model's joint order, as the detector's does,
+        so that keypoints whose labels are the other way round give the same float bit for bit.
     """
 
     offsets: np.ndarray
@@ -225,6 +229,7 @@ class KeypointKernelArgs(NamedTuple):
     swap: bool
     swapped_segment: np.ndarray
     swapped_local: np.ndarray
+    swapped_order: np.ndarray
 
 
 # ----------------------------------------------------------------------------- kernels
@@ -704,11 +709,14 @@ def keypoint_labellings_kernel(pose, args):
     direct = 0.0
     swapped = 0.0
     for i in range(args.uv.shape[0]):
-        u, v = args.uv[i, 0], args.uv[i, 1]
-        d = _joint_distance(t, cam, args.joint_segment[i], args.joint_local, i, u, v, args.behind_penalty)
+        d = _joint_distance(t, cam, args.joint_segment[i], args.joint_local, i, args.uv[i, 0], args.uv[i, 1],
+                            args.behind_penalty)
         direct += args.weight[i] * _robust(d, args.scale[i])
-        if args.swap:
-            d = _joint_distance(t, cam, args.swapped_segment[i], args.swapped_local, i, u, v, args.behind_penalty)
+    if args.swap:
+        for k in range(args.uv.shape[0]):
+            i = args.swapped_order[k]
+            d = _joint_distance(t, cam, args.swapped_segment[i], args.swapped_local, i, args.uv[i, 0], args.uv[i, 1],
+                                args.behind_penalty)
             swapped += args.weight[i] * _robust(d, args.scale[i])
     return direct, swapped
 
@@ -1081,11 +1089,13 @@ CONTOUR_SPACING_PX = 1.0
 #: of the ten joints' RMS distance from their mean: MediaPipe Pose on renders of held-out motion
 #: capture, 1.4826 MAD per coordinate (``experiments/lifter_keypoint_noise.json``,
 #: ``python -m experiments.lifter_keypoint_noise``). MediaPipe gives no neck; its value is the
-#: shoulders' mean.
+#: shoulders'. Each side's twins have the two sides' mean (the sides differ by the measure's own
+#: noise, and the labels are what the tracker does not take from the detector): the cost of
+#: keypoints whose left and right are swapped is then the same under the other labelling.
 KEYPOINT_NOISE = MappingProxyType({
     "head": 0.0309, "neck": 0.0744,
-    "r_shoulder": 0.0624, "r_elbow": 0.0893, "r_wrist": 0.1139, "r_hand": 0.1546,
-    "l_shoulder": 0.0864, "l_elbow": 0.1061, "l_wrist": 0.0964, "l_hand": 0.1528,
+    "r_shoulder": 0.0744, "r_elbow": 0.0977, "r_wrist": 0.1052, "r_hand": 0.1537,
+    "l_shoulder": 0.0744, "l_elbow": 0.0977, "l_wrist": 0.1052, "l_hand": 0.1537,
 })
 #: Least robust scale of a keypoint, pixels: a detector's pixel grid and the model's joints'
 #: own definitions (the hand's centre, the shoulder's place) put a keypoint this far off even
@@ -1121,7 +1131,8 @@ def robust_distance(d, scale):
 def keypoint_scales(uv, confidence) -> np.ndarray:
     """Each keypoint's robust scale (pixels): :data:`KEYPOINT_NOISE` times the present keypoints'
     RMS distance from their mean (the person's size in the image, as the noise was measured), at
-    least :data:`MIN_KEYPOINT_SCALE_PX`.
+    least :data:`MIN_KEYPOINT_SCALE_PX`. The spread is computed over the keypoints sorted by
+    position, so that the same keypoints under other labels give the same floats.
 
     Parameters
     ----------
@@ -1137,6 +1148,7 @@ def keypoint_scales(uv, confidence) -> np.ndarray:
     spread = 0.0
     if present.sum() >= 2:
         p = uv[present]
+        p = p[np.lexsort((p[:, 1], p[:, 0]))]
         spread = float(np.sqrt(((p - p.mean(axis=0)) ** 2).sum(axis=1).mean()))
     noise = np.array([KEYPOINT_NOISE[name] for name in JOINT_NAMES])
     return np.maximum(noise * spread, MIN_KEYPOINT_SCALE_PX)
@@ -1237,7 +1249,7 @@ class KeypointCost:
         #: Each present keypoint's silhouette gate (:func:`keypoint_gates`; 1 without a foreground).
         self.gates = gate
         weight = conf[present] * gate
-        total = weight.sum()
+        total = np.sort(weight).sum()                     # the same float whatever the labels' order
         self._weight = weight / total if total > 0 else np.zeros(0)
         joints = np.flatnonzero(present)
         twins = np.array([SWAPPED_JOINTS[j] for j in joints], dtype=np.int64)
@@ -1246,6 +1258,7 @@ class KeypointCost:
         self._local = np.ascontiguousarray(skeleton.joint_local[joints])
         self._swapped_segment = np.ascontiguousarray(skeleton.joint_segment[twins])
         self._swapped_local = np.ascontiguousarray(skeleton.joint_local[twins])
+        self._swapped_order = np.argsort(twins, kind="stable").astype(np.int64)
         self._transforms = np.zeros((len(SEGMENT_NAMES), 3, 4))
         self._camera = camera.as_array()
         self.behind_penalty = float(np.hypot(camera.width, camera.height))
@@ -1278,7 +1291,7 @@ class KeypointCost:
         """Second argument of :func:`keypoint_cost_kernel` (for compiled optimiser loops)."""
         return KeypointKernelArgs(self.model.skeleton.offsets, self._segment, self._local, self._uv, self._weight,
                                   self._camera, self._transforms, self.behind_penalty, self._scale, self.swap,
-                                  self._swapped_segment, self._swapped_local)
+                                  self._swapped_segment, self._swapped_local, self._swapped_order)
 
 
 def non_overlapping_ratio(target_labels: np.ndarray, model_labels: np.ndarray, n_classes: int, *,
