@@ -311,7 +311,7 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
 
 
 #: The arms' joints, right side then left (rows of :data:`mocap.body.skeleton.JOINT_NAMES`).
-ARM_JOINTS = tuple(JOINT_INDEX[f"{side}_{j}"] for side in "rl" for j in ("shoulder", "elbow", "wrist", "hand"))
+SIDED_ARM_JOINTS = tuple(JOINT_INDEX[f"{side}_{j}"] for side in "rl" for j in ("shoulder", "elbow", "wrist", "hand"))
 
 
 def arm_labels(joints: np.ndarray, truth: np.ndarray) -> dict:
@@ -331,7 +331,7 @@ def arm_labels(joints: np.ndarray, truth: np.ndarray) -> dict:
     """
     joints, truth = np.asarray(joints, dtype=np.float64), np.asarray(truth, dtype=np.float64)
     neck = JOINT_INDEX["neck"]
-    arms = list(ARM_JOINTS)
+    arms = list(SIDED_ARM_JOINTS)
     mirrored = arms[4:] + arms[:4]
     a = joints[:, arms] - joints[:, neck:neck + 1]
     right = np.linalg.norm(a - (truth[:, arms] - truth[:, neck:neck + 1]), axis=2).mean(axis=1)

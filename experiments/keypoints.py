@@ -72,6 +72,11 @@ def swap_runs(frames: int, share: float, seed: int = 0, shortest: int = 5, longe
 
 
 def swap_labels(keypoints: list[Keypoints], swapped: np.ndarray) -> list[Keypoints]:
-    """``keypoints`` with left and right swapped (:meth:`Keypoints.swapped`) on the frames where
-    ``swapped`` is True."""
-    return [k.swapped() if s else k for k, s in zip(keypoints, swapped)]
+    """``keypoints`` with left and right swapped (every ``r_`` joint's row given to its ``l_``
+    twin and back, as :meth:`Keypoints.swapped` does; spelt out here so that code from before it
+    is measured the same way) on the frames where ``swapped`` is True."""
+    from mocap.body.skeleton import JOINT_NAMES
+
+    twin = [JOINT_NAMES.index({"r_": "l_", "l_": "r_"}.get(n[:2], n[:2]) + n[2:]) for n in JOINT_NAMES]
+    return [Keypoints(k.uv[twin], k.confidence[twin], None if k.world is None else k.world[twin]) if s else k
+            for k, s in zip(keypoints, swapped)]
