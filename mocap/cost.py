@@ -1097,10 +1097,16 @@ KEYPOINT_NOISE = MappingProxyType({
     "r_shoulder": 0.0744, "r_elbow": 0.0977, "r_wrist": 0.1052, "r_hand": 0.1537,
     "l_shoulder": 0.0744, "l_elbow": 0.0977, "l_wrist": 0.1052, "l_hand": 0.1537,
 })
-#: Least robust scale of a keypoint, pixels: a detector's pixel grid and the model's joints'
-#: own definitions (the hand's centre, the shoulder's place) put a keypoint this far off even
-#: where the noise above is smaller (the oracle keypoints' 2 px per coordinate is about as much).
-MIN_KEYPOINT_SCALE_PX = 3.0
+#: Least robust scale of a keypoint, pixels. The noise above times the person's spread (about 34
+#: px at 160x120) is 1-5 px, and at that scale the true-2D figures got worse (the keypoints of a
+#: hypothesis on a wrong branch, 10-20 px off, hardly pulled it back): on seed 5, six
+#: sequences, median 66.7 mm and 20.0 % of frames over 100 mm at a 3 px floor, 64.7 / 21.1 at
+#: 6, 60.4 / 16.1 at 12, 72.5 / 24.6 with four times the noise, against 60.4 / 17.4 for the
+#: plain distance (docs/research-log.md, 2026-11-28). So at 160x120 this floor is the scale.
+MIN_KEYPOINT_SCALE_PX = 12.0
+#: Distance off the person's region within which a keypoint is not gated down, pixels (the pixel
+#: grid, and a keypoint on the silhouette's edge with the oracle's 2 px of noise).
+GATE_MARGIN_PX = 3.0
 
 
 def robust_distance(d, scale):
@@ -1109,8 +1115,9 @@ def robust_distance(d, scale):
     Near a keypoint it is the distance itself (slope 1, so the term's weight means what it meant
     for the plain distance); far away it grows as the logarithm, and the pull of a joint (the
     slope, ``scale / (scale + d)``) falls off as ``scale / d``: a joint 50 px off pulls at
-    ``scale / 53`` of a near one's rate. It is the L1 form of the Cauchy (Lorentzian) loss,
-    whose negative log-likelihood ``log(1 + (d / scale)^2)`` would make the term quadratic near
+    ``scale / (scale + 50)`` of a near one's rate (19 % at the 12 px of
+    :data:`MIN_KEYPOINT_SCALE_PX`; the silhouette's gate, :func:`keypoint_gates`, does the rest).
+    It is the L1 form of the Cauchy (Lorentzian) loss, whose negative log-likelihood ``log(1 + (d / scale)^2)`` would make the term quadratic near
     the keypoint and change its balance with the image's terms.
 
     Parameters
@@ -1154,19 +1161,19 @@ def keypoint_scales(uv, confidence) -> np.ndarray:
     return np.maximum(noise * spread, MIN_KEYPOINT_SCALE_PX)
 
 
-def keypoint_gates(uv, scale, foreground) -> np.ndarray:
-    """Each keypoint's silhouette gate in (0, 1]: 1 on the person's region or within ``scale`` of
-    it, else ``1 / (1 + ((o - scale) / scale)^2)`` with ``o`` its distance to the region
-    (pixels): a joint 50 px outside at a 3 px scale weighs 0.4 % of one on the person. Without a
-    region (no foreground pixel) every gate is 1.
+def keypoint_gates(uv, foreground, margin: float = GATE_MARGIN_PX) -> np.ndarray:
+    """Each keypoint's silhouette gate in (0, 1]: 1 on the person's region or within ``margin``
+    of it, else ``1 / (1 + ((o - margin) / margin)^2)`` with ``o`` its distance to the region
+    (pixels): a joint 50 px outside weighs 0.4 % of one on the person. Without a region (no
+    foreground pixel) every gate is 1.
 
     Parameters
     ----------
     uv : ndarray, shape (n, 2), float, pixels
         Keypoints (finite), pixel centres at half-integers.
-    scale : ndarray, shape (n,), float, pixels (> 0)
     foreground : ndarray, shape (H, W), bool
         The person's region (a label image's pixels other than background).
+    margin : float, pixels (> 0)
 
     Returns
     -------
@@ -1174,7 +1181,9 @@ def keypoint_gates(uv, scale, foreground) -> np.ndarray:
     """
     from scipy.ndimage import distance_transform_edt
 
-    uv, scale = np.asarray(uv, dtype=np.float64), np.asarray(scale, dtype=np.float64)
+    uv = np.asarray(uv, dtype=np.float64)
+    if not (np.isfinite(margin) and margin > 0):
+        raise ValueError(f"margin must be finite and positive, got {margin!r}")
     fg = np.asarray(foreground, dtype=bool)
     if fg.ndim != 2:
         raise ValueError(f"foreground must be a 2-D mask, got shape {fg.shape}")
@@ -1190,7 +1199,7 @@ def keypoint_gates(uv, scale, foreground) -> np.ndarray:
     if fg[row, col].all() and not beyond.any():
         return gates
     outside = distance_transform_edt(~fg)[row, col] + beyond
-    excess = np.maximum(outside - scale, 0.0) / scale
+    excess = np.maximum(outside - margin, 0.0) / margin
     return 1.0 / (1.0 + excess ** 2)
 
 
@@ -1245,7 +1254,7 @@ class KeypointCost:
         self.swap = bool(swap)
         self._uv = np.ascontiguousarray(uv[present])
         self._scale = np.ascontiguousarray(scale[present])
-        gate = np.ones(len(self._uv)) if foreground is None else keypoint_gates(self._uv, self._scale, foreground)
+        gate = np.ones(len(self._uv)) if foreground is None else keypoint_gates(self._uv, foreground)
         #: Each present keypoint's silhouette gate (:func:`keypoint_gates`; 1 without a foreground).
         self.gates = gate
         weight = conf[present] * gate

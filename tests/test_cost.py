@@ -297,7 +297,7 @@ def test_keypoint_cost_is_zero_on_the_models_own_projections_and_grows_with_a_sh
     conf = rng.uniform(0.1, 1.0, 10)
     assert KeypointCost(uv, conf, MODEL, CAMERA)(q) == pytest.approx(0.0, abs=1e-9)
     assert KeypointCost(uv + [3.0, 4.0], conf, MODEL, CAMERA, scale=np.full(10, np.inf))(q) == pytest.approx(5.0)
-    # robust: 5 px at a 2 px scale is 2 log(1 + 5 / 2) pixels
+    # robust: 5 px at a 2 px scale is 2 log(1 + 5 / 2) pixels (a scale given)
     assert KeypointCost(uv + [3.0, 4.0], conf, MODEL, CAMERA, scale=np.full(10, 2.0))(q) == pytest.approx(
         2.0 * np.log(3.5))
 
@@ -316,19 +316,22 @@ def test_keypoint_scales_follow_the_persons_size_and_keep_a_floor():
     small = keypoint_scales(uv, np.ones(10))
     assert np.all(small >= MIN_KEYPOINT_SCALE_PX)
     spread = np.sqrt(((uv - uv.mean(axis=0)) ** 2).sum(axis=1).mean())
-    big = keypoint_scales(uv * 20.0, np.ones(10))            # 20x the person: the measured noise rules
-    np.testing.assert_allclose(big, [20.0 * spread * KEYPOINT_NOISE[n] for n in JOINT_NAMES])
+    factor = 2.0 * MIN_KEYPOINT_SCALE_PX / (spread * min(KEYPOINT_NOISE.values()))
+    big = keypoint_scales(uv * factor, np.ones(10))          # a person that large: the measured noise rules
+    np.testing.assert_allclose(big, [factor * spread * KEYPOINT_NOISE[n] for n in JOINT_NAMES])
 
 
 def test_keypoint_gates_weigh_down_a_joint_off_the_silhouette():
     fg = np.zeros(CAMERA.shape, bool)
     fg[40:80, 60:100] = True
     uv = np.array([[70.5, 50.5], [101.5, 50.5], [150.5, 50.5], [80.0, -20.0]])
-    gates = keypoint_gates(uv, np.full(4, 3.0), fg)
-    assert gates[0] == 1.0 and gates[1] == 1.0                  # on it, and 2 px off it (within the scale)
+    gates = keypoint_gates(uv, fg, margin=3.0)
+    assert gates[0] == 1.0 and gates[1] == 1.0                  # on it, and 2 px off it (within the margin)
     assert gates[2] == pytest.approx(1.0 / (1.0 + ((51.0 - 3.0) / 3.0) ** 2))   # 51 px to the nearest column
     assert gates[3] < 0.01                                      # above the image: 60 px off
-    np.testing.assert_array_equal(keypoint_gates(uv, np.full(4, 3.0), np.zeros(CAMERA.shape, bool)), 1.0)
+    np.testing.assert_array_equal(keypoint_gates(uv, np.zeros(CAMERA.shape, bool)), 1.0)
+    with pytest.raises(ValueError, match="margin"):
+        keypoint_gates(uv, fg, margin=0.0)
     # a gated joint hardly counts: the cost is about the others' alone
     q = neutral_pose()
     truth = CAMERA.project(MODEL.joint_positions(q))

@@ -220,7 +220,7 @@ def test_a_joint_thrown_off_the_silhouette_does_not_drag_the_arm():
     within 2 cm of its pose registered without that joint. The reference shows the test can fail:
     today's term (the plain pixel distance, no gate) drags it further."""
     from mocap.body.skeleton import JOINT_INDEX
-    from mocap.cost import KeypointCost, keypoint_gates, keypoint_scales
+    from mocap.cost import KeypointCost, keypoint_gates
 
     truth = neutral_pose()
     for name, degrees in (("r_shoulder_abd", 40), ("r_elbow_flex", 60), ("l_shoulder_abd", 20)):
@@ -234,8 +234,7 @@ def test_a_joint_thrown_off_the_silhouette_does_not_drag_the_arm():
     thrown = uv.copy()
     thrown[wrist, 0] -= 50.0
     foreground = r.labels != 0
-    scale = keypoint_scales(uv, np.ones(10))
-    assert keypoint_gates(thrown[wrist:wrist + 1], scale[wrist:wrist + 1], foreground)[0] < 0.01   # off it
+    assert keypoint_gates(thrown[wrist:wrist + 1], foreground)[0] < 0.01   # off it
     without_joint = np.ones(10)
     without_joint[wrist] = 0.0
     start = truth + np.r_[0.03, -0.02, 0.05, np.radians(np.full(20, 4.0))]
