@@ -213,10 +213,8 @@ class KeypointKernelArgs(NamedTuple):
         That joint in its segment's frame.
     swapped_order : ndarray, shape (n,), int64
         The keypoints in the order of their twins' joints (:data:`~mocap.body.skeleton.JOINT_NAMES`
-        order): the swapped labelling's sum runs in the model's joint order, as the detector's does.
-    swap_cost : float, pixels
-        Added to the swapped labelling's distance (:data:`LABEL_SWAP_PX`): the detector's labels
-        are kept unless the other labelling fits by more than this.
+        order): the swapped labelling's sum runs in the model's joint order, as the detector's does,
+        so that keypoints whose labels are the other way round give the same float bit for bit.
     """
 
     offsets: np.ndarray
@@ -232,7 +230,6 @@ class KeypointKernelArgs(NamedTuple):
     swapped_segment: np.ndarray
     swapped_local: np.ndarray
     swapped_order: np.ndarray
-    swap_cost: float
 
 
 # ----------------------------------------------------------------------------- kernels
@@ -728,10 +725,10 @@ def keypoint_labellings_kernel(pose, args):
 def keypoint_cost_kernel(pose, args):
     """Compiled D_k(pose), pixels, for an unchecked float64 (23,) pose and a
     :class:`KeypointKernelArgs` (0 with no keypoint): the detector's labelling, or with
-    ``args.swap`` the lower of it and the swapped one plus ``args.swap_cost``."""
+    ``args.swap`` the lower of it and the swapped one."""
     direct, swapped = keypoint_labellings_kernel(pose, args)
-    if args.swap and swapped + args.swap_cost < direct:
-        return swapped + args.swap_cost
+    if args.swap and swapped < direct:
+        return swapped
     return direct
 
 
@@ -1107,12 +1104,6 @@ KEYPOINT_NOISE = MappingProxyType({
 #: 6, 60.4 / 16.1 at 12, 72.5 / 24.6 with four times the noise, against 60.4 / 17.4 for the
 #: plain distance (docs/research-log.md, 2026-11-28). So at 160x120 this floor is the scale.
 MIN_KEYPOINT_SCALE_PX = 12.0
-#: What reading a frame's keypoints with left and right swapped costs, pixels of D_k (in the
-#: score, ``keypoint_weight`` times this): the detector's labels are evidence too, right on most
-#: frames where it sees the face. Without it, MediaPipe's right labels on a render of held-out
-#: motion were read swapped on a third of the frames, the body turned around while side-on
-#: (docs/research-log.md, 2026-11-28).
-LABEL_SWAP_PX = 1.5
 #: Distance off the person's region within which a keypoint is not gated down, pixels (the pixel
 #: grid, and a keypoint on the silhouette's edge with the oracle's 2 px of noise).
 GATE_MARGIN_PX = 3.0
@@ -1232,10 +1223,7 @@ class KeypointCost:
         distance).
     swap : bool
         Also score the keypoints with left and right swapped (:data:`~mocap.io.keypoints.SWAPPED_JOINTS`):
-        the cost is the lower of the detector's labelling and the swapped one plus ``swap_cost``,
-        and :meth:`labelling` tells which.
-    swap_cost : float, pixels
-        What the swapped labelling pays (default :data:`LABEL_SWAP_PX`; >= 0).
+        the cost is the lower of the two labellings, and :meth:`labelling` tells which.
 
     Calling ``cost(pose)`` returns ``sum_j w_j rho_j(|pi(J_j(pose)) - k_j|)`` over the present
     joints j, pixels (>= 0; 0 when no joint is present or the keypoints are the model's own
@@ -1245,8 +1233,7 @@ class KeypointCost:
     """
 
     def __init__(self, uv: np.ndarray, confidence: np.ndarray, model: BodyModel, camera: Camera, *,
-                 foreground: np.ndarray | None = None, scale: np.ndarray | None = None, swap: bool = False,
-                 swap_cost: float = LABEL_SWAP_PX) -> None:
+                 foreground: np.ndarray | None = None, scale: np.ndarray | None = None, swap: bool = False) -> None:
         uv, conf = np.asarray(uv, dtype=np.float64), np.asarray(confidence, dtype=np.float64)
         if uv.shape != (len(JOINT_NAMES), 2) or conf.shape != (len(JOINT_NAMES),):
             raise ValueError(f"keypoints need uv of shape ({len(JOINT_NAMES)}, 2) and confidence of shape "
@@ -1261,9 +1248,6 @@ class KeypointCost:
             raise ValueError(f"foreground of shape {np.shape(foreground)} does not match the camera {camera.shape}")
         if not isinstance(swap, (bool, np.bool_)):
             raise ValueError(f"swap must be true or false, got {swap!r}")
-        if not (np.isfinite(swap_cost) and swap_cost >= 0):
-            raise ValueError(f"swap_cost must be finite and non-negative, got {swap_cost!r}")
-        self.swap_cost = float(swap_cost)
         present = (conf > 0) & np.isfinite(uv).all(axis=1)
         self.model, self.camera = model, camera
         self.present = present
@@ -1301,22 +1285,22 @@ class KeypointCost:
         return keypoint_cost_kernel(pose, self.kernel_args())
 
     def labellings(self, pose) -> tuple[float, float]:
-        """D_k at ``pose`` under the detector's labelling and under the swapped one (without
-        ``swap_cost``), pixels (the second NaN when ``swap`` is off)."""
+        """D_k at ``pose`` under the detector's labelling and under the swapped one, pixels (the
+        second NaN when ``swap`` is off)."""
         direct, swapped = keypoint_labellings_kernel(check_pose(pose), self.kernel_args())
         return float(direct), (float(swapped) if self.swap else float("nan"))
 
     def labelling(self, pose) -> bool:
-        """Whether the cost at ``pose`` is the swapped labelling's (its distance plus ``swap_cost``
-        lower than the detector's; a tie keeps the detector's; False when ``swap`` is off)."""
+        """Whether the cost at ``pose`` is the swapped labelling's (lower than the detector's; a
+        tie keeps the detector's; False when ``swap`` is off)."""
         direct, swapped = self.labellings(pose)
-        return bool(self.swap and swapped + self.swap_cost < direct)
+        return bool(self.swap and swapped < direct)
 
     def kernel_args(self) -> KeypointKernelArgs:
         """Second argument of :func:`keypoint_cost_kernel` (for compiled optimiser loops)."""
         return KeypointKernelArgs(self.model.skeleton.offsets, self._segment, self._local, self._uv, self._weight,
                                   self._camera, self._transforms, self.behind_penalty, self._scale, self.swap,
-                                  self._swapped_segment, self._swapped_local, self._swapped_order, self.swap_cost)
+                                  self._swapped_segment, self._swapped_local, self._swapped_order)
 
 
 def non_overlapping_ratio(target_labels: np.ndarray, model_labels: np.ndarray, n_classes: int, *,

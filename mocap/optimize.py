@@ -561,7 +561,7 @@ class _DummyArgs:
         scene = cost.kernel_args().scene
         return KeypointKernelArgs(scene.offsets, np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 2)),
                                   np.zeros(0), scene.camera, np.zeros((len(scene.offsets), 3, 4)), 0.0, np.zeros(0),
-                                  False, np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros(0, np.int64), 0.0)
+                                  False, np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros(0, np.int64))
 
     @staticmethod
     def edge(cost) -> EdgeKernelArgs:

@@ -477,13 +477,13 @@ def naive_region_gradient(pose, model, camera, target, edge_gap, ignore_unknown=
     return value, grad * value / used, samples
 
 
-def naive_keypoint_distance(pose, model, camera, uv, confidence, scale=None, swap=False, swap_cost=0.0):
+def naive_keypoint_distance(pose, model, camera, uv, confidence, scale=None, swap=False):
     """D_k from the model's joints (scipy forward kinematics above) projected by the pinhole
     formula: the confidence-weighted mean over joints with a finite keypoint and positive
     confidence (0 if none) of ``scale * log(1 + d / scale)`` of each keypoint's pixel distance d
     (d itself without ``scale``), the image diagonal for a joint nearer than 5 cm; with ``swap``
-    the lower of that and ``swap_cost`` plus the same with every ``r_`` joint's keypoint given to
-    its ``l_`` twin and back. ``confidence`` may carry the silhouette gates already (the weights)."""
+    the lower of that and the same with every ``r_`` joint's keypoint given to its ``l_`` twin
+    and back. ``confidence`` may carry the silhouette gates already (the weights)."""
     transforms = naive_segment_transforms(pose, model.skeleton.offsets)
     from mocap.body import JOINT_NAMES
     from mocap.body.skeleton import SEGMENT_NAMES
@@ -512,7 +512,7 @@ def naive_keypoint_distance(pose, model, camera, uv, confidence, scale=None, swa
         return {"r_": "l_", "l_": "r_"}.get(name[:2], name[:2]) + name[2:]
 
     direct = total(lambda name: name)
-    return min(direct, total(other_side) + swap_cost) if swap else direct
+    return min(direct, total(other_side)) if swap else direct
 
 
 # --- synth ---

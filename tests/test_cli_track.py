@@ -17,8 +17,6 @@ from tests.conftest import need_mediapipe
 #: Mean joint error bound on the short test sequence with the true calibration, millimetres.
 SEQUENCE_MPJPE_BOUND_MM = 110.0
 N_FRAMES = 16
-#: Swapped keypoints' poses against the right ones' (metres, any joint, any frame).
-SWAPPED_TOLERANCE_M = 0.03
 
 
 @pytest.fixture(scope="module")
@@ -260,11 +258,10 @@ def test_an_old_run_folder_is_refused_with_why_and_what_to_do(sequence, tmp_path
 
 def test_keypoints_with_left_and_right_swapped_give_the_same_poses(sequence, tmp_path):
     """A keypoint file whose left and right are swapped on every frame, or on a run of frames (a
-    detector that does not see the face), gives the poses of the right file within
-    SWAPPED_TOLERANCE_M (every joint, every frame; the labelling is part of each hypothesis,
-    and reading the keypoints swapped costs ``LABEL_SWAP_PX``, which the image outweighs).
-    ``poses.csv`` says which labelling each frame's pose read, and ``keypoints.csv`` keeps the
-    detector's own labels."""
+    detector that does not see the face), gives the same poses as the right file: the tolerance
+    is none (the labelling is part of each hypothesis, scored under both labellings in the
+    model's joint order). ``poses.csv`` says which labelling each frame's pose read, and
+    ``keypoints.csv`` keeps the detector's own labels."""
     from mocap.io.keypoints import Keypoints, read_keypoints, write_keypoints
     from mocap.render.calibration import Calibration
 
@@ -287,7 +284,8 @@ def test_keypoints_with_left_and_right_swapped_give_the_same_poses(sequence, tmp
         for i in range(n):
             np.testing.assert_array_equal(kept[i].uv, given[i].uv)
     for name in ("every", "run"):
-        assert np.linalg.norm(tables[name].joints - tables["right"].joints, axis=2).max() < SWAPPED_TOLERANCE_M
+        np.testing.assert_array_equal(tables[name].poses, tables["right"].poses)
+        np.testing.assert_array_equal(tables[name].joints, tables["right"].joints)
     # the right labels' poses are the truth's arms, not a body turned around
     arms = [2, 3, 4, 5, 6, 7, 8, 9]
     about_neck = lambda j: j[:, arms] - j[:, 1:2]

@@ -278,17 +278,16 @@ def test_keypoint_cost_equals_its_twin_on_random_poses():
         scale = rng.uniform(1.0, 8.0, 10)
         swap = trial % 2 == 1
         plain = KeypointCost(uv, conf, MODEL, CAMERA, scale=np.full(10, np.inf))
-        swap_cost = rng.uniform(0.0, 3.0)
-        robust = KeypointCost(uv, conf, MODEL, CAMERA, scale=scale, swap=swap, swap_cost=swap_cost)
+        robust = KeypointCost(uv, conf, MODEL, CAMERA, scale=scale, swap=swap)
         for _ in range(5):
             q = random_pose(rng)
             assert plain(q) == pytest.approx(naive_keypoint_distance(q, MODEL, CAMERA, uv, conf), rel=1e-12, abs=1e-12)
-            assert robust(q) == pytest.approx(naive_keypoint_distance(q, MODEL, CAMERA, uv, conf, scale, swap,
-                                                                      swap_cost), rel=1e-12, abs=1e-12)
+            assert robust(q) == pytest.approx(naive_keypoint_distance(q, MODEL, CAMERA, uv, conf, scale, swap),
+                                              rel=1e-12, abs=1e-12)
             direct, swapped = robust.labellings(q)
             assert direct == pytest.approx(naive_keypoint_distance(q, MODEL, CAMERA, uv, conf, scale), rel=1e-12,
                                            abs=1e-12)
-            assert robust.labelling(q) == (swap and swapped + swap_cost < direct)
+            assert robust.labelling(q) == (swap and swapped < direct)
 
 
 def test_keypoint_cost_is_zero_on_the_models_own_projections_and_grows_with_a_shift():
