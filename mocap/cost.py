@@ -1097,13 +1097,13 @@ KEYPOINT_NOISE = MappingProxyType({
     "r_shoulder": 0.0744, "r_elbow": 0.0977, "r_wrist": 0.1052, "r_hand": 0.1537,
     "l_shoulder": 0.0744, "l_elbow": 0.0977, "l_wrist": 0.1052, "l_hand": 0.1537,
 })
-#: Least robust scale of a keypoint, pixels. The noise above times the person's spread (about 34
-#: px at 160x120) is 1-5 px, and at that scale the true-2D figures got worse (the keypoints of a
-#: hypothesis on a wrong branch, 10-20 px off, hardly pulled it back): on seed 5, six
-#: sequences, median 66.7 mm and 20.0 % of frames over 100 mm at a 3 px floor, 64.7 / 21.1 at
-#: 6, 60.4 / 16.1 at 12, 72.5 / 24.6 with four times the noise, against 60.4 / 17.4 for the
-#: plain distance (docs/research-log.md, 2026-11-28). So at 160x120 this floor is the scale.
-MIN_KEYPOINT_SCALE_PX = 12.0
+#: Least robust scale of a keypoint, pixels: a detector's pixel grid and the model's joints' own
+#: definitions put a keypoint this far off even where the noise above is smaller (the oracle's
+#: 2 px per coordinate is about as much). At 160x120 the noise times the person's spread (about
+#: 34 px) is 1-5 px. This robust scale costs the true-2D figures (seed 71: 80 mm and 30.1 % of
+#: frames over 100 mm against 71 mm and 26.0 % with the plain distance); a 12 px floor did better
+#: on six sequences but four recovery tests failed with it (docs/research-log.md, 2026-11-28).
+MIN_KEYPOINT_SCALE_PX = 3.0
 #: Distance off the person's region within which a keypoint is not gated down, pixels (the pixel
 #: grid, and a keypoint on the silhouette's edge with the oracle's 2 px of noise).
 GATE_MARGIN_PX = 3.0
@@ -1115,7 +1115,7 @@ def robust_distance(d, scale):
     Near a keypoint it is the distance itself (slope 1, so the term's weight means what it meant
     for the plain distance); far away it grows as the logarithm, and the pull of a joint (the
     slope, ``scale / (scale + d)``) falls off as ``scale / d``: a joint 50 px off pulls at
-    ``scale / (scale + 50)`` of a near one's rate (19 % at the 12 px of
+    ``scale / (scale + 50)`` of a near one's rate (6 % at the 3 px of
     :data:`MIN_KEYPOINT_SCALE_PX`; the silhouette's gate, :func:`keypoint_gates`, does the rest).
     It is the L1 form of the Cauchy (Lorentzian) loss, whose negative log-likelihood ``log(1 + (d / scale)^2)`` would make the term quadratic near
     the keypoint and change its balance with the image's terms.
