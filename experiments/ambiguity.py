@@ -70,6 +70,7 @@ from experiments.config import sequence_list
 from experiments.units import (EXTENSIONS, PREPARED_FILE, PREPARED_FILE_PAPER, DataSpec, load_prepared, load_sequence,
                                prepare_data, prepared_file)
 from mocap.body import JOINT_NAMES, PARAMETER_INDEX
+from mocap.body.skeleton import JOINT_INDEX
 from mocap.io.files import read_json, write_json
 from mocap.metrics import (DEFAULT_FAILURE_MM, acceleration_error, failure_rate, mpjpe, pa_mpjpe, reprojection_error,
                            root_relative_mpjpe)
@@ -213,12 +214,20 @@ def lower_region_cost(forward: list, backward: list) -> list:
 
 
 def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two_way: bool = False,
-            without: tuple[str, ...] = (), oracle_sigma_px: float | None = None) -> dict:
+            without: tuple[str, ...] = (), oracle_sigma_px: float | None = None,
+            swap_share: float | None = None) -> dict:
     """Track one benchmark sequence with ``config`` and measure its errors (see the module);
     ``without``: model extensions left out (:func:`experiments.units.load_sequence`; both: the
     paper's two-class model); ``oracle_sigma_px``: give the tracker the oracle keypoints of
-    :func:`experiments.keypoints.oracle_keypoints` with that noise (seeded by ``seed``)."""
-    from experiments.keypoints import oracle_keypoints
+    :func:`experiments.keypoints.oracle_keypoints` with that noise (seeded by ``seed``);
+    ``swap_share``: their left and right swapped on runs of frames covering that share
+    (:func:`experiments.keypoints.swap_runs`), as a detector that does not see the face does.
+    The result has ``labels_right_rate`` (the share of frames whose written arms are nearer the
+    truth's than the truth's with left and right swapped, about the neck), ``arms_centred_mm``
+    (the arms' eight joints' mean error about their own centre, no rotation: a body turned around
+    shows there), ``labels_swapped_rate`` (frames the tracker read the keypoints swapped on) and
+    ``detector_swapped_rate`` (frames the keypoints were swapped on)."""
+    from experiments.keypoints import oracle_keypoints, swap_labels, swap_runs
 
     loaded, prepared = benchmark_sequence(sequence, root, seed, without)
     camera = loaded.calibration.camera
@@ -229,6 +238,10 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     truth_joints = loaded.ground_truth.joints
     keypoints = ([None] * len(prepared) if oracle_sigma_px is None
                  else oracle_keypoints(truth_joints[: len(prepared)], camera, oracle_sigma_px, seed))
+    detector_swapped = np.zeros(len(prepared), bool)
+    if swap_share is not None and oracle_sigma_px is not None:
+        detector_swapped = swap_runs(len(prepared), swap_share, seed)
+        keypoints = swap_labels(keypoints, detector_swapped)
     results, beam_best, proposal_best, other_best, lifter_best, seconds = [], [], [], [], [], 0.0
     proposal_origins = {source.origin for source in tracker.sources}
     error = lambda q, i: mpjpe(loaded.model.joint_positions(q)[None], truth_joints[i:i + 1])
@@ -292,9 +305,42 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
             "flip_oracle_mpjpe_mm": mpjpe(oracle, truth), "flip_oracle_failure_rate": failure_rate(oracle, truth),
             "flip_oracle_reprojection_px": reprojection_error(oracle, truth, camera),
             "cost_equivalent_failure_rate": equivalent, "cost_equivalent_both_rate": equivalent_both,
-            **jitter(joints, decoded, truth),
+            **jitter(joints, decoded, truth), **arm_labels(joints, truth),
             **written_against_decoded(np.array([r.pose for r in results]), joints, decoded),
+            "labels_swapped_rate": float(np.mean([getattr(r, "labels_swapped", False) for r in results])),
+            "detector_swapped_rate": float(np.mean(detector_swapped)),
             "decoded_poses": np.array([r.decoded_pose for r in results]).tolist()}
+
+
+#: The arms' joints, right side then left (rows of :data:`mocap.body.skeleton.JOINT_NAMES`).
+SIDED_ARM_JOINTS = tuple(JOINT_INDEX[f"{side}_{j}"] for side in "rl" for j in ("shoulder", "elbow", "wrist", "hand"))
+
+
+def arm_labels(joints: np.ndarray, truth: np.ndarray) -> dict:
+    """Whether the tracked arms carry the right labels, and the arms' error about their centre.
+
+    Parameters
+    ----------
+    joints, truth : ndarray, shape (frames, 10, 3), metres
+
+    Returns
+    -------
+    dict
+        ``labels_right_rate``: the share of frames whose arms' joints (about the neck) are nearer
+        the truth's than the truth's with left and right swapped (ties count as right);
+        ``arms_centred_mm``: the eight arm joints' mean distance to the truth's, each set about
+        its own centroid (no rotation), millimetres, mean over frames.
+    """
+    joints, truth = np.asarray(joints, dtype=np.float64), np.asarray(truth, dtype=np.float64)
+    neck = JOINT_INDEX["neck"]
+    arms = list(SIDED_ARM_JOINTS)
+    mirrored = arms[4:] + arms[:4]
+    a = joints[:, arms] - joints[:, neck:neck + 1]
+    right = np.linalg.norm(a - (truth[:, arms] - truth[:, neck:neck + 1]), axis=2).mean(axis=1)
+    wrong = np.linalg.norm(a - (truth[:, mirrored] - truth[:, neck:neck + 1]), axis=2).mean(axis=1)
+    centred = lambda x: x - x.mean(axis=1, keepdims=True)
+    arms_mm = 1e3 * np.linalg.norm(centred(joints[:, arms]) - centred(truth[:, arms]), axis=2).mean()
+    return {"labels_right_rate": float(np.mean(right <= wrong)), "arms_centred_mm": float(arms_mm)}
 
 
 class SmootherCalls:

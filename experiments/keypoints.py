@@ -3,7 +3,9 @@
 What the keypoint cue can give at best (a detector's error is larger and not Gaussian): every
 joint of :data:`mocap.body.skeleton.JOINT_NAMES` present with confidence 1, each coordinate
 displaced by independent N(0, sigma^2) pixels, from a seeded generator (the same seed gives
-the same keypoints).
+the same keypoints). :func:`swap_runs` and :func:`swap_labels` simulate a detector that names
+the person's left arm the right one on runs of frames (MediaPipe on a figure whose face it does
+not see, issue 44).
 """
 from __future__ import annotations
 
@@ -43,3 +45,38 @@ def oracle_keypoints(joints: np.ndarray, camera: Camera, sigma_px: float = ORACL
     uv = camera.project(joints) + rng.normal(0.0, sigma_px, joints.shape[:-1] + (2,))
     ones = np.ones(joints.shape[1])
     return [Keypoints(frame_uv, ones) for frame_uv in uv]
+
+
+def swap_runs(frames: int, share: float, seed: int = 0, shortest: int = 5, longest: int = 30) -> np.ndarray:
+    """Which frames a simulated detector swaps left and right on: runs of ``shortest`` to
+    ``longest`` frames (uniform) between runs as long, until about ``share`` of the frames are
+    swapped (1: every frame; 0: none).
+
+    Returns
+    -------
+    ndarray, shape (frames,), bool
+    """
+    if not 0.0 <= share <= 1.0:
+        raise ValueError(f"share must be in [0, 1], got {share}")
+    if share in (0.0, 1.0):
+        return np.full(frames, share == 1.0)
+    rng = np.random.default_rng(seed + 7919)
+    mask = np.zeros(frames, bool)
+    i = int(rng.integers(shortest, longest + 1))
+    while i < frames:
+        run = int(rng.integers(shortest, longest + 1))
+        mask[i:i + run] = True
+        gap = int(round(run * (1.0 - share) / share))
+        i += run + max(gap, 1)
+    return mask
+
+
+def swap_labels(keypoints: list[Keypoints], swapped: np.ndarray) -> list[Keypoints]:
+    """``keypoints`` with left and right swapped (every ``r_`` joint's row given to its ``l_``
+    twin and back, as :meth:`Keypoints.swapped` does; spelt out here so that code from before it
+    is measured the same way) on the frames where ``swapped`` is True."""
+    from mocap.body.skeleton import JOINT_NAMES
+
+    twin = [JOINT_NAMES.index({"r_": "l_", "l_": "r_"}.get(n[:2], n[:2]) + n[2:]) for n in JOINT_NAMES]
+    return [Keypoints(k.uv[twin], k.confidence[twin], None if k.world is None else k.world[twin]) if s else k
+            for k, s in zip(keypoints, swapped)]

@@ -58,6 +58,10 @@ CONFIGS = MappingProxyType({
     # the keypoint term alone; issue 34)
     "oracle-keypoints": {},
     "oracle-no-lifter": {"lifter_weight": 0.0},
+    # the oracle's keypoints with left and right swapped on runs of half the frames, and on every
+    # frame (SWAPPED_KEYPOINTS; a detector that does not see the face, issue 44)
+    "oracle-swapped": {},
+    "oracle-swapped-all": {},
     # the written poses' smoother (issue 39): live (lag 0), offline, and off
     "oracle-L0": {"lag": 0},
     "oracle-offline": {"offline": True},
@@ -84,7 +88,11 @@ TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
 #: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
 ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter", "oracle-fitted",
                                                               "oracle-fitted-silhouette", "oracle-L0", "oracle-offline",
-                                                              "oracle-unsmoothed")})
+                                                              "oracle-unsmoothed", "oracle-swapped",
+                                                              "oracle-swapped-all")})
+#: Configurations whose oracle keypoints have left and right swapped: the share of frames
+#: (:func:`experiments.keypoints.swap_runs`).
+SWAPPED_KEYPOINTS = MappingProxyType({"oracle-swapped": 0.5, "oracle-swapped-all": 1.0})
 
 
 def config_of(name: str) -> TrackerConfig:
@@ -97,6 +105,7 @@ def unit_path(out: Path, name: str, sequence: str, seed: int) -> Path:
     from experiments.ambiguity import config_key
     model = "-two-class" if name in TWO_CLASS_MODEL else ""
     keypoints = f"-oracle{ORACLE_KEYPOINTS[name]:g}px" if name in ORACLE_KEYPOINTS else ""
+    keypoints += f"-swapped{SWAPPED_KEYPOINTS[name]:g}" if name in SWAPPED_KEYPOINTS else ""
     return out / "units" / f"{sequence}-s{seed}-{config_key(config_of(name))}{model}{keypoints}.json"
 
 
@@ -113,7 +122,7 @@ def run_unit(out: Path, name: str, sequence: str, seed: int) -> dict:
         return row
     config = config_of(name)
     row = measure(sequence, config, out, seed, without=EXTENSIONS if name in TWO_CLASS_MODEL else (),
-                  oracle_sigma_px=ORACLE_KEYPOINTS.get(name))
+                  oracle_sigma_px=ORACLE_KEYPOINTS.get(name), swap_share=SWAPPED_KEYPOINTS.get(name))
     write_json(path, {"config": config.to_dict(), "name": name, "seed": seed, "code": code, "result": row})
     return row
 

@@ -239,7 +239,10 @@ def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: B
 
     With ``keypoints`` (:class:`mocap.io.keypoints.Keypoints`, ``camera`` pixels) both fits add
     :data:`CALIBRATION_KEYPOINT_WEIGHT` times the keypoint distance (the shoulders' width and
-    place, the head, the arms).
+    place, the head, the arms), gated by the foreground, under the labelling the tracker would
+    take: the lower of the detector's and the left/right swapped one (``KeypointCost(swap=True)``),
+    so a detector that names the left arm the right one does not turn the upright, camera-facing
+    body the calibration assumes (the refinement's colour classes, the face and the hair, see it).
 
     Returns the Calibration and the ColourModel learnt inside the fitted model (``seed_colour``,
     when given, where the fitted model covers too few foreground pixels of a class).
@@ -276,7 +279,8 @@ def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: B
             value = RegionCost(target, model, camera)(pose)
             if keypoints is not None:
                 value += CALIBRATION_KEYPOINT_WEIGHT * KeypointCost(keypoints.uv, keypoints.confidence, model,
-                                                                    camera)(pose)
+                                                                    camera, foreground=foreground,
+                                                                    swap=True)(pose)
             return value
         return cost
 

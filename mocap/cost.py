@@ -4,9 +4,12 @@
   model's coloured silhouette and the segmented label image, over m colour classes.
 - :class:`EdgeCost`: the mean edge distance D_c of eq. (2): the mean, over the model's
   occluding-edge pixels, of the image's distance-to-nearest-edge map.
-- :class:`KeypointCost`: beyond the paper, the keypoint distance D_k: the confidence-weighted
-  mean, over the joints a 2D detector found, of the pixel distance between the model's
-  projected joint and the keypoint (normalised like eq. 2: a mean distance in pixels).
+- :class:`KeypointCost`: beyond the paper, the keypoint distance D_k: the weighted mean, over
+  the joints a 2D detector found, of a robust distance (:func:`robust_distance`, pixels) between
+  the model's projected joint and the keypoint, each joint weighted by its confidence and by
+  whether it lies on the person's silhouette (:func:`keypoint_gates`), the robust scale from
+  the detector's measured noise (:func:`keypoint_scales`); optionally the lower of the
+  detector's labelling and the left/right swapped one (``swap``).
 
 Each is built once per frame from its target and called as ``cost(pose) -> float``. One call
 is one compiled function that poses the mesh, rasterizes it and accumulates the cost only
@@ -20,8 +23,8 @@ Degenerate cases (documented, finite, never NaN):
   F = 1 (:data:`EMPTY_REGION_COST`).
 - D_c: when the model has no occluding-edge pixel in view, D_c is the ``no_edge_penalty``
   (default: the distance map's truncation value, i.e. its maximum).
-- D_k: a joint nearer than the near plane counts the image's diagonal as its distance; with no
-  keypoint present D_k is 0 (no evidence).
+- D_k: a joint nearer than the near plane counts the image's diagonal as its distance (through
+  the robust distance); with no keypoint present D_k is 0 (no evidence).
 
 Gradients (the paper's future work, issue 30): :meth:`EdgeCost.gradient` and
 :meth:`RegionCost.gradient` differentiate eq. (2) and eq. (1) with respect to the 23 pose
@@ -30,6 +33,7 @@ parameters from one render each (see :class:`EdgeGradient` and :class:`RegionGra
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import NamedTuple
 
 import numpy as np
@@ -41,6 +45,7 @@ from mocap.body.mesh import edge_faces
 from mocap.body.model import BodyModel
 from mocap.body.pose import N_PARAMETERS, check_pose
 from mocap.body.skeleton import JOINT_NAMES, SEGMENT_NAMES
+from mocap.io.keypoints import SWAPPED_JOINTS
 from mocap.labels import MAX_CLASSES, UNKNOWN
 from mocap.render.camera import Camera
 from mocap.render.rasterize import (EDGE_DEPTH_GAP_M, Buffers, Scene, check_edge_gap, occluding_edge_marks_into,
@@ -190,13 +195,26 @@ class KeypointKernelArgs(NamedTuple):
     uv : ndarray, shape (n, 2), float64, pixels
         The keypoints.
     weight : ndarray, shape (n,), float64
-        Their confidences divided by the confidences' sum.
+        Their confidences times their silhouette gates (:func:`keypoint_gates`), divided by
+        those products' sum.
     camera : ndarray, shape (5,), float64
         :meth:`~mocap.render.camera.Camera.as_array`.
     transforms : ndarray, shape (8, 3, 4), float64
         Scratch for the segment transforms.
     behind_penalty : float, pixels
         Distance counted for a joint nearer than the near plane.
+    scale : ndarray, shape (n,), float64, pixels
+        Each keypoint's robust scale (:func:`robust_distance`; inf: the plain distance).
+    swap : bool
+        Also score the labelling with left and right swapped; the cost is the lower of the two.
+    swapped_segment : ndarray, shape (n,), int64
+        Segment of each keypoint's joint under the swapped labelling (its twin on the other side).
+    swapped_local : ndarray, shape (n, 3), float64, metres
+        That joint in its segment's frame.
+    swapped_order : ndarray, shape (n,), int64
+        The keypoints in the order of their twins' joints (:data:`~mocap.body.skeleton.JOINT_NAMES`
+        order): the swapped labelling's sum runs in the model's joint order, as the detector's does,
+        so that keypoints whose labels are the other way round give the same float bit for bit.
     """
 
     offsets: np.ndarray
@@ -207,6 +225,11 @@ class KeypointKernelArgs(NamedTuple):
     camera: np.ndarray
     transforms: np.ndarray
     behind_penalty: float
+    scale: np.ndarray
+    swap: bool
+    swapped_segment: np.ndarray
+    swapped_local: np.ndarray
+    swapped_order: np.ndarray
 
 
 # ----------------------------------------------------------------------------- kernels
@@ -655,25 +678,58 @@ def region_gradient_kernel(pose, args, gradient):
 
 
 @jit
+def _robust(d, scale):
+    """:func:`robust_distance` of one distance ``d`` at ``scale`` (pixels; inf: ``d`` itself)."""
+    if scale == np.inf:
+        return d
+    return scale * np.log1p(d / scale)
+
+
+@jit
+def _joint_distance(t, cam, s, local, i, u, v, behind_penalty):
+    """Pixel distance from keypoint (u, v) to the projection of the point ``local[i]`` of segment
+    ``s`` (transforms ``t``); ``behind_penalty`` when it is nearer than the near plane."""
+    x = t[s, 0, 0] * local[i, 0] + t[s, 0, 1] * local[i, 1] + t[s, 0, 2] * local[i, 2] + t[s, 0, 3]
+    y = t[s, 1, 0] * local[i, 0] + t[s, 1, 1] * local[i, 1] + t[s, 1, 2] * local[i, 2] + t[s, 1, 3]
+    z = t[s, 2, 0] * local[i, 0] + t[s, 2, 1] * local[i, 1] + t[s, 2, 2] * local[i, 2] + t[s, 2, 3]
+    if z < cam[4]:
+        return behind_penalty
+    du = cam[0] * x / z + cam[2] - u
+    dv = cam[1] * y / z + cam[3] - v
+    return np.sqrt(du * du + dv * dv)
+
+
+@jit
+def keypoint_labellings_kernel(pose, args):
+    """Compiled D_k(pose) under the detector's labelling and under the swapped one (pixels),
+    for an unchecked float64 (23,) pose and a :class:`KeypointKernelArgs`: ``(detector,
+    swapped)``, the second 0 when ``args.swap`` is off (both 0 with no keypoint)."""
+    segment_transforms_into(pose, args.offsets, args.transforms)
+    t, cam = args.transforms, args.camera
+    direct = 0.0
+    swapped = 0.0
+    for i in range(args.uv.shape[0]):
+        d = _joint_distance(t, cam, args.joint_segment[i], args.joint_local, i, args.uv[i, 0], args.uv[i, 1],
+                            args.behind_penalty)
+        direct += args.weight[i] * _robust(d, args.scale[i])
+    if args.swap:
+        for k in range(args.uv.shape[0]):
+            i = args.swapped_order[k]
+            d = _joint_distance(t, cam, args.swapped_segment[i], args.swapped_local, i, args.uv[i, 0], args.uv[i, 1],
+                                args.behind_penalty)
+            swapped += args.weight[i] * _robust(d, args.scale[i])
+    return direct, swapped
+
+
+@jit
 def keypoint_cost_kernel(pose, args):
     """Compiled D_k(pose), pixels, for an unchecked float64 (23,) pose and a
-    :class:`KeypointKernelArgs` (0 with no keypoint)."""
-    segment_transforms_into(pose, args.offsets, args.transforms)
-    t, cam, local = args.transforms, args.camera, args.joint_local
-    total = 0.0
-    for i in range(args.uv.shape[0]):
-        s = args.joint_segment[i]
-        x = t[s, 0, 0] * local[i, 0] + t[s, 0, 1] * local[i, 1] + t[s, 0, 2] * local[i, 2] + t[s, 0, 3]
-        y = t[s, 1, 0] * local[i, 0] + t[s, 1, 1] * local[i, 1] + t[s, 1, 2] * local[i, 2] + t[s, 1, 3]
-        z = t[s, 2, 0] * local[i, 0] + t[s, 2, 1] * local[i, 1] + t[s, 2, 2] * local[i, 2] + t[s, 2, 3]
-        if z < cam[4]:
-            d = args.behind_penalty
-        else:
-            du = cam[0] * x / z + cam[2] - args.uv[i, 0]
-            dv = cam[1] * y / z + cam[3] - args.uv[i, 1]
-            d = np.sqrt(du * du + dv * dv)
-        total += args.weight[i] * d
-    return total
+    :class:`KeypointKernelArgs` (0 with no keypoint): the detector's labelling, or with
+    ``args.swap`` the lower of it and the swapped one."""
+    direct, swapped = keypoint_labellings_kernel(pose, args)
+    if args.swap and swapped < direct:
+        return swapped
+    return direct
 
 
 @jit
@@ -1029,8 +1085,126 @@ class RegionGradient:
 CONTOUR_SPACING_PX = 1.0
 
 
+#: The detector's measured 2D noise per joint (:data:`~mocap.body.skeleton.JOINT_NAMES`), in units
+#: of the ten joints' RMS distance from their mean: MediaPipe Pose on renders of held-out motion
+#: capture, 1.4826 MAD per coordinate (``experiments/lifter_keypoint_noise.json``,
+#: ``python -m experiments.lifter_keypoint_noise``). MediaPipe gives no neck; its value is the
+#: shoulders'. Each side's twins have the two sides' mean (the sides differ by the measure's own
+#: noise, and the labels are what the tracker does not take from the detector): the cost of
+#: keypoints whose left and right are swapped is then the same under the other labelling.
+KEYPOINT_NOISE = MappingProxyType({
+    "head": 0.0309, "neck": 0.0744,
+    "r_shoulder": 0.0744, "r_elbow": 0.0977, "r_wrist": 0.1052, "r_hand": 0.1537,
+    "l_shoulder": 0.0744, "l_elbow": 0.0977, "l_wrist": 0.1052, "l_hand": 0.1537,
+})
+#: Least robust scale of a keypoint, pixels: a detector's pixel grid and the model's joints' own
+#: definitions put a keypoint this far off even where the noise above is smaller (the oracle's
+#: 2 px per coordinate is about as much). At 160x120 the noise times the person's spread (about
+#: 34 px) is 1-5 px. This robust scale costs the true-2D figures (seed 71: 80 mm and 30.1 % of
+#: frames over 100 mm against 71 mm and 26.0 % with the plain distance); a 12 px floor did better
+#: on six sequences but four recovery tests failed with it (docs/research-log.md, 2026-11-28).
+MIN_KEYPOINT_SCALE_PX = 3.0
+#: Distance off the person's region within which a keypoint is not gated down, pixels (the pixel
+#: grid, and a keypoint on the silhouette's edge with the oracle's 2 px of noise).
+GATE_MARGIN_PX = 3.0
+
+
+def robust_distance(d, scale):
+    """The keypoint term's robust distance: ``scale * log(1 + d / scale)`` (pixels).
+
+    Near a keypoint it is the distance itself (slope 1, so the term's weight means what it meant
+    for the plain distance); far away it grows as the logarithm, and the pull of a joint (the
+    slope, ``scale / (scale + d)``) falls off as ``scale / d``: a joint 50 px off pulls at
+    ``scale / (scale + 50)`` of a near one's rate (6 % at the 3 px of
+    :data:`MIN_KEYPOINT_SCALE_PX`; the silhouette's gate, :func:`keypoint_gates`, does the rest).
+    It is the L1 form of the Cauchy (Lorentzian) loss, whose negative log-likelihood ``log(1 + (d / scale)^2)`` would make the term quadratic near
+    the keypoint and change its balance with the image's terms.
+
+    Parameters
+    ----------
+    d : float or ndarray, pixels (>= 0)
+    scale : float or ndarray, pixels (> 0; inf gives ``d``)
+
+    Returns
+    -------
+    float or ndarray, pixels
+    """
+    d, scale = np.asarray(d, dtype=np.float64), np.asarray(scale, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        out = np.where(np.isinf(scale), d, scale * np.log1p(d / np.where(np.isinf(scale), 1.0, scale)))
+    return out[()] if out.ndim == 0 else out
+
+
+def keypoint_scales(uv, confidence) -> np.ndarray:
+    """Each keypoint's robust scale (pixels): :data:`KEYPOINT_NOISE` times the present keypoints'
+    RMS distance from their mean (the person's size in the image, as the noise was measured), at
+    least :data:`MIN_KEYPOINT_SCALE_PX`. The spread is computed over the keypoints sorted by
+    position, so that the same keypoints under other labels give the same floats.
+
+    Parameters
+    ----------
+    uv : ndarray, shape (10, 2), float, pixels (NaN where absent)
+    confidence : ndarray, shape (10,), in [0, 1] (0 where absent)
+
+    Returns
+    -------
+    ndarray, shape (10,), float64, pixels
+    """
+    uv, conf = np.asarray(uv, dtype=np.float64), np.asarray(confidence, dtype=np.float64)
+    present = (np.nan_to_num(conf) > 0) & np.isfinite(uv).all(axis=1)
+    spread = 0.0
+    if present.sum() >= 2:
+        p = uv[present]
+        p = p[np.lexsort((p[:, 1], p[:, 0]))]
+        spread = float(np.sqrt(((p - p.mean(axis=0)) ** 2).sum(axis=1).mean()))
+    noise = np.array([KEYPOINT_NOISE[name] for name in JOINT_NAMES])
+    return np.maximum(noise * spread, MIN_KEYPOINT_SCALE_PX)
+
+
+def keypoint_gates(uv, foreground, margin: float = GATE_MARGIN_PX) -> np.ndarray:
+    """Each keypoint's silhouette gate in (0, 1]: 1 on the person's region or within ``margin``
+    of it, else ``1 / (1 + ((o - margin) / margin)^2)`` with ``o`` its distance to the region
+    (pixels): a joint 50 px outside weighs 0.4 % of one on the person. Without a region (no
+    foreground pixel) every gate is 1.
+
+    Parameters
+    ----------
+    uv : ndarray, shape (n, 2), float, pixels
+        Keypoints (finite), pixel centres at half-integers.
+    foreground : ndarray, shape (H, W), bool
+        The person's region (a label image's pixels other than background).
+    margin : float, pixels (> 0)
+
+    Returns
+    -------
+    ndarray, shape (n,), float64
+    """
+    from scipy.ndimage import distance_transform_edt
+
+    uv = np.asarray(uv, dtype=np.float64)
+    if not (np.isfinite(margin) and margin > 0):
+        raise ValueError(f"margin must be finite and positive, got {margin!r}")
+    fg = np.asarray(foreground, dtype=bool)
+    if fg.ndim != 2:
+        raise ValueError(f"foreground must be a 2-D mask, got shape {fg.shape}")
+    gates = np.ones(len(uv))
+    if len(uv) == 0 or not fg.any():
+        return gates
+    h, w = fg.shape
+    col = np.clip(np.floor(uv[:, 0]).astype(np.int64), 0, w - 1)
+    row = np.clip(np.floor(uv[:, 1]).astype(np.int64), 0, h - 1)
+    # beyond the image: the distance to the border pixel plus that pixel's to the region
+    beyond = np.hypot(np.maximum(np.maximum(-uv[:, 0], uv[:, 0] - w), 0.0),
+                      np.maximum(np.maximum(-uv[:, 1], uv[:, 1] - h), 0.0))
+    if fg[row, col].all() and not beyond.any():
+        return gates
+    outside = distance_transform_edt(~fg)[row, col] + beyond
+    excess = np.maximum(outside - margin, 0.0) / margin
+    return 1.0 / (1.0 + excess ** 2)
+
+
 class KeypointCost:
-    """Keypoint distance D_k: confidence-weighted mean pixel distance of the projected joints.
+    """Keypoint distance D_k: the weighted mean robust distance of the projected joints.
 
     Parameters
     ----------
@@ -1041,14 +1215,25 @@ class KeypointCost:
         In [0, 1]; 0 (or NaN) where absent.
     model : BodyModel
     camera : Camera
+    foreground : ndarray, shape (H, W), bool, optional
+        The person's region in the camera's image (the frame's label image other than
+        background): a keypoint off it is gated down (:func:`keypoint_gates`). None: no gate.
+    scale : ndarray, shape (10,), float, pixels, optional
+        Each keypoint's robust scale (default :func:`keypoint_scales`; inf: the plain pixel
+        distance).
+    swap : bool
+        Also score the keypoints with left and right swapped (:data:`~mocap.io.keypoints.SWAPPED_JOINTS`):
+        the cost is the lower of the two labellings, and :meth:`labelling` tells which.
 
-    Calling ``cost(pose)`` returns ``sum_j c_j |pi(J_j(pose)) - k_j| / sum_j c_j`` over the
-    present joints j, pixels (>= 0; 0 when no joint is present or the keypoints are the
-    model's own projections). A joint nearer than the camera's near plane counts the image
-    diagonal.
+    Calling ``cost(pose)`` returns ``sum_j w_j rho_j(|pi(J_j(pose)) - k_j|)`` over the present
+    joints j, pixels (>= 0; 0 when no joint is present or the keypoints are the model's own
+    projections): ``rho_j`` :func:`robust_distance` at the joint's scale, ``w_j`` its confidence
+    times its gate over the sum of those products. A joint nearer than the camera's near plane
+    counts the image diagonal.
     """
 
-    def __init__(self, uv: np.ndarray, confidence: np.ndarray, model: BodyModel, camera: Camera) -> None:
+    def __init__(self, uv: np.ndarray, confidence: np.ndarray, model: BodyModel, camera: Camera, *,
+                 foreground: np.ndarray | None = None, scale: np.ndarray | None = None, swap: bool = False) -> None:
         uv, conf = np.asarray(uv, dtype=np.float64), np.asarray(confidence, dtype=np.float64)
         if uv.shape != (len(JOINT_NAMES), 2) or conf.shape != (len(JOINT_NAMES),):
             raise ValueError(f"keypoints need uv of shape ({len(JOINT_NAMES)}, 2) and confidence of shape "
@@ -1056,14 +1241,33 @@ class KeypointCost:
         conf = np.where(np.isnan(conf), 0.0, conf)
         if np.any(conf < 0) or np.any(conf > 1) or np.any(np.isinf(uv)):
             raise ValueError("keypoint confidences must be in [0, 1] and positions finite or NaN")
+        scale = keypoint_scales(uv, conf) if scale is None else np.asarray(scale, dtype=np.float64)
+        if scale.shape != (len(JOINT_NAMES),) or np.any(np.isnan(scale)) or np.any(scale <= 0):
+            raise ValueError(f"keypoint scales must be {len(JOINT_NAMES)} positive numbers, got {scale!r}")
+        if foreground is not None and np.shape(foreground) != camera.shape:
+            raise ValueError(f"foreground of shape {np.shape(foreground)} does not match the camera {camera.shape}")
+        if not isinstance(swap, (bool, np.bool_)):
+            raise ValueError(f"swap must be true or false, got {swap!r}")
         present = (conf > 0) & np.isfinite(uv).all(axis=1)
         self.model, self.camera = model, camera
         self.present = present
+        self.swap = bool(swap)
         self._uv = np.ascontiguousarray(uv[present])
-        total = conf[present].sum()
-        self._weight = conf[present] / total if total > 0 else np.zeros(0)
-        self._segment = np.ascontiguousarray(model.skeleton.joint_segment[present])
-        self._local = np.ascontiguousarray(model.skeleton.joint_local[present])
+        self._scale = np.ascontiguousarray(scale[present])
+        gate = np.ones(len(self._uv)) if foreground is None else keypoint_gates(self._uv, foreground)
+        #: Each present keypoint's silhouette gate (:func:`keypoint_gates`; 1 without a foreground).
+        self.gates = gate
+        weight = conf[present] * gate
+        total = np.sort(weight).sum()                     # the same float whatever the labels' order
+        self._weight = weight / total if total > 0 else np.zeros(0)
+        joints = np.flatnonzero(present)
+        twins = np.array([SWAPPED_JOINTS[j] for j in joints], dtype=np.int64)
+        skeleton = model.skeleton
+        self._segment = np.ascontiguousarray(skeleton.joint_segment[joints])
+        self._local = np.ascontiguousarray(skeleton.joint_local[joints])
+        self._swapped_segment = np.ascontiguousarray(skeleton.joint_segment[twins])
+        self._swapped_local = np.ascontiguousarray(skeleton.joint_local[twins])
+        self._swapped_order = np.argsort(twins, kind="stable").astype(np.int64)
         self._transforms = np.zeros((len(SEGMENT_NAMES), 3, 4))
         self._camera = camera.as_array()
         self.behind_penalty = float(np.hypot(camera.width, camera.height))
@@ -1080,10 +1284,23 @@ class KeypointCost:
         """As calling, without validating ``pose`` (a float64 (23,) array): for optimiser loops."""
         return keypoint_cost_kernel(pose, self.kernel_args())
 
+    def labellings(self, pose) -> tuple[float, float]:
+        """D_k at ``pose`` under the detector's labelling and under the swapped one, pixels (the
+        second NaN when ``swap`` is off)."""
+        direct, swapped = keypoint_labellings_kernel(check_pose(pose), self.kernel_args())
+        return float(direct), (float(swapped) if self.swap else float("nan"))
+
+    def labelling(self, pose) -> bool:
+        """Whether the cost at ``pose`` is the swapped labelling's (lower than the detector's; a
+        tie keeps the detector's; False when ``swap`` is off)."""
+        direct, swapped = self.labellings(pose)
+        return bool(self.swap and swapped < direct)
+
     def kernel_args(self) -> KeypointKernelArgs:
         """Second argument of :func:`keypoint_cost_kernel` (for compiled optimiser loops)."""
         return KeypointKernelArgs(self.model.skeleton.offsets, self._segment, self._local, self._uv, self._weight,
-                                  self._camera, self._transforms, self.behind_penalty)
+                                  self._camera, self._transforms, self.behind_penalty, self._scale, self.swap,
+                                  self._swapped_segment, self._swapped_local, self._swapped_order)
 
 
 def non_overlapping_ratio(target_labels: np.ndarray, model_labels: np.ndarray, n_classes: int, *,

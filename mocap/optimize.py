@@ -560,7 +560,8 @@ class _DummyArgs:
         """No keypoint (the loop never evaluates it: its weight is 0); arrays of the real one's types."""
         scene = cost.kernel_args().scene
         return KeypointKernelArgs(scene.offsets, np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 2)),
-                                  np.zeros(0), scene.camera, np.zeros((len(scene.offsets), 3, 4)), 0.0)
+                                  np.zeros(0), scene.camera, np.zeros((len(scene.offsets), 3, 4)), 0.0, np.zeros(0),
+                                  False, np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros(0, np.int64))
 
     @staticmethod
     def edge(cost) -> EdgeKernelArgs:

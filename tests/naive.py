@@ -12,7 +12,7 @@ compiled kernel                                            twin                 
 ``optimize`` (ask/tell Nelder–Mead, compiled cost loop)    :func:`naive_nelder_mead`         ``tests/test_optimize.py``
 ``cost`` (region counts, eq. 1; edge mean, eq. 2)          :func:`naive_non_overlapping_ratio`, ``tests/test_cost.py``
                                                            :func:`naive_mean_edge_distance`
-``cost`` (keypoint distance D_k)                           :func:`naive_keypoint_distance`   ``tests/test_cost.py``
+``cost`` (keypoint distance D_k, both labellings)          :func:`naive_keypoint_distance`   ``tests/test_cost.py``
 ``cost`` (gradient of eq. 2 over the occluding contour)    :func:`naive_edge_gradient`       ``tests/test_cost_gradient.py``
 ``cost`` (gradient of eq. 1, boundary motion)              :func:`naive_region_gradient`     ``tests/test_cost_gradient.py``
 ``synth.shading`` (surface samples)                        :func:`naive_surface_samples`     ``tests/synth/test_sequence.py``
@@ -477,28 +477,42 @@ def naive_region_gradient(pose, model, camera, target, edge_gap, ignore_unknown=
     return value, grad * value / used, samples
 
 
-def naive_keypoint_distance(pose, model, camera, uv, confidence):
+def naive_keypoint_distance(pose, model, camera, uv, confidence, scale=None, swap=False):
     """D_k from the model's joints (scipy forward kinematics above) projected by the pinhole
-    formula: the confidence-weighted mean distance over joints with a finite keypoint and
-    positive confidence (0 if none), the image diagonal for a joint nearer than 5 cm."""
+    formula: the confidence-weighted mean over joints with a finite keypoint and positive
+    confidence (0 if none) of ``scale * log(1 + d / scale)`` of each keypoint's pixel distance d
+    (d itself without ``scale``), the image diagonal for a joint nearer than 5 cm; with ``swap``
+    the lower of that and the same with every ``r_`` joint's keypoint given to its ``l_`` twin
+    and back. ``confidence`` may carry the silhouette gates already (the weights)."""
     transforms = naive_segment_transforms(pose, model.skeleton.offsets)
     from mocap.body import JOINT_NAMES
     from mocap.body.skeleton import SEGMENT_NAMES
 
-    total, weight = 0.0, 0.0
-    for j, name in enumerate(JOINT_NAMES):
-        c = confidence[j]
-        if not (c > 0) or not np.all(np.isfinite(uv[j])):
-            continue
+    def projected(name):
+        j = JOINT_NAMES.index(name)
         r, t = transforms[SEGMENT_NAMES[model.skeleton.joint_segment[j]]]
         x, y, z = r @ model.skeleton.joint_local[j] + t
-        if z < 0.05:
-            d = np.hypot(camera.width, camera.height)
-        else:
-            d = np.hypot(camera.fx * x / z + camera.cx - uv[j, 0], camera.fy * y / z + camera.cy - uv[j, 1])
-        total += c * d
-        weight += c
-    return total / weight if weight else 0.0
+        return None if z < 0.05 else np.array([camera.fx * x / z + camera.cx, camera.fy * y / z + camera.cy])
+
+    def total(relabel):
+        acc, weight = 0.0, 0.0
+        for j, name in enumerate(JOINT_NAMES):
+            c = confidence[j]
+            if not (c > 0) or not np.all(np.isfinite(uv[j])):
+                continue
+            p = projected(relabel(name))
+            d = np.hypot(camera.width, camera.height) if p is None else float(np.hypot(*(p - uv[j])))
+            if scale is not None:
+                d = scale[j] * np.log(1.0 + d / scale[j])
+            acc += c * d
+            weight += c
+        return acc / weight if weight else 0.0
+
+    def other_side(name):
+        return {"r_": "l_", "l_": "r_"}.get(name[:2], name[:2]) + name[2:]
+
+    direct = total(lambda name: name)
+    return min(direct, total(other_side)) if swap else direct
 
 
 # --- synth ---

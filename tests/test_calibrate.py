@@ -75,6 +75,28 @@ def test_keypoints_pull_the_calibrated_joints_onto_them(actor):
 
 
 @pytest.mark.slow
+def test_keypoints_with_left_and_right_swapped_calibrate_the_same_body(actor):
+    """The detector's left and right swapped (as MediaPipe does on a figure whose face it does not
+    see): the calibration decides the labelling as the tracker does, and fits the same body and
+    pose as from the right labels, to the float (the keypoint distance is the lower of the two
+    labellings, computed in the model's joint order)."""
+    from mocap.io.keypoints import Keypoints
+
+    dims, pose, _, _ = actor
+    _, _, _, frame, background = _actor_scene()
+    true_uv = CAMERA.project(BodyModel.build(dims).joint_positions(pose))
+    keypoints = Keypoints(true_uv, np.ones(len(true_uv)))
+    config = AutoCalibrationConfig(evaluations=300)
+    right = auto_calibrate(frame, background, CAMERA, config=config, keypoints=keypoints)
+    swapped = auto_calibrate(frame, background, CAMERA, config=config, keypoints=keypoints.swapped())
+    np.testing.assert_array_equal(swapped.initial_pose, right.initial_pose)
+    assert swapped.dims.to_dict() == right.dims.to_dict()
+    # and it is the right body: each arm's joints on their own keypoints
+    joints_uv = CAMERA.project(swapped.body_model().joint_positions(swapped.initial_pose))
+    assert np.linalg.norm(joints_uv - true_uv, axis=1).max() < 1.5
+
+
+@pytest.mark.slow
 def test_auto_calibrate_recovers_position_depth_and_arm_pose(actor):
     _, pose, _, fitted = actor
     assert isinstance(fitted, Calibration) and fitted.camera == CAMERA

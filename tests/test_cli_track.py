@@ -254,3 +254,39 @@ def test_an_old_run_folder_is_refused_with_why_and_what_to_do(sequence, tmp_path
     assert main(["track", str(sequence), "--out", str(extra), *args]) == 0
     monkeypatch.setattr(mediapipe_keypoints, "available", lambda: False)      # the extra removed since
     refused(extra, "the optional extra 'keypoints' was installed or removed")
+
+
+def test_keypoints_with_left_and_right_swapped_give_the_same_poses(sequence, tmp_path):
+    """A keypoint file whose left and right are swapped on every frame, or on a run of frames (a
+    detector that does not see the face), gives the same poses as the right file: the tolerance
+    is none (the labelling is part of each hypothesis, scored under both labellings in the
+    model's joint order). ``poses.csv`` says which labelling each frame's pose read, and
+    ``keypoints.csv`` keeps the detector's own labels."""
+    from mocap.io.keypoints import Keypoints, read_keypoints, write_keypoints
+    from mocap.render.calibration import Calibration
+
+    n = 6
+    truth = PoseTable.read(sequence / "ground_truth.csv")
+    camera = Calibration.from_json(sequence / "calibration.json").camera
+    rng = np.random.default_rng(5)
+    right = [Keypoints(camera.project(j) + rng.normal(0.0, 1.0, (len(j), 2)), np.ones(len(j))) for j in truth.joints[:n]]
+    runs = {"right": np.zeros(n, bool), "every": np.ones(n, bool), "run": np.isin(np.arange(n), [2, 3, 4])}
+    tables = {}
+    for name, swapped in runs.items():
+        given = {i: k.swapped() if s else k for i, (k, s) in enumerate(zip(right, swapped))}
+        write_keypoints(tmp_path / f"{name}.csv", given)
+        out = tmp_path / name
+        assert main(["track", str(sequence), "--out", str(out), "--iterations", "100", "--max-frames", str(n),
+                     "--no-overlay", "--keypoints", str(tmp_path / f"{name}.csv")]) == 0
+        tables[name] = PoseTable.read(out / "poses.csv")
+        np.testing.assert_array_equal(tables[name].extra["labels_swapped"], swapped.astype(float))
+        kept = read_keypoints(out / "keypoints.csv")
+        for i in range(n):
+            np.testing.assert_array_equal(kept[i].uv, given[i].uv)
+    for name in ("every", "run"):
+        np.testing.assert_array_equal(tables[name].poses, tables["right"].poses)
+        np.testing.assert_array_equal(tables[name].joints, tables["right"].joints)
+    # the right labels' poses are the truth's arms, not a body turned around
+    arms = [2, 3, 4, 5, 6, 7, 8, 9]
+    about_neck = lambda j: j[:, arms] - j[:, 1:2]
+    assert np.linalg.norm(about_neck(tables["right"].joints) - about_neck(truth.joints[:n]), axis=2).mean() < 0.08

@@ -4,8 +4,9 @@ from hypothesis import given, settings, strategies as st
 from hypothesis.extra import numpy as hnp
 from scipy import ndimage
 
-from mocap.body import JOINT_LIMITS, PARAMETER_INDEX as P, BodyModel, neutral_pose
-from mocap.cost import (EMPTY_REGION_COST, EdgeCost, KeypointCost, LabelRenderer, RegionCost, mean_edge_distance,
+from mocap.body import JOINT_LIMITS, JOINT_NAMES, PARAMETER_INDEX as P, BodyModel, neutral_pose
+from mocap.cost import (EMPTY_REGION_COST, KEYPOINT_NOISE, MIN_KEYPOINT_SCALE_PX, EdgeCost, KeypointCost, LabelRenderer,
+                        RegionCost, keypoint_gates, keypoint_scales, mean_edge_distance, robust_distance,
                         non_overlapping_ratio)
 from mocap.render import Camera, render
 from tests.naive import naive_keypoint_distance, naive_mean_edge_distance, naive_non_overlapping_ratio
@@ -269,15 +270,24 @@ def test_one_class_matched_exactly_does_not_zero_the_product():
 # ------------------------------------------------------------------ keypoint distance
 def test_keypoint_cost_equals_its_twin_on_random_poses():
     rng = np.random.default_rng(11)
-    for _ in range(20):
+    for trial in range(20):
         uv = rng.uniform([0, 0], [CAMERA.width, CAMERA.height], (10, 2))
         conf = rng.uniform(0, 1, 10)
         conf[rng.uniform(size=10) < 0.3] = 0.0                    # some absent
         uv[rng.uniform(size=10) < 0.1] = np.nan                    # some NaN: absent too
-        cost = KeypointCost(uv, conf, MODEL, CAMERA)
+        scale = rng.uniform(1.0, 8.0, 10)
+        swap = trial % 2 == 1
+        plain = KeypointCost(uv, conf, MODEL, CAMERA, scale=np.full(10, np.inf))
+        robust = KeypointCost(uv, conf, MODEL, CAMERA, scale=scale, swap=swap)
         for _ in range(5):
             q = random_pose(rng)
-            assert cost(q) == pytest.approx(naive_keypoint_distance(q, MODEL, CAMERA, uv, conf), rel=1e-12, abs=1e-12)
+            assert plain(q) == pytest.approx(naive_keypoint_distance(q, MODEL, CAMERA, uv, conf), rel=1e-12, abs=1e-12)
+            assert robust(q) == pytest.approx(naive_keypoint_distance(q, MODEL, CAMERA, uv, conf, scale, swap),
+                                              rel=1e-12, abs=1e-12)
+            direct, swapped = robust.labellings(q)
+            assert direct == pytest.approx(naive_keypoint_distance(q, MODEL, CAMERA, uv, conf, scale), rel=1e-12,
+                                           abs=1e-12)
+            assert robust.labelling(q) == (swap and swapped < direct)
 
 
 def test_keypoint_cost_is_zero_on_the_models_own_projections_and_grows_with_a_shift():
@@ -286,7 +296,51 @@ def test_keypoint_cost_is_zero_on_the_models_own_projections_and_grows_with_a_sh
     uv = CAMERA.project(MODEL.joint_positions(q))
     conf = rng.uniform(0.1, 1.0, 10)
     assert KeypointCost(uv, conf, MODEL, CAMERA)(q) == pytest.approx(0.0, abs=1e-9)
-    assert KeypointCost(uv + [3.0, 4.0], conf, MODEL, CAMERA)(q) == pytest.approx(5.0, abs=1e-9)
+    assert KeypointCost(uv + [3.0, 4.0], conf, MODEL, CAMERA, scale=np.full(10, np.inf))(q) == pytest.approx(5.0)
+    # robust: 5 px at a 2 px scale is 2 log(1 + 5 / 2) pixels (a scale given)
+    assert KeypointCost(uv + [3.0, 4.0], conf, MODEL, CAMERA, scale=np.full(10, 2.0))(q) == pytest.approx(
+        2.0 * np.log(3.5))
+
+
+def test_robust_distance_is_the_distance_near_a_keypoint_and_its_pull_falls_off():
+    assert robust_distance(0.0, 3.0) == 0.0
+    assert robust_distance(0.01, 3.0) == pytest.approx(0.01, rel=2e-3)       # slope 1 at the keypoint
+    assert robust_distance(50.0, 3.0) == pytest.approx(3.0 * np.log(53.0 / 3.0))
+    slope = (robust_distance(50.01, 3.0) - robust_distance(50.0, 3.0)) / 0.01
+    assert slope == pytest.approx(3.0 / 53.0, rel=1e-3)
+    assert robust_distance(7.0, np.inf) == 7.0
+
+
+def test_keypoint_scales_follow_the_persons_size_and_keep_a_floor():
+    uv = CAMERA.project(MODEL.joint_positions(neutral_pose()))
+    small = keypoint_scales(uv, np.ones(10))
+    assert np.all(small >= MIN_KEYPOINT_SCALE_PX)
+    spread = np.sqrt(((uv - uv.mean(axis=0)) ** 2).sum(axis=1).mean())
+    factor = 2.0 * MIN_KEYPOINT_SCALE_PX / (spread * min(KEYPOINT_NOISE.values()))
+    big = keypoint_scales(uv * factor, np.ones(10))          # a person that large: the measured noise rules
+    np.testing.assert_allclose(big, [factor * spread * KEYPOINT_NOISE[n] for n in JOINT_NAMES])
+
+
+def test_keypoint_gates_weigh_down_a_joint_off_the_silhouette():
+    fg = np.zeros(CAMERA.shape, bool)
+    fg[40:80, 60:100] = True
+    uv = np.array([[70.5, 50.5], [101.5, 50.5], [150.5, 50.5], [80.0, -20.0]])
+    gates = keypoint_gates(uv, fg, margin=3.0)
+    assert gates[0] == 1.0 and gates[1] == 1.0                  # on it, and 2 px off it (within the margin)
+    assert gates[2] == pytest.approx(1.0 / (1.0 + ((51.0 - 3.0) / 3.0) ** 2))   # 51 px to the nearest column
+    assert gates[3] < 0.01                                      # above the image: 60 px off
+    np.testing.assert_array_equal(keypoint_gates(uv, np.zeros(CAMERA.shape, bool)), 1.0)
+    with pytest.raises(ValueError, match="margin"):
+        keypoint_gates(uv, fg, margin=0.0)
+    # a gated joint hardly counts: the cost is about the others' alone
+    q = neutral_pose()
+    truth = CAMERA.project(MODEL.joint_positions(q))
+    labels = render(q, MODEL, CAMERA).labels
+    wrong = truth.copy()
+    wrong[JOINT_NAMES.index("r_hand")] += [0.0, 45.0]              # thrown below the silhouette
+    gated = KeypointCost(wrong, np.ones(10), MODEL, CAMERA, foreground=labels != 0)
+    ungated = KeypointCost(wrong, np.ones(10), MODEL, CAMERA)
+    assert gated(q) < 0.05 * ungated(q)
 
 
 def test_keypoint_cost_without_keypoints_is_zero_and_joints_behind_the_camera_cost_the_diagonal():
@@ -295,7 +349,7 @@ def test_keypoint_cost_without_keypoints_is_zero_and_joints_behind_the_camera_co
     behind = q.copy()
     behind[2] = -1.0
     uv = CAMERA.project(MODEL.joint_positions(q))
-    assert KeypointCost(uv, np.ones(10), MODEL, CAMERA)(behind) == pytest.approx(np.hypot(160, 120))
+    assert KeypointCost(uv, np.ones(10), MODEL, CAMERA, scale=np.full(10, np.inf))(behind) == pytest.approx(np.hypot(160, 120))
     with pytest.raises(ValueError, match="shape"):
         KeypointCost(uv[:3], np.ones(3), MODEL, CAMERA)
     with pytest.raises(ValueError, match=r"\[0, 1\]"):

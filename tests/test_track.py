@@ -212,3 +212,41 @@ def test_the_failure_flag_reads_the_keypoints_where_there_are_some():
     assert without.failed(config)
     assert right.keypoint_residual < KEYPOINT_FAILURE_THRESHOLD_PX and not right.failed(config)
     assert wrong.keypoint_residual > KEYPOINT_FAILURE_THRESHOLD_PX and wrong.failed(config)
+
+
+def test_a_joint_thrown_off_the_silhouette_does_not_drag_the_arm():
+    """The robust, gated keypoint term (issue 44 item 3): the right wrist's keypoint thrown 50 px
+    off the silhouette (to the image's left, where no body part is), the registered arm stays
+    within 2 cm of its pose registered without that joint. The reference shows the test can fail:
+    today's term (the plain pixel distance, no gate) drags it further."""
+    from mocap.body.skeleton import JOINT_INDEX
+    from mocap.cost import KeypointCost, keypoint_gates
+
+    truth = neutral_pose()
+    for name, degrees in (("r_shoulder_abd", 40), ("r_elbow_flex", 60), ("l_shoulder_abd", 20)):
+        truth[P[name]] = np.radians(degrees)
+    r = render(truth, MODEL, CAMERA)
+    distance = np.minimum(ndimage.distance_transform_edt(~r.edges), 20.0).astype(np.float32)
+    region, edge = RegionCost(r.labels, MODEL, CAMERA), EdgeCost(distance, MODEL, CAMERA)
+    config = TrackerConfig(evaluations=300)
+    uv = CAMERA.project(MODEL.joint_positions(truth)) + np.random.default_rng(0).normal(0.0, 1.0, (10, 2))
+    wrist = JOINT_INDEX["r_wrist"]
+    thrown = uv.copy()
+    thrown[wrist, 0] -= 50.0
+    foreground = r.labels != 0
+    assert keypoint_gates(thrown[wrist:wrist + 1], foreground)[0] < 0.01   # off it
+    without_joint = np.ones(10)
+    without_joint[wrist] = 0.0
+    start = truth + np.r_[0.03, -0.02, 0.05, np.radians(np.full(20, 4.0))]
+    arm = [JOINT_INDEX[f"r_{j}"] for j in ("elbow", "wrist", "hand")]
+
+    def arm_joints(keypoint_uv, confidence, **options):
+        cost = KeypointCost(keypoint_uv, confidence, MODEL, CAMERA, **options)
+        pose = register(region, edge, start, config, keypoint_cost=cost).pose
+        return MODEL.joint_positions(pose)[arm]
+
+    reference = arm_joints(uv, without_joint, foreground=foreground)
+    robust = arm_joints(thrown, np.ones(10), foreground=foreground)
+    plain = arm_joints(thrown, np.ones(10), scale=np.full(10, np.inf))
+    assert np.linalg.norm(robust - reference, axis=1).max() < 0.02
+    assert np.linalg.norm(plain - reference, axis=1).max() > 0.02

@@ -17,6 +17,13 @@ A detector that also gives 3D (MediaPipe Pose's world landmarks) writes the head
 ``frame,joint,u,v,confidence,x,y,z`` instead: ``x, y, z`` the joint in metres about the
 detector's own origin (MediaPipe's: the hips' midpoint) on the camera's axes (x right, y down,
 z away from the camera), empty where the detector gave none (:attr:`Keypoints.world`).
+
+**Labellings.** A detector may name the person's left arm the right one (MediaPipe does on a
+figure whose face it does not see: docs/research-log.md, issue 44). The sided joints are the
+shoulders, elbows, wrists and hands (``r_*`` and ``l_*``); the head and the neck have no side.
+:data:`SWAPPED_JOINTS` maps each joint to its twin on the other side and
+:meth:`Keypoints.swapped` gives a frame's keypoints under the other labelling; the tracker scores
+both (:class:`mocap.cost.KeypointCost`, ``swap``) and files keep the detector's own labels.
 """
 from __future__ import annotations
 
@@ -37,6 +44,19 @@ KEYPOINT_COLUMNS: tuple[str, ...] = ("frame", "joint", "u", "v", "confidence")
 #: Header of a keypoint file that also carries the detector's 3D (:attr:`Keypoints.world`).
 KEYPOINT_WORLD_COLUMNS: tuple[str, ...] = KEYPOINT_COLUMNS + ("x", "y", "z")
 _JOINT = {name: i for i, name in enumerate(JOINT_NAMES)}
+
+
+def _twin(name: str) -> str:
+    """The joint's name on the other side (``r_elbow`` <-> ``l_elbow``; unsided joints are their own)."""
+    for a, b in (("r_", "l_"), ("l_", "r_")):
+        if name.startswith(a):
+            return b + name[len(a):]
+    return name
+
+
+#: Row of each joint's twin on the other side (:data:`~mocap.body.skeleton.JOINT_NAMES` order):
+#: the permutation that swaps the detector's left and right labels (an involution).
+SWAPPED_JOINTS: tuple[int, ...] = tuple(_JOINT[_twin(name)] for name in JOINT_NAMES)
 
 
 @dataclass(frozen=True)
@@ -121,6 +141,13 @@ class Keypoints:
     def present(self) -> np.ndarray:
         """Whether each joint is present, bool (10,)."""
         return self.confidence > 0.0
+
+    def swapped(self) -> "Keypoints":
+        """The same frame's keypoints with left and right swapped (:data:`SWAPPED_JOINTS`): the
+        detector's ``r_elbow`` becomes ``l_elbow`` and so on; positions, confidences and 3D move
+        with their labels (the 3D is not mirrored)."""
+        rows = list(SWAPPED_JOINTS)
+        return Keypoints(self.uv[rows], self.confidence[rows], None if self.world is None else self.world[rows])
 
     def scaled(self, sx: float, sy: float) -> "Keypoints":
         """The keypoints of the same frame resampled by ``sx`` horizontally and ``sy`` vertically.
@@ -316,6 +343,6 @@ def _text(frames: Mapping[int, Keypoints], header: bool) -> str:
     return buf.getvalue()
 
 
-__all__ = ["KEYPOINT_COLUMNS", "KEYPOINT_WORLD_COLUMNS", "KeypointFile", "KeypointSource", "Keypoints",
+__all__ = ["KEYPOINT_COLUMNS", "KEYPOINT_WORLD_COLUMNS", "SWAPPED_JOINTS", "KeypointFile", "KeypointSource", "Keypoints",
            "append_keypoints", "parse_keypoints",
            "read_keypoints", "write_keypoints"]

@@ -35,7 +35,7 @@ __all__ = ["EXTRA_COLUMNS", "PIXEL_COLUMNS", "FinishedRun", "RunSummary", "finis
 #: Per-frame columns of ``poses.csv`` after the pose and joint columns.
 EXTRA_COLUMNS = ("region_residual", "edge_residual", "keypoint_residual", "edge_residual_after_region", "smoothed_mm",
                  "failed", "empty", "hypothesis",
-                 "score", "origin", "evaluations", "region_iterations",
+                 "score", "origin", "labels_swapped", "evaluations", "region_iterations",
                  "edge_iterations", "ms_prepare", "ms_region", "ms_edge", "ms_beam", "ms_proposals", "ms_total")
 #: Names of the 2D keypoint columns of ``poses.csv`` (input-video pixels).
 PIXEL_COLUMNS = tuple(f"{j}_{a}" for j in JOINT_NAMES for a in "uv")
@@ -148,7 +148,7 @@ def frame_row(result, camera=None, work_factor: int = 1, dark: bool | None = Non
               "edge_residual_after_region": [result.edge_residual_after_region], "smoothed_mm": [result.smoothed_mm],
               "failed": np.array([int(result.failed)]), "empty": np.array([int(result.empty)]),
               "hypothesis": np.array([result.hypothesis]), "score": [result.score],
-              "origin": np.array([result.origin]),
+              "origin": np.array([result.origin]), "labels_swapped": np.array([int(result.labels_swapped)]),
               "evaluations": np.array([result.evaluations]),
               "region_iterations": np.array([result.region_iterations]),
               "edge_iterations": np.array([result.edge_iterations]), "ms_prepare": [t.get("prepare", 0.0)],

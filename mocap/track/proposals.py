@@ -74,9 +74,15 @@ class ProposalContext:
         The learned lifter's hypotheses of the frame's 2D keypoints (:meth:`LifterSource.lift`),
         lifted once per frame for the proposal stage and the score alike; None on frames without
         keypoints or when the configuration does not lift.
+    lifted_swapped : LiftedHypotheses or None
+        The same of the keypoints with left and right swapped
+        (:meth:`mocap.io.keypoints.Keypoints.swapped`): the body the keypoints show if the
+        detector named the person's left arm the right one; None where ``lifted`` is, or where
+        the labellings are not both scored (``keypoint_weight`` 0).
     """
 
     lifted: LiftedHypotheses | None = None
+    lifted_swapped: LiftedHypotheses | None = None
 
 
 class ProposalSource(Protocol):
@@ -291,6 +297,7 @@ class LifterSource:
         return min(top - self.lifter.log_density(lifted, relative_joints(joints)), LIFTER_ENERGY_CAP)
 
     def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
-        if context.lifted is None:
-            return []
-        return [Proposal(np.array(q, dtype=np.float64), self.origin) for q in context.lifted.poses]
+        """Every hypothesis of the frame's lifting, most probable first, then those of the
+        swapped labelling's (:attr:`ProposalContext.lifted_swapped`), if any."""
+        return [Proposal(np.array(q, dtype=np.float64), self.origin)
+                for lifted in (context.lifted, context.lifted_swapped) if lifted is not None for q in lifted.poses]

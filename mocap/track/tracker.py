@@ -58,6 +58,8 @@ from mocap.body.model import BodyModel
 from mocap.body.pose import HEADING, PARAMETER_INDEX, check_pose, clamp_to_limits, heading_near
 from mocap.body.prior import PosePrior, default_prior
 from mocap.cost import EdgeCost, KeypointCost, RegionCost
+from mocap.io.keypoints import SWAPPED_JOINTS
+from mocap.labels import BACKGROUND
 from mocap.render.camera import Camera
 from mocap.track.branches import depth_alternatives
 from mocap.track.config import JUMPS_REFINED, MERGE_DISTANCE_M, RECOVERY_STEP_SCALE, TrackerConfig, split_budget
@@ -89,7 +91,9 @@ class FrameResult:
     ``keypoint_residual`` (NaN without keypoints) and ``failed`` are theirs; ``score`` and
     ``edge_residual_after_region`` stay the decoded hypothesis's, and ``smoothed_mm`` is the
     mean joint distance from the decoded pose (``decoded_pose``) to the written one
-    (millimetres; 0 unsmoothed).
+    (millimetres; 0 unsmoothed). ``labels_swapped``: the chosen hypothesis read the frame's
+    keypoints with left and right swapped (the detector named the person's left arm the right
+    one; False without keypoints).
     """
 
     frame: int
@@ -110,6 +114,7 @@ class FrameResult:
     keypoint_residual: float = math.nan
     smoothed_mm: float = 0.0
     decoded_pose: np.ndarray | None = None
+    labels_swapped: bool = False
 
 
 @dataclass
@@ -124,6 +129,7 @@ class _Hypothesis:
     unary: float
     region_iterations: int
     edge_iterations: int
+    swapped: bool = False               # it reads the frame's keypoints with left and right swapped
 
 
 @dataclass
@@ -238,7 +244,9 @@ class Tracker:
         if self.smoother is None:
             return [_result(self._window.popleft(), int(path[i])) for i in range(count)]
         weights = np.array([self.smoother.weights(None if f.evidence is None or f.evidence.keypoints is None
-                                                  else f.evidence.keypoints[:, 2]) for f in frames])
+                                                  else f.evidence.keypoints[list(SWAPPED_JOINTS) if h.swapped
+                                                                            else slice(None), 2])
+                            for f, h in zip(frames, chosen)])
         poses = self.smoother.smooth(np.array([h.pose for h in chosen]), np.array([h.joints for h in chosen]),
                                      weights, count, empty=[f.empty for f in frames])
         return [self._written(self._window.popleft(), int(path[i]), poses[i]) for i in range(count)]
@@ -256,7 +264,9 @@ class Tracker:
         edge = EdgeCost(evidence.distance, self.model, self.camera)(pose)
         keypoint_cost = None
         if evidence.keypoints is not None and self.config.keypoint_weight != 0:
-            keypoint_cost = KeypointCost(evidence.keypoints[:, :2], evidence.keypoints[:, 2], self.model, self.camera)
+            kp = evidence.keypoints[list(SWAPPED_JOINTS)] if frame.hypotheses[k].swapped else evidence.keypoints
+            keypoint_cost = KeypointCost(kp[:, :2], kp[:, 2], self.model, self.camera,
+                                         foreground=evidence.labels != BACKGROUND)
         keypoint = math.nan if keypoint_cost is None or keypoint_cost.empty else keypoint_cost(pose)
         result.region_residual, result.edge_residual, result.keypoint_residual = region, edge, keypoint
         result.failed = failed_residuals(region, edge, keypoint,
@@ -280,12 +290,16 @@ class Tracker:
         return (RegionCost(prepared.labels, self.model, self.camera),
                 EdgeCost(prepared.distance, self.model, self.camera))
 
-    def keypoint_cost(self, keypoints) -> KeypointCost | None:
+    def keypoint_cost(self, keypoints, labels: np.ndarray | None = None) -> KeypointCost | None:
         """The keypoint distance of a frame's :class:`~mocap.io.keypoints.Keypoints` (working
-        camera pixels) for this tracker; None when there are none or ``keypoint_weight`` is 0."""
+        camera pixels) for this tracker, under both labellings (``swap``: the lower of the
+        detector's and the left/right swapped one), each keypoint gated by the person's region
+        of the frame's label image ``labels`` (its pixels other than background; None: no gate);
+        None when there are none or ``keypoint_weight`` is 0."""
         if keypoints is None or self.config.keypoint_weight == 0:
             return None
-        cost = KeypointCost(keypoints.uv, keypoints.confidence, self.model, self.camera)
+        cost = KeypointCost(keypoints.uv, keypoints.confidence, self.model, self.camera, swap=True,
+                            foreground=None if labels is None else labels != BACKGROUND)
         return None if cost.empty else cost
 
     def _track(self, index: int, prepared, keypoints=None) -> _Frame:
@@ -302,9 +316,13 @@ class Tracker:
             return _Frame(index, True, kept, self._cost - self._cost.min(), np.arange(len(kept)), 0, timings)
         region_cost, edge_cost = self.costs(prepared)
         # every registration of the frame, with the keypoint distance when keypoints are given
-        keypoint_cost = self.keypoint_cost(keypoints)
+        keypoint_cost = self.keypoint_cost(keypoints, prepared.labels)
         fit = functools.partial(register, region_cost, edge_cost, config=cfg, keypoint_cost=keypoint_cost)
+        # the lifter reads the keypoints under both labellings (a candidate pays its own's energy)
         lifted = self.lifting.lift(keypoints, self.camera, self.model) if self.lifting is not None else None
+        lifted_swapped = (self.lifting.lift(keypoints.swapped(), self.camera, self.model)
+                          if lifted is not None and keypoint_cost is not None else None)
+        lifts = (lifted, lifted_swapped)
         candidates: list[tuple[Registration, str]] = []
         evaluations = 0
         t1 = time.perf_counter()
@@ -333,16 +351,17 @@ class Tracker:
             evaluations += self._mirror(fit, leader, candidates)
         t3 = time.perf_counter()
         if self.sources and cfg.proposals_refined > 0:
-            context = ProposalContext(lifted=lifted)
-            rough = functools.partial(self._rough_unary, region_cost, edge_cost, keypoint_cost, lifted)
+            context = ProposalContext(lifted=lifted, lifted_swapped=lifted_swapped)
+            rough = functools.partial(self._rough_unary, region_cost, edge_cost, keypoint_cost, lifts)
             for source in self.sources:
                 evaluations += self._propose(source, prepared, context, rough, fit, candidates)
         timings["proposals"] = 1e3 * (time.perf_counter() - t3)
         joints = [self.model.joint_positions(reg.pose) for reg, _ in candidates]
-        terms = [self._terms(reg.region_residual, reg.edge_residual, reg.keypoint_residual, reg.pose, j, lifted)
-                 for (reg, _), j in zip(candidates, joints)]
-        hypotheses = [self._hypothesis(reg, origin, j, t)
-                      for (reg, origin), j, t in zip(candidates, joints, terms)]
+        swapped = [keypoint_cost is not None and keypoint_cost.labelling(reg.pose) for reg, _ in candidates]
+        terms = [self._terms(reg.region_residual, reg.edge_residual, reg.keypoint_residual, reg.pose, j, lifts[s])
+                 for (reg, _), j, s in zip(candidates, joints, swapped)]
+        hypotheses = [self._hypothesis(reg, origin, j, t, s)
+                      for (reg, origin), j, t, s in zip(candidates, joints, terms, swapped)]
         motion = motion_term([h.joints for h in self._beam], [h.joints for h in hypotheses])
         motion_weight = self.weights[MOTION]
         transition = motion if motion_weight == 1.0 else motion_weight * motion
@@ -370,18 +389,23 @@ class Tracker:
         values = {"region": region, "edge": edge, "keypoint": keypoint, "prior": prior, "lifter": lifter}
         return np.array([values[t.name] for t in UNARY_TERMS], dtype=np.float64)
 
-    def _rough_unary(self, region_cost, edge_cost, keypoint_cost, lifted: LiftedHypotheses | None,
-                     pose: np.ndarray) -> float:
-        """The unary score of an unrefined pose (one evaluation of each cost): what ranks proposals."""
+    def _rough_unary(self, region_cost, edge_cost, keypoint_cost,
+                     lifts: tuple[LiftedHypotheses | None, LiftedHypotheses | None], pose: np.ndarray) -> float:
+        """The unary score of an unrefined pose (one evaluation of each cost): what ranks proposals.
+        ``lifts``: the frame's lifted hypotheses under the detector's labelling and the swapped
+        one; the pose pays the lifter energy of the labelling its keypoint distance takes."""
+        swapped = keypoint_cost is not None and keypoint_cost.labelling(pose)
         return weighted_sum(self._terms(region_cost.evaluate_unchecked(pose), edge_cost(pose),
                                         math.nan if keypoint_cost is None else keypoint_cost(pose), pose,
-                                        self.model.joint_positions(pose), lifted), self.weights)
+                                        self.model.joint_positions(pose), lifts[swapped]), self.weights)
 
-    def _hypothesis(self, reg: Registration, origin: str, joints: np.ndarray, terms: np.ndarray) -> _Hypothesis:
+    def _hypothesis(self, reg: Registration, origin: str, joints: np.ndarray, terms: np.ndarray,
+                    swapped: bool) -> _Hypothesis:
         unary = weighted_sum(terms, self.weights)
         return _Hypothesis(reg.pose, joints, reg.region_residual, reg.edge_residual,
                            reg.edge_residual_after_region, reg.failed(self.config), origin, unary,
-                           reg.region.iterations if reg.region else 0, reg.edge.iterations if reg.edge else 0)
+                           reg.region.iterations if reg.region else 0, reg.edge.iterations if reg.edge else 0,
+                           bool(swapped))
 
     def _select(self, hypotheses: list[_Hypothesis], cost: np.ndarray) -> list[int]:
         """Indices of the survivors: cheapest path first, near-duplicates merged, at most ``beam``;
@@ -518,13 +542,14 @@ def _hyp_to_dict(h: _Hypothesis) -> dict:
     return {"pose": h.pose.tolist(), "joints": h.joints.tolist(), "region": h.region_residual,
             "edge": h.edge_residual, "edge_after_region": h.edge_residual_after_region, "failed": h.failed,
             "origin": h.origin, "unary": h.unary, "region_iterations": h.region_iterations,
-            "edge_iterations": h.edge_iterations}
+            "edge_iterations": h.edge_iterations, "swapped": h.swapped}
 
 
 def _hyp_from_dict(d: dict) -> _Hypothesis:
     return _Hypothesis(np.array(d["pose"], dtype=np.float64), np.array(d["joints"], dtype=np.float64),
                        float(d["region"]), float(d["edge"]), float(d["edge_after_region"]), bool(d["failed"]),
-                       str(d["origin"]), float(d["unary"]), int(d["region_iterations"]), int(d["edge_iterations"]))
+                       str(d["origin"]), float(d["unary"]), int(d["region_iterations"]), int(d["edge_iterations"]),
+                       bool(d["swapped"]))
 
 
 def _result(frame: _Frame, k: int) -> FrameResult:
@@ -534,7 +559,7 @@ def _result(frame: _Frame, k: int) -> FrameResult:
                        edge_residual_after_region=h.edge_residual_after_region, failed=h.failed, empty=frame.empty,
                        origin=h.origin, evaluations=frame.evaluations, region_iterations=h.region_iterations,
                        edge_iterations=h.edge_iterations, timings_ms=dict(frame.timings), hypothesis=k, score=h.unary,
-                       decoded_pose=h.pose.copy())
+                       decoded_pose=h.pose.copy(), labels_swapped=h.swapped)
 
 
 def proposal_sources(config: TrackerConfig, lifting: LifterSource | None = None) -> list[ProposalSource]:
