@@ -130,7 +130,7 @@ def test_started_wrong_the_lifter_brings_the_tracker_back(lifter, wrong, weight)
     """A still clip with keypoints (1 px noise). The tracker starts either with both arms mirrored
     in depth about their shoulders (the same silhouette and keypoints) or turned round (the
     torso's front/back mirror, arms kept). With the lifter's proposals and score it is within
-    10 cm of the truth (about the neck) from the third frame on. Without the lifter (no proposal
+    10 cm of the truth (about the neck) from the third frame on (turned round: the fourth). Without the lifter (no proposal
     stage, no lifter term) the mirrored arms stay lost; turned round, the torso's kinematic jump
     alone brings it back too (so that case checks only the lifter's side). Both arms need the
     score at weight 2: at the default 0.5 the two branches, alike in every image cost on a still
@@ -150,7 +150,12 @@ def test_started_wrong_the_lifter_brings_the_tracker_back(lifter, wrong, weight)
     # the beam kept)
     without = None if wrong == "facing away" else tracked_errors(TrackerConfig(lag=0, lifter_weight=0.0,
                                                                                mirrors=False), start, truth, lifter)
-    assert with_lifter[2:].max() < BACK_M
+    # turned round: the keypoints' labels no longer tell front from back (issue 44: the lower of
+    # both labellings), so the image and the lifter under both labellings bring it back; with the
+    # heading kept on the circle as well (issue 44 item 4) that is a frame later, from the fourth
+    # frame (0.07 m there, 0.60 m on the third; each change alone: the third)
+    first = 3 if wrong == "facing away" else 2
+    assert with_lifter[first:].max() < BACK_M
     if without is not None:
         assert without.min() > BACK_M
 
