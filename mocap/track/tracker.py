@@ -244,8 +244,7 @@ class Tracker:
         if self.smoother is None:
             return [_result(self._window.popleft(), int(path[i])) for i in range(count)]
         weights = np.array([self.smoother.weights(None if f.evidence is None or f.evidence.keypoints is None
-                                                  else f.evidence.keypoints[list(SWAPPED_JOINTS) if h.swapped
-                                                                            else slice(None), 2])
+                                                  else _read_as(f.evidence.keypoints, h.swapped)[:, 2])
                             for f, h in zip(frames, chosen)])
         poses = self.smoother.smooth(np.array([h.pose for h in chosen]), np.array([h.joints for h in chosen]),
                                      weights, count, empty=[f.empty for f in frames])
@@ -264,7 +263,7 @@ class Tracker:
         edge = EdgeCost(evidence.distance, self.model, self.camera)(pose)
         keypoint_cost = None
         if evidence.keypoints is not None and self.config.keypoint_weight != 0:
-            kp = evidence.keypoints[list(SWAPPED_JOINTS)] if frame.hypotheses[k].swapped else evidence.keypoints
+            kp = _read_as(evidence.keypoints, frame.hypotheses[k].swapped)
             keypoint_cost = KeypointCost(kp[:, :2], kp[:, 2], self.model, self.camera,
                                          foreground=evidence.labels != BACKGROUND)
         keypoint = math.nan if keypoint_cost is None or keypoint_cost.empty else keypoint_cost(pose)
@@ -536,6 +535,13 @@ def _evidence_from(state: dict[str, np.ndarray], i: int, frame: dict) -> _Eviden
     keypoints = np.array(state[f"window_keypoints_{i}"], dtype=np.float64) if frame["keypoints"] else None
     return _Evidence(np.array(state[f"window_labels_{i}"], dtype=np.uint8),
                      np.array(state[f"window_distance_{i}"], dtype=np.float32), keypoints)
+
+
+def _read_as(keypoints: np.ndarray, swapped: bool) -> np.ndarray:
+    """A frame's stored keypoints, shape (10, 3) (u, v pixels and the confidence), under the
+    labelling a hypothesis read them with: left and right exchanged (:data:`SWAPPED_JOINTS`)
+    when ``swapped``, else as the detector gave them."""
+    return keypoints[list(SWAPPED_JOINTS)] if swapped else keypoints
 
 
 def _hyp_to_dict(h: _Hypothesis) -> dict:

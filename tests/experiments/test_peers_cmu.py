@@ -46,7 +46,7 @@ def test_the_cmu_group_renders_the_held_out_subjects_trial_and_passes_the_lifter
         frames = {}
         for i, joints in enumerate(table.joints):
             k = Keypoints(camera.project(joints), np.ones(len(joints)))
-            frames[i] = {1: _swapped(k),
+            frames[i] = {1: k.swapped(),
                          2: Keypoints(k.uv + [3.0, 0.0], k.confidence),
                          3: Keypoints.empty()}.get(i, k)
         out.mkdir(parents=True, exist_ok=True)
@@ -93,15 +93,6 @@ def test_the_cmu_group_renders_the_held_out_subjects_trial_and_passes_the_lifter
     assert "14_24" in (out / "peers.md").read_text()
     # trials of another subject than the held-out one are refused
     assert peers.main(["--only", "cmu", "--data", str(shared_data), "--trials", "02_01", "--out", str(out)]) == 2
-
-
-def _swapped(k):
-    """``k`` with every right joint's row given to its left twin and back."""
-    from mocap.body.skeleton import JOINT_NAMES
-    from mocap.io.keypoints import Keypoints
-
-    twin = [JOINT_NAMES.index({"r_": "l_", "l_": "r_"}.get(n[:2], n[:2]) + n[2:]) for n in JOINT_NAMES]
-    return Keypoints(k.uv[twin], k.confidence[twin])
 
 
 def test_track_hands_the_lifter_file_to_the_tracker_config(tmp_path, monkeypatch):
