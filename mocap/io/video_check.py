@@ -21,7 +21,8 @@ from pathlib import Path
 
 import imageio_ffmpeg
 
-__all__ = ["VideoCheck", "RunningCheck", "announced", "check_video", "ffmpeg_failure", "format_frames"]
+__all__ = ["VideoCheck", "RunningCheck", "announced", "check_video", "ffmpeg_failure", "format_frames",
+           "parse_check_log"]
 
 #: Niceness of the running check's ffmpeg (POSIX): it decodes the whole clip beside the run and
 #: takes the CPU the set-up and the tracker leave (on two cores it used to slow the first frame).
@@ -29,6 +30,7 @@ CHECK_NICENESS = 10
 _DURATION = re.compile(r"Duration: (\d+):(\d\d):(\d\d(?:\.\d+)?)")
 _FPS = re.compile(r"Stream #\d+:\d+.*?: Video: .*?(\d+(?:\.\d+)?)(k?) fps")
 _PREFIX = re.compile(r"(?=\[[^\]\n]* @ 0x[0-9a-f]+\])")
+_SHOWINFO_PREFIX = "[Parsed_showinfo"
 _SHOWINFO = re.compile(r"\[Parsed_showinfo[^\]]*\] n:\s*(\d+) pts:\s*(-?\d+) pts_time:(-?[\d.e+-]+)")
 #: Prefixes of the log lines of ffmpeg's output side (the null muxer's complaints about repeated
 #: timestamps are about the input's timing, not damage).
@@ -247,7 +249,7 @@ class RunningCheck:
                     self._changed.notify_all()
         self._proc.wait()
         try:
-            result: VideoCheck | Exception = _parse_check(self.path, "".join(self._lines), self._proc.returncode)
+            result: VideoCheck | Exception = parse_check_log(self.path, "".join(self._lines), self._proc.returncode)
         except ValueError as exc:
             result = exc
         with self._changed:
@@ -323,13 +325,24 @@ def _seconds(duration: re.Match) -> float:
     return int(duration.group(1)) * 3600 + int(duration.group(2)) * 60 + float(duration.group(3))
 
 
-def _parse_check(path: Path, log: str, returncode: int) -> VideoCheck:
-    """The :class:`VideoCheck` of ffmpeg's whole ``showinfo`` log of ``path``."""
+def parse_check_log(path: str | Path, log: str, returncode: int = 0) -> VideoCheck:
+    """The :class:`VideoCheck` of ffmpeg's whole ``showinfo`` log of ``path`` (what
+    :class:`RunningCheck` reads from ffmpeg's standard error; ``returncode`` is ffmpeg's exit status).
+
+    Raises
+    ------
+    ValueError
+        As :func:`check_video`, when no frame decoded.
+    """
+    path = Path(path)
     duration = _DURATION.search(log)
     fps = _announced_fps(log)
     times, corrupt, messages = [], [], []
     pending_damage = ended_early = False
-    # ffmpeg's threads may interleave messages on one line: split at every "[name @ 0x...]" prefix
+    # ffmpeg's threads may interleave messages on one line: split at every "[name @ 0x...]" prefix.
+    # ffmpeg prints a prefix only at the start of a line, and showinfo writes its line in pieces:
+    # a demuxer's or decoder's message that comes between two pieces is glued, without its own
+    # prefix, to a showinfo line (whose own text has no damage words), so those are read too.
     for message in _PREFIX.split(log):
         shown = _SHOWINFO.match(message)
         if shown:
@@ -337,7 +350,8 @@ def _parse_check(path: Path, log: str, returncode: int) -> VideoCheck:
             if pending_damage:
                 corrupt.append(len(times) - 1)
                 pending_damage = False
-        elif any(w in message.lower() for w in _DAMAGE_WORDS) and not message.startswith(_OUTPUT_SIDE):
+        own_output_side = message.startswith(_OUTPUT_SIDE) and not message.startswith(_SHOWINFO_PREFIX)
+        if any(w in message.lower() for w in _DAMAGE_WORDS) and not own_output_side:
             messages.append(next(line.strip() for line in message.splitlines()
                                  if any(w in line.lower() for w in _DAMAGE_WORDS)))
             if any(w in message.lower() for w in _EARLY_END_WORDS):

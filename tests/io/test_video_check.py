@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from mocap.io.video import count_frames, iter_frames
-from mocap.io.video_check import check_video, format_frames
+from mocap.io.video_check import check_video, format_frames, parse_check_log
 
 N_FRAMES = 30
 
@@ -53,6 +53,41 @@ def test_garbage_inside_a_video_is_found(clips, ext):
     assert check.damaged and check.messages
     assert check.decoded == sum(1 for _ in iter_frames(clips / f"garbage.{ext}")) < N_FRAMES
     assert all(0 <= f < N_FRAMES for f in check.damaged_frames)
+
+
+#: ffmpeg's log of a damaged clip as a loaded machine prints it (lines from a real run, cut short):
+#: the demuxer's and the decoder's messages glued, without their own prefix, to showinfo's lines.
+GLUED_LOG = """Input #0, matroska,webm, from 'garbage.mkv':
+  Duration: 00:00:00.50, start: 0.000000, bitrate: 66 kb/s
+  Stream #0:0: Video: h264 (High), yuv420p(tv, progressive), 64x48, 10 fps, 10 tbr, 1k tbn
+[Parsed_showinfo_0 @ 0x7f1] n:   0 pts:      0 pts_time:0       duration:    100 duration_time:0.1     \
+fmt:yuv420p cl:left sar:0/1 s:64x48 i:P iskey:1 type:I 
+[Parsed_showinfo_0 @ 0x7f1] color_range:tv color_space:unknown color_primaries:unknown color_trc:unknown
+[Parsed_showinfo_0 @ 0x7f1] n:   1 pts:    100 pts_time:0.1     duration:    100 duration_time:0.1     \
+fmt:yuv420p cl:left sar:0/1 s:64x48 i:P iskey:0 type:P Element at 0x3270 ending at 0xc226c exceeds containing \
+master element ending at 0x60c8
+[Parsed_showinfo_0 @ 0x7f1] color_range:tv color_space:unknown color_primaries:unknown color_trc:unknown
+[Parsed_showinfo_0 @ 0x7f1] n:   2 pts:    200 pts_time:0.2     duration:    100 duration_time:0.1     \
+fmt:yuv420p cl:left sar:0/1 s:64x48 i:P iskey:0 type:P 
+[Parsed_showinfo_0 @ 0x7f1] color_range:tv color_space:unknowncorrupt decoded frame
+[Parsed_showinfo_0 @ 0x7f1]  color_primaries:unknown color_trc:unknown
+[Parsed_showinfo_0 @ 0x7f1] n:   3 pts:    300 pts_time:0.3     duration:    100 duration_time:0.1     \
+fmt:yuv420p cl:left sar:0/1 s:64x48 i:P iskey:0 type:P 
+[Parsed_showinfo_0 @ 0x7f1] color_range:tv color_space:unknown color_primaries:unknown color_trc:unknown
+[Parsed_showinfo_0 @ 0x7f1] n:   4 pts:    400 pts_time:0.4     duration:    100 duration_time:0.1     \
+fmt:yuv420p cl:left sar:0/1 s:64x48 i:P iskey:0 type:P 
+[null @ 0x55b] Application provided invalid, non monotonically increasing dts to muxer in stream 0: 4 >= 4
+""".replace("\\\n", "")
+
+
+def test_messages_glued_to_showinfo_lines_are_read():
+    # each message belongs to the next frame put out; the output side's complaint is not damage
+    check = parse_check_log("garbage.mkv", GLUED_LOG)
+    assert check.times == [0.0, 0.1, 0.2, 0.3, 0.4] and check.missing == []
+    assert check.corrupt == [2, 3]
+    assert [m.split("type:P ")[-1] for m in check.messages] == [
+        "Element at 0x3270 ending at 0xc226c exceeds containing master element ending at 0x60c8",
+        "[Parsed_showinfo_0 @ 0x7f1] color_range:tv color_space:unknowncorrupt decoded frame"]
 
 
 def _clip(folder, name: str, *, setpts: str | None = None, setts: str | None = None, frames: int = 12):
