@@ -38,6 +38,15 @@ _OUTPUT_SIDE = ("[null @", "[out#", "[vost#", "[enc:", "[vf#", "[Parsed_", "[fc#
 #: Log lines of demuxers and decoders that mean the data is damaged (matched lower-cased).
 _DAMAGE_WORDS = ("error", "invalid", "corrupt", "concealing", "missing picture", "ended prematurely",
                  "truncat", "exceeds containing", "partial file")
+#: Complaints of the output side (the null muxer's about repeated timestamps: the input's timing,
+#: not damage) that may come glued to a showinfo line without their prefix (matched lower-cased).
+_OUTPUT_SIDE_WORDS = ("non monoton",)
+
+
+def _is_damage(line: str) -> bool:
+    """Whether a log line (or a message glued into one) says the data is damaged."""
+    low = line.lower()
+    return any(w in low for w in _DAMAGE_WORDS) and not any(w in low for w in _OUTPUT_SIDE_WORDS)
 
 
 @dataclass
@@ -350,10 +359,11 @@ def parse_check_log(path: str | Path, log: str, returncode: int = 0) -> VideoChe
             if pending_damage:
                 corrupt.append(len(times) - 1)
                 pending_damage = False
-        own_output_side = message.startswith(_OUTPUT_SIDE) and not message.startswith(_SHOWINFO_PREFIX)
-        if any(w in message.lower() for w in _DAMAGE_WORDS) and not own_output_side:
-            messages.append(next(line.strip() for line in message.splitlines()
-                                 if any(w in line.lower() for w in _DAMAGE_WORDS)))
+        if message.startswith(_OUTPUT_SIDE) and not message.startswith(_SHOWINFO_PREFIX):
+            continue
+        damage = [line.strip() for line in message.splitlines() if _is_damage(line)]
+        if damage:
+            messages.append(damage[0])
             if any(w in message.lower() for w in _EARLY_END_WORDS):
                 ended_early = True
             else:
