@@ -215,19 +215,24 @@ def lower_region_cost(forward: list, backward: list) -> list:
 
 def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two_way: bool = False,
             without: tuple[str, ...] = (), oracle_sigma_px: float | None = None,
-            swap_share: float | None = None) -> dict:
+            swap_share: float | None = None, detector: bool = False) -> dict:
     """Track one benchmark sequence with ``config`` and measure its errors (see the module);
     ``without``: model extensions left out (:func:`experiments.units.load_sequence`; both: the
     paper's two-class model); ``oracle_sigma_px``: give the tracker the oracle keypoints of
     :func:`experiments.keypoints.oracle_keypoints` with that noise (seeded by ``seed``);
     ``swap_share``: their left and right swapped on runs of frames covering that share
-    (:func:`experiments.keypoints.swap_runs`), as a detector that does not see the face does.
+    (:func:`experiments.keypoints.swap_runs`), as a detector that does not see the face does;
+    ``detector``: give it MediaPipe's keypoints on the rendered frames instead
+    (:func:`experiments.keypoints.detector_keypoints`, kept in the sequence's folder).
     The result has ``labels_right_rate`` (the share of frames whose written arms are nearer the
     truth's than the truth's with left and right swapped, about the neck), ``arms_centred_mm``
     (the arms' eight joints' mean error about their own centre, no rotation: a body turned around
     shows there), ``labels_swapped_rate`` (frames the tracker read the keypoints swapped on) and
     ``detector_swapped_rate`` (frames the keypoints were swapped on)."""
-    from experiments.keypoints import oracle_keypoints, swap_labels, swap_runs
+    from experiments.keypoints import DETECTOR_FILE, detector_keypoints, oracle_keypoints, swap_labels, swap_runs
+
+    if detector and oracle_sigma_px is not None:
+        raise ValueError("give the tracker the oracle's keypoints or the detector's, not both")
 
     loaded, prepared = benchmark_sequence(sequence, root, seed, without)
     camera = loaded.calibration.camera
@@ -238,10 +243,19 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     truth_joints = loaded.ground_truth.joints
     keypoints = ([None] * len(prepared) if oracle_sigma_px is None
                  else oracle_keypoints(truth_joints[: len(prepared)], camera, oracle_sigma_px, seed))
+    if detector:
+        keypoints = detector_keypoints(loaded.frames[: len(prepared)], loaded.folder / DETECTOR_FILE)
     detector_swapped = np.zeros(len(prepared), bool)
     if swap_share is not None and oracle_sigma_px is not None:
         detector_swapped = swap_runs(len(prepared), swap_share, seed)
         keypoints = swap_labels(keypoints, detector_swapped)
+    if detector:        # the frames MediaPipe's arms fit the truth's projection better swapped
+        from experiments.detector_size import ARMS, label_swapped
+
+        arms = [JOINT_INDEX[name] for name in ARMS]
+        detected = np.array([np.where(k.present[arms, None], k.uv[arms], np.nan) for k in keypoints])
+        truth_uv = camera.project(truth_joints[: len(prepared), arms].reshape(-1, 3)).reshape(len(prepared), len(arms), 2)
+        detector_swapped = label_swapped(detected, truth_uv)
     results, beam_best, proposal_best, other_best, lifter_best, seconds = [], [], [], [], [], 0.0
     proposal_origins = {source.origin for source in tracker.sources}
     error = lambda q, i: mpjpe(loaded.model.joint_positions(q)[None], truth_joints[i:i + 1])
@@ -264,7 +278,8 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
         n = len(prepared)
         results = lower_region_cost(results, [replace(r, frame=n - 1 - r.frame) for r in backward[::-1]])
     if calls is not None:
-        keypoints_tag = "" if oracle_sigma_px is None else f"-oracle{oracle_sigma_px:g}px"
+        keypoints_tag = ("-mediapipe" if detector else "") + ("" if oracle_sigma_px is None
+                                                               else f"-oracle{oracle_sigma_px:g}px")
         calls.save(root / "smoother_calls" / f"{sequence}-s{seed}-{config_key(config)}{keypoints_tag}.npz")
     joints = np.array([r.joints for r in results])
     truth = loaded.ground_truth.joints[: len(joints)]
@@ -309,7 +324,26 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
             **written_against_decoded(np.array([r.pose for r in results]), joints, decoded),
             "labels_swapped_rate": float(np.mean([getattr(r, "labels_swapped", False) for r in results])),
             "detector_swapped_rate": float(np.mean(detector_swapped)),
+            **(beside_detector(joints, keypoints, truth) if detector else {}),
             "decoded_poses": np.array([r.decoded_pose for r in results]).tolist()}
+
+
+def beside_detector(joints: np.ndarray, keypoints: list, truth: np.ndarray) -> dict:
+    """Ours and MediaPipe's own 3D side by side (the detector's world joints in ``keypoints``, see
+    :func:`experiments.keypoints.detector_keypoints`): the arms' PA-MPJPE (mm) and acceleration
+    error (mm/frame², each frame aligned) of both, over the frames MediaPipe found the arms, as
+    :mod:`experiments.peers` measures them; ``joints`` and ``truth`` (N, 10, 3) metres."""
+    from experiments.peers import arm_figures, arm_indices
+
+    arms = arm_indices()
+    n = len(joints)
+    world = np.array([np.full((len(arms), 3), np.nan) if k.world is None else k.world[arms] for k in keypoints[:n]])
+    found = np.isfinite(world).all(axis=(1, 2))
+    ours = arm_figures(np.where(found[:, None, None], joints[:, arms], np.nan), truth[:, arms])
+    theirs = arm_figures(world, truth[:, arms])
+    return {"arms_pa_mpjpe_mm": ours["pa_mpjpe_mm"], "arms_accel": ours["accel"],
+            "mediapipe_arms_pa_mpjpe_mm": theirs["pa_mpjpe_mm"], "mediapipe_arms_accel": theirs["accel"],
+            "mediapipe_found_rate": float(found.mean())}
 
 
 #: The arms' joints, right side then left (rows of :data:`mocap.body.skeleton.JOINT_NAMES`).

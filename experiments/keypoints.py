@@ -1,21 +1,28 @@
-"""The oracle keypoint source: the ground truth's projected joints plus Gaussian pixel noise.
+"""The keypoint sources of the experiments: the oracle (the ground truth's projected joints plus
+Gaussian pixel noise) and the run's own detector on the rendered frames.
 
 What the keypoint cue can give at best (a detector's error is larger and not Gaussian): every
 joint of :data:`mocap.body.skeleton.JOINT_NAMES` present with confidence 1, each coordinate
 displaced by independent N(0, sigma^2) pixels, from a seeded generator (the same seed gives
 the same keypoints). :func:`swap_runs` and :func:`swap_labels` simulate a detector that names
 the person's left arm the right one on runs of frames (MediaPipe on a figure whose face it does
-not see, issue 44).
+not see, issue 44). :func:`detector_keypoints` is what a user gets instead: MediaPipe Pose as
+``python -m mocap track --keypoints mediapipe`` runs it (image mode, every frame on its own, at
+the frames' own size), its errors and left/right labels as they come.
 """
 from __future__ import annotations
 
 import numpy as np
+
+from pathlib import Path
 
 from mocap.io.keypoints import Keypoints
 from mocap.render.camera import Camera
 
 #: Noise of the oracle in the experiments, pixels at 160x120 (issue 23).
 ORACLE_SIGMA_PX = 2.0
+#: The detector's keypoints, kept in a benchmark sequence's folder (:func:`detector_keypoints`).
+DETECTOR_FILE = "keypoints-mediapipe.csv"
 
 
 def oracle_keypoints(joints: np.ndarray, camera: Camera, sigma_px: float = ORACLE_SIGMA_PX,
@@ -80,3 +87,35 @@ def swap_labels(keypoints: list[Keypoints], swapped: np.ndarray) -> list[Keypoin
     twin = [JOINT_NAMES.index({"r_": "l_", "l_": "r_"}.get(n[:2], n[:2]) + n[2:]) for n in JOINT_NAMES]
     return [Keypoints(k.uv[twin], k.confidence[twin], None if k.world is None else k.world[twin]) if s else k
             for k, s in zip(keypoints, swapped)]
+
+
+def detector_keypoints(frames: list[np.ndarray], cache: Path) -> list[Keypoints]:
+    """MediaPipe Pose, as the run uses it (:class:`mocap.io.mediapipe_keypoints.MediaPipeKeypoints`,
+    image mode), on every frame; read back from ``cache`` (a keypoint file with MediaPipe's world
+    joints) when it holds them, else detected and written there (atomically).
+
+    Parameters
+    ----------
+    frames : list of ndarray, shape (H, W, 3), uint8
+        The input frames, RGB, in order.
+    cache : Path
+        The keypoint file (:data:`DETECTOR_FILE` in the sequence's folder).
+
+    Returns
+    -------
+    list of Keypoints
+        One per frame, input pixels (empty where no person was found).
+
+    Raises
+    ------
+    ValueError
+        When the keypoints extra is not installed (``pip install -e .[keypoints]``).
+    """
+    from mocap.io.keypoints import read_keypoints, write_keypoints
+    from mocap.io.mediapipe_keypoints import MediaPipeKeypoints
+
+    if not cache.is_file():
+        with MediaPipeKeypoints() as detector:
+            write_keypoints(cache, {i: detector.keypoints(i, frame) for i, frame in enumerate(frames)})
+    found = read_keypoints(cache)
+    return [found.get(i, Keypoints.empty()) for i in range(len(frames))]

@@ -12,6 +12,12 @@ sequence's acceleration errors and per-frame median errors, written / decoded / 
 the written poses stray from the decoded ones (the largest joint distance, and the largest step of
 the written heading from one frame to the next: issue 44).
 
+``mediapipe-keypoints`` gives the tracker what a user has: MediaPipe Pose's keypoints on the
+rendered frames, as ``--keypoints mediapipe`` runs it (image mode, at 160x120; detected once and
+kept in the sequence's folder, :func:`experiments.keypoints.detector_keypoints`; needs the
+keypoints extra). A third table then sets ours beside MediaPipe's own 3D on the same frames: the
+detector's label swaps, and the arms' PA-MPJPE and acceleration error of both, with their ratios.
+
 One JSON file per (configuration, sequence, seed) under ``--out`` (written atomically: an
 interrupted run resumes where it stopped). Prints the Markdown table (medians over sequences,
 failure shares over all frames pooled); with ``--report`` it also draws the ablation figure
@@ -62,6 +68,9 @@ CONFIGS = MappingProxyType({
     # frame (SWAPPED_KEYPOINTS; a detector that does not see the face, issue 44)
     "oracle-swapped": {},
     "oracle-swapped-all": {},
+    # MediaPipe Pose's keypoints on the rendered frames, as `--keypoints mediapipe` runs it (image mode,
+    # 160x120): the detector a user has, its errors and labels as they come (DETECTOR_KEYPOINTS)
+    "mediapipe-keypoints": {},
     # the written poses' smoother (issue 39): live (lag 0), offline, and off
     "oracle-L0": {"lag": 0},
     "oracle-offline": {"offline": True},
@@ -90,6 +99,9 @@ ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", 
                                                               "oracle-fitted-silhouette", "oracle-L0", "oracle-offline",
                                                               "oracle-unsmoothed", "oracle-swapped",
                                                               "oracle-swapped-all")})
+#: Configurations given MediaPipe's keypoints on the rendered frames
+#: (:func:`experiments.keypoints.detector_keypoints`; needs the keypoints extra).
+DETECTOR_KEYPOINTS = frozenset({"mediapipe-keypoints"})
 #: Configurations whose oracle keypoints have left and right swapped: the share of frames
 #: (:func:`experiments.keypoints.swap_runs`).
 SWAPPED_KEYPOINTS = MappingProxyType({"oracle-swapped": 0.5, "oracle-swapped-all": 1.0})
@@ -106,6 +118,7 @@ def unit_path(out: Path, name: str, sequence: str, seed: int) -> Path:
     model = "-two-class" if name in TWO_CLASS_MODEL else ""
     keypoints = f"-oracle{ORACLE_KEYPOINTS[name]:g}px" if name in ORACLE_KEYPOINTS else ""
     keypoints += f"-swapped{SWAPPED_KEYPOINTS[name]:g}" if name in SWAPPED_KEYPOINTS else ""
+    keypoints += "-mediapipe" if name in DETECTOR_KEYPOINTS else ""
     return out / "units" / f"{sequence}-s{seed}-{config_key(config_of(name))}{model}{keypoints}.json"
 
 
@@ -122,7 +135,8 @@ def run_unit(out: Path, name: str, sequence: str, seed: int) -> dict:
         return row
     config = config_of(name)
     row = measure(sequence, config, out, seed, without=EXTENSIONS if name in TWO_CLASS_MODEL else (),
-                  oracle_sigma_px=ORACLE_KEYPOINTS.get(name), swap_share=SWAPPED_KEYPOINTS.get(name))
+                  oracle_sigma_px=ORACLE_KEYPOINTS.get(name), swap_share=SWAPPED_KEYPOINTS.get(name),
+                  detector=name in DETECTOR_KEYPOINTS)
     write_json(path, {"config": config.to_dict(), "name": name, "seed": seed, "code": code, "result": row})
     return row
 
@@ -194,6 +208,26 @@ def jitter_table(rows: dict[str, list[dict]]) -> str:
     return "\n".join(lines)
 
 
+def detector_table(rows: dict[str, list[dict]]) -> str:
+    """Markdown table of the configurations given MediaPipe's keypoints (:data:`DETECTOR_KEYPOINTS`),
+    per sequence and seed: the detector's label swaps (share of frames), and ours beside MediaPipe's
+    own 3D (:func:`experiments.ambiguity.beside_detector`): the arms' PA-MPJPE and acceleration
+    error, and their ratios (ours over MediaPipe's: below 1 is better)."""
+    lines = ["| configuration | sequence | seed | detector: labels swapped | MediaPipe found | arms PA-MPJPE mm, "
+             "ours / MediaPipe's | PA ratio | arms accel mm/frame², ours / MediaPipe's | accel ratio |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for name, rs in rows.items():
+        for r in rs:
+            if "mediapipe_arms_pa_mpjpe_mm" not in r:
+                continue
+            ours, theirs = r["arms_pa_mpjpe_mm"], r["mediapipe_arms_pa_mpjpe_mm"]
+            lines.append(f"| {name} | {r['sequence']} | {r.get('seed', '')} | {_percent(r['detector_swapped_rate'])} | "
+                         f"{_percent(r['mediapipe_found_rate'])} | {ours:.0f} / {theirs:.0f} | {ours / theirs:.2f} | "
+                         f"{r['arms_accel']:.1f} / {r['mediapipe_arms_accel']:.1f} | "
+                         f"{r['arms_accel'] / r['mediapipe_arms_accel']:.2f} |")
+    return "\n".join(lines)
+
+
 def _unseen_heading(seeds: list[int]) -> str:
     return f"seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds))}, never used for tuning"
 
@@ -234,6 +268,12 @@ def main(argv=None) -> int:
         print(f"error: unknown configuration(s) {unknown} or sequence(s) {bad_sequences}, or no seeds; "
               f"configurations: {'; '.join(CONFIGS)}", file=sys.stderr)
         return 2
+    if DETECTOR_KEYPOINTS & set(names):
+        from mocap.io.mediapipe_keypoints import MISSING_EXTRA, available
+
+        if not available():
+            print(f"error: {', '.join(sorted(DETECTOR_KEYPOINTS & set(names)))}: {MISSING_EXTRA}", file=sys.stderr)
+            return 2
     from tqdm import tqdm
 
     units = [(n, s, q) for n in names for s in seeds + unseen for q in sequences]
@@ -262,6 +302,10 @@ def main(argv=None) -> int:
     print("\nwritten / decoded / naive (mm/frame² and mm):\n")
     print(jitter_table({n: [{**r, "seed": s} for r, (s, _) in zip(rows[n] + unseen_rows[n], units_of[n])]
                         for n in names}))
+    if DETECTOR_KEYPOINTS & set(names):
+        print("\nbeside MediaPipe's own 3D:\n")
+        print(detector_table({n: [{**r, "seed": s} for r, (s, _) in zip(rows[n] + unseen_rows[n], units_of[n])]
+                              for n in names if n in DETECTOR_KEYPOINTS}))
     if args.report:
         write_report_section(rows, summaries, heading, apart)
     return 0

@@ -71,3 +71,87 @@ def test_budget_figure_draws_the_configurations_with_an_evaluation_count(tmp_pat
                  "old": {"median_mpjpe_mm": 120.0, "failure_rate": 0.6}}        # no count: left out
     paths = ext_proposal_budget.main(summaries, tmp_path)
     assert paths and all(p.is_file() and p.stat().st_size > 1000 for p in paths)
+
+
+def test_detector_keypoints_are_detected_once_and_read_back_with_the_world_joints(tmp_path, monkeypatch):
+    """The benchmark's MediaPipe keypoints (experiments.keypoints.detector_keypoints): the run's
+    detector on every frame (a stand-in here: MediaPipe need not be installed), written to the
+    sequence's folder and read back exactly, world joints and frames without a person included;
+    a second call reads the file and detects nothing."""
+    from experiments import keypoints as source
+    from mocap.io.keypoints import Keypoints
+
+    rng = np.random.default_rng(0)
+    made = [Keypoints(rng.uniform(0, 160, (10, 2)), rng.uniform(0.5, 1, 10), rng.normal(0, 0.3, (10, 3))),
+            Keypoints.empty(), Keypoints(rng.uniform(0, 160, (10, 2)), np.ones(10), None)]
+    seen = []
+
+    class Detector:
+        def __init__(self, *, image_mode=True):
+            assert image_mode                              # as --keypoints mediapipe runs it
+
+        def keypoints(self, index, image):
+            seen.append(index)
+            return made[index]
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            pass
+
+    monkeypatch.setattr("mocap.io.mediapipe_keypoints.MediaPipeKeypoints", Detector)
+    frames = [np.zeros((120, 160, 3), np.uint8)] * 3
+    cache = tmp_path / source.DETECTOR_FILE
+    for _ in range(2):
+        got = source.detector_keypoints(frames, cache)
+        assert len(got) == 3 and not got[1].present.any()
+        for k, m in ((got[0], made[0]), (got[2], made[2])):
+            np.testing.assert_array_equal(k.uv, m.uv)
+            np.testing.assert_array_equal(k.confidence, m.confidence)
+        np.testing.assert_array_equal(got[0].world, made[0].world)
+    assert seen == [0, 1, 2]                                # detected on the first call only
+
+
+def test_beside_detector_measures_ours_and_mediapipe_on_the_frames_it_found():
+    """Ours and MediaPipe's own 3D compared on the same frames: MediaPipe's world joints are the
+    truth's arms turned, scaled and moved (PA-MPJPE 0), missing on one frame; ours are the truth
+    plus a fixed offset on one joint (PA-MPJPE by mocap.metrics over the frames MediaPipe found)."""
+    from scipy.spatial.transform import Rotation
+
+    from experiments.ambiguity import beside_detector
+    from experiments.peers import arm_indices
+    from mocap.io.keypoints import Keypoints
+    from mocap.metrics import pa_mpjpe
+
+    rng = np.random.default_rng(1)
+    truth = rng.normal(0, 0.3, (6, 10, 3)) + np.array([0, 0, 3.0])
+    ours = truth.copy()
+    ours[:, 3] += np.array([0.05, -0.02, 0.1])            # the right elbow off
+    turn = Rotation.from_euler("y", 30, degrees=True).as_matrix()
+    keypoints = [Keypoints(np.zeros((10, 2)), np.ones(10), 0.8 * t @ turn.T + 1.0) for t in truth]
+    keypoints[2] = Keypoints(np.zeros((10, 2)), np.ones(10), None)
+    got = beside_detector(ours, keypoints, truth)
+    arms, found = arm_indices(), np.array([True, True, False, True, True, True])
+    assert got["mediapipe_found_rate"] == pytest.approx(5 / 6)
+    assert got["mediapipe_arms_pa_mpjpe_mm"] == pytest.approx(0.0, abs=1e-6)
+    assert got["arms_pa_mpjpe_mm"] == pytest.approx(pa_mpjpe(ours[found][:, arms], truth[found][:, arms]), rel=1e-9)
+    assert got["arms_pa_mpjpe_mm"] > 1.0
+
+
+def test_detector_table_gives_ours_over_mediapipes():
+    from experiments.tracking import detector_table
+
+    r = {"sequence": "turning", "seed": 3, "detector_swapped_rate": 0.25, "mediapipe_found_rate": 0.5,
+         "arms_pa_mpjpe_mm": 40.0, "mediapipe_arms_pa_mpjpe_mm": 50.0, "arms_accel": 3.0, "mediapipe_arms_accel": 12.0}
+    text = detector_table({"mediapipe-keypoints": [r], "default": [{"sequence": "turning"}]})
+    assert "| mediapipe-keypoints | turning | 3 | 25.0 % | 50.0 % | 40 / 50 | 0.80 | 3.0 / 12.0 | 0.25 |" in text
+    assert "| default |" not in text
+
+
+def test_the_detector_configuration_needs_the_keypoints_extra(monkeypatch, capsys, tmp_path):
+    from experiments.tracking import main
+
+    monkeypatch.setattr("mocap.io.mediapipe_keypoints.available", lambda: False)
+    assert main(["--configs", "mediapipe-keypoints", "--seeds", "0", "--out", str(tmp_path)]) == 2
+    assert "mediapipe-keypoints" in capsys.readouterr().err and not (tmp_path / "units").exists()
