@@ -12,9 +12,9 @@ the frames' own size), its errors and left/right labels as they come.
 """
 from __future__ import annotations
 
-import numpy as np
-
 from pathlib import Path
+
+import numpy as np
 
 from mocap.io.keypoints import Keypoints
 from mocap.render.camera import Camera
