@@ -2,7 +2,10 @@
 
 The best path through every scored candidate of each record (:func:`decode_offline`), the
 motion term recomputed between all pairs of consecutive frames' candidates, at several motion
-weights, caps and lifter weights, against the tracker's own online decisions.
+weights, caps and lifter weights, against the tracker's own online decisions. The records hold
+each candidate's joints, not its heading: the joints' :func:`mocap.track.score.motion_term` is
+recomputed, without the heading's :func:`mocap.track.score.turn_term` that the tracker adds
+since 2026-11-29 (records from before have no turn term in their motion column either).
 """
 from __future__ import annotations
 

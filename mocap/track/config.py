@@ -134,7 +134,9 @@ class TrackerConfig(JsonConfig):
         the unit of the score). The registration's steps keep their own balance (:data:`EDGE_WEIGHT`).
     motion_weight : float
         Multiplies the motion term between consecutive frames' hypotheses
-        (:func:`mocap.track.score.motion_term`: :data:`MOTION_SIGMA_M`, :data:`MOTION_CAP`); 0: the
+        (:func:`mocap.track.score.transition_term`: the joints' truncated quadratic,
+        :data:`MOTION_SIGMA_M`, :data:`MOTION_CAP`, plus the chest heading's,
+        :data:`~mocap.track.score.TURN_SIGMA_DEG`, :data:`~mocap.track.score.TURN_CAP`); 0: the
         decoder takes each frame's best unary score. The score's weights (``edge_weight``,
         ``keypoint_weight``, ``prior_weight``, ``lifter_weight``, ``motion_weight``: the table
         :data:`mocap.track.score.TERMS`) score every frame, with keypoints or without. Weights of

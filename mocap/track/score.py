@@ -4,8 +4,9 @@ Every candidate of a frame gets a **unary score**: the sum over the unary terms 
 :data:`TERMS` of each term's weight times its value, a term whose value is NaN (it does not
 apply: the keypoint distance on a frame without keypoints, the prior with ``prior_weight`` 0,
 the lifter's energy on a frame not lifted) left out (:func:`weighted_sum`). Between consecutive
-frames the **motion term** (:func:`motion_term`) links every hypothesis of the previous frame to
-every candidate of this one; ``motion_weight`` multiplies it in the decoder. F's weight is the
+frames the **motion term** (:func:`transition_term`: the joints' :func:`motion_term` plus the
+heading's :func:`turn_term`) links every hypothesis of the previous frame to every candidate of
+this one; ``motion_weight`` multiplies it in the decoder. F's weight is the
 constant :data:`REGION_WEIGHT`, the score's unit; every other weight is a field of
 :class:`~mocap.track.config.TrackerConfig`, named in the table, and the same weights score every
 frame, with keypoints or without.
@@ -31,6 +32,14 @@ MOTION_SIGMA_M = 0.05
 #: ...at most this much (a truncated quadratic): a jump between branches or to a re-acquired arm
 #: costs a fixed price that a clearly better fit pays.
 MOTION_CAP = 8.0
+#: Turn term between hypotheses of consecutive frames: half the squared change of the chest's
+#: heading (on the circle) over ``TURN_SIGMA_DEG**2`` (degrees)...
+TURN_SIGMA_DEG = 45.0
+#: ...at most this much. A body turned round between two frames (a front/back switch, which the
+#: keypoints' labellings cannot tell apart) pays 18 besides the joints' motion term, where before
+#: it paid at most :data:`MOTION_CAP` as an arm's jump does; a 30° step pays 0.5
+#: (docs/research-log.md, 2026-11-29).
+TURN_CAP = 40.0
 
 
 @dataclass(frozen=True)
@@ -133,6 +142,45 @@ def weighted_sum(values, w):
     for j in range(x.shape[-1]):
         total = total + np.where(np.isnan(x[..., j]), 0.0, w[j] * x[..., j])
     return total
+
+
+def turn_term(previous, current) -> np.ndarray:
+    """The turn term between every pair (previous, current) of chest headings: half the squared
+    change on the circle over ``TURN_SIGMA_DEG**2``, at most :data:`TURN_CAP`.
+
+    Parameters
+    ----------
+    previous : array_like, shape (P,), radians
+    current : array_like, shape (C,), radians
+
+    Returns
+    -------
+    ndarray, shape (P, C), float64
+    """
+    a = np.asarray(previous, dtype=np.float64)
+    b = np.asarray(current, dtype=np.float64)
+    if a.ndim != 1 or b.ndim != 1:
+        raise ValueError(f"need headings of shape (P,) and (C,), got {a.shape} and {b.shape}")
+    change = np.angle(np.exp(1j * (b[None] - a[:, None])))
+    return np.minimum(0.5 * (change / np.radians(TURN_SIGMA_DEG)) ** 2, TURN_CAP)
+
+
+def transition_term(previous_joints, current_joints, previous_headings, current_headings) -> np.ndarray:
+    """The motion term of the decoder between every pair (previous, current) of hypotheses before
+    ``motion_weight``: the joints' :func:`motion_term` plus the chest headings' :func:`turn_term`.
+
+    Parameters
+    ----------
+    previous_joints : array_like, shape (P, J, 3), metres
+    current_joints : array_like, shape (C, J, 3), metres
+    previous_headings : array_like, shape (P,), radians
+    current_headings : array_like, shape (C,), radians
+
+    Returns
+    -------
+    ndarray, shape (P, C), float64
+    """
+    return motion_term(previous_joints, current_joints) + turn_term(previous_headings, current_headings)
 
 
 def motion_term(previous, current, cap: float = MOTION_CAP) -> np.ndarray:

@@ -68,7 +68,7 @@ from mocap.track.lifter import LiftedHypotheses, Lifter
 from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, jump_proposals, reach_proposals,
                                    unexplained_hands)
 from mocap.track.registration import Registration, failed_residuals, register
-from mocap.track.score import MOTION, UNARY_TERMS, ScoredCandidate, motion_term, weighted_sum, weights
+from mocap.track.score import MOTION, UNARY_TERMS, ScoredCandidate, transition_term, weighted_sum, weights
 from mocap.track.smooth import Smoother
 
 #: Index of the chest's heading in the pose vector.
@@ -361,7 +361,8 @@ class Tracker:
                  for (reg, _), j, s in zip(candidates, joints, swapped)]
         hypotheses = [self._hypothesis(reg, origin, j, t, s)
                       for (reg, origin), j, t, s in zip(candidates, joints, terms, swapped)]
-        motion = motion_term([h.joints for h in self._beam], [h.joints for h in hypotheses])
+        motion = transition_term([h.joints for h in self._beam], [h.joints for h in hypotheses],
+                                 [h.pose[_HEADING] for h in self._beam], [h.pose[_HEADING] for h in hypotheses])
         motion_weight = self.weights[MOTION]
         transition = motion if motion_weight == 1.0 else motion_weight * motion
         cost, back = viterbi_step(self._cost, transition, np.array([h.unary for h in hypotheses]))

@@ -8,8 +8,9 @@ import pytest
 
 from mocap.track.smooth import SmootherConfig
 from mocap.track import ScoredCandidate, TrackerConfig
-from mocap.track.score import (MOTION, MOTION_CAP, MOTION_SIGMA_M, REGION_WEIGHT, TERM_NAMES, TERMS, UNARY_TERMS,
-                               WEIGHT_FIELDS, motion_term, weighted_sum, weights, with_weights)
+from mocap.track.score import (MOTION, MOTION_CAP, MOTION_SIGMA_M, REGION_WEIGHT, TERM_NAMES, TERMS, TURN_CAP,
+                               TURN_SIGMA_DEG, UNARY_TERMS, WEIGHT_FIELDS, motion_term, transition_term, turn_term,
+                               weighted_sum, weights, with_weights)
 
 
 def test_every_term_is_an_attribute_of_a_scored_candidate_and_its_weight_a_validated_config_field():
@@ -83,6 +84,30 @@ def test_the_motion_term_is_half_the_mean_squared_displacement_truncated():
     assert motion_term(a, b, cap=1e9)[1, 0] == pytest.approx(0.5 * 3 * 0.4 ** 2 / MOTION_SIGMA_M ** 2)
     with pytest.raises(ValueError):
         motion_term(a, b[:, :5])
+
+
+def test_the_turn_term_is_half_the_squared_heading_change_on_the_circle_truncated():
+    # by hand in degrees: the change taken the short way round, (b - a + 180) mod 360 - 180
+    previous = np.radians([0.0, 170.0, -90.0])
+    current = np.radians([10.0, -170.0, 90.0, 370.0, 180.0])
+    t = turn_term(previous, current)
+    assert t.shape == (3, 5)
+    for i, a in enumerate(np.degrees(previous)):
+        for j, b in enumerate(np.degrees(current)):
+            change = (b - a + 180.0) % 360.0 - 180.0
+            assert t[i, j] == pytest.approx(min(0.5 * (change / TURN_SIGMA_DEG) ** 2, TURN_CAP), rel=1e-9, abs=1e-12)
+    assert t[0, 3] == pytest.approx(t[0, 0]) and t[1, 1] == pytest.approx(t[0, 0])     # 370 is 10; 170 -> -170 is 20 the short way
+    assert t[0, 4] == pytest.approx(0.5 * (180.0 / TURN_SIGMA_DEG) ** 2)           # turned round: an arm's jump more
+    assert t[0, 4] >= MOTION_CAP
+    with pytest.raises(ValueError):
+        turn_term(previous[:, None], current)
+
+
+def test_the_decoders_motion_term_adds_the_joints_and_the_heading():
+    rng = np.random.default_rng(7)
+    a, b = rng.normal(0, 0.05, size=(2, 10, 3)), rng.normal(0, 0.05, size=(3, 10, 3))
+    ha, hb = rng.uniform(-np.pi, np.pi, 2), rng.uniform(-np.pi, np.pi, 3)
+    np.testing.assert_allclose(transition_term(a, b, ha, hb), motion_term(a, b) + turn_term(ha, hb), rtol=1e-15)
 
 
 def test_the_papers_method_switches_off_the_terms_beyond_the_paper():
