@@ -96,7 +96,7 @@ def test_the_turn_term_is_half_the_squared_heading_change_on_the_circle_truncate
         for j, b in enumerate(np.degrees(current)):
             change = (b - a + 180.0) % 360.0 - 180.0
             assert t[i, j] == pytest.approx(min(0.5 * (change / TURN_SIGMA_DEG) ** 2, TURN_CAP), rel=1e-9, abs=1e-12)
-    assert t[0, 3] == pytest.approx(t[0, 0]) and t[1, 1] == pytest.approx(t[0, 0])     # 370 is 10; 170 -> -170 is 20 the short way
+    assert t[0, 3] == pytest.approx(t[0, 0]) and t[1, 1] == pytest.approx(4 * t[0, 0])   # 370 is 10; 170 -> -170 is 20 the short way
     assert t[0, 4] == pytest.approx(0.5 * (180.0 / TURN_SIGMA_DEG) ** 2)           # turned round: an arm's jump more
     assert t[0, 4] >= MOTION_CAP
     with pytest.raises(ValueError):
