@@ -36,9 +36,9 @@ MOTION_CAP = 8.0
 #: heading (on the circle) over ``TURN_SIGMA_DEG**2`` (degrees)...
 TURN_SIGMA_DEG = 45.0
 #: ...at most this much. A body turned round between two frames (a front/back switch, which the
-#: keypoints' labellings cannot tell apart) pays 18 besides the joints' motion term, where before
-#: it paid at most :data:`MOTION_CAP` as an arm's jump does; a 30° step pays 0.5
-#: (docs/research-log.md, 2026-11-29).
+#: keypoints' labellings cannot tell apart) pays 8 besides the joints' motion term (at most
+#: :data:`MOTION_CAP`, what an arm's jump pays); a 30° step pays 0.22 (docs/research-log.md,
+#: 2026-11-29).
 TURN_CAP = 40.0
 
 
