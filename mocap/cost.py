@@ -15,7 +15,7 @@ Each is built once per frame from its target and called as ``cost(pose) -> float
 is one compiled function that poses the mesh, rasterizes it and accumulates the cost only
 inside the model's bounding box, then clears what it drew; there is no Python work per pixel.
 The cost objects hold scratch buffers, so one object must not be called from two threads at
-once (make one per thread).
+once: :meth:`~RegionCost.spare` gives another thread a twin with buffers of its own.
 
 Degenerate cases (documented, finite, never NaN):
 - F: a class whose union ``|A_c ∪ B_c|`` is empty (neither image nor model has it) drops out
@@ -32,6 +32,7 @@ parameters from one render each (see :class:`EdgeGradient` and :class:`RegionGra
 """
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import NamedTuple
@@ -880,6 +881,15 @@ class RegionCost:
         """As calling, without validating ``pose`` (a float64 (23,) array): for optimiser loops."""
         return region_cost_kernel(pose, self.kernel_args())
 
+    def spare(self) -> "RegionCost":
+        """The same cost with scratch buffers of its own, for another thread (the target and
+        the scene are shared, read-only); it gives the same value at every pose."""
+        twin = copy.copy(self)
+        twin._buffers = Buffers.of(self.model, self.camera)
+        twin._model_count, twin._overlap_count = np.zeros_like(self._model_count), np.zeros_like(self._overlap_count)
+        twin._gradient_args = None
+        return twin
+
     def kernel_args(self) -> RegionKernelArgs:
         """Second argument of :func:`region_cost_kernel` (for compiled optimiser loops)."""
         return RegionKernelArgs(self._scene, self._buffers, self._target, self.target_count, self.n_classes,
@@ -963,6 +973,15 @@ class EdgeCost:
     def evaluate_unchecked(self, pose: np.ndarray) -> float:
         """As calling, without validating ``pose`` (a float64 (23,) array): for optimiser loops."""
         return edge_cost_kernel(pose, self.kernel_args())
+
+    def spare(self) -> "EdgeCost":
+        """The same cost with scratch buffers of its own, for another thread (the distance map
+        and the scene are shared, read-only); it gives the same value at every pose."""
+        twin = copy.copy(self)
+        twin._buffers = Buffers.of(self.model, self.camera)
+        twin._marks = np.zeros_like(self._marks)
+        twin._gradient_args = None
+        return twin
 
     def kernel_args(self) -> EdgeKernelArgs:
         """Second argument of :func:`edge_cost_kernel` (for compiled optimiser loops)."""
@@ -1295,6 +1314,13 @@ class KeypointCost:
         tie keeps the detector's; False when ``swap`` is off)."""
         direct, swapped = self.labellings(pose)
         return bool(self.swap and swapped < direct)
+
+    def spare(self) -> "KeypointCost":
+        """The same cost with a scratch buffer of its own, for another thread (the keypoints are
+        shared, read-only); it gives the same value at every pose."""
+        twin = copy.copy(self)
+        twin._transforms = np.zeros_like(self._transforms)
+        return twin
 
     def kernel_args(self) -> KeypointKernelArgs:
         """Second argument of :func:`keypoint_cost_kernel` (for compiled optimiser loops)."""

@@ -109,21 +109,22 @@ def test_resume_with_a_decoding_lag_is_bit_identical(sequence, tmp_path, keypoin
     held-back rows not written yet) all resume to the uninterrupted run's poses, with and
     without keypoints. The written poses are smoothed over the lag (:mod:`mocap.track.smooth`):
     the checkpoint carries the smoother's state and the window's images, so the smoothed poses
-    and their residuals come back bit for bit."""
+    and their residuals come back bit for bit. The threads change nothing either: the whole run
+    on one thread, the killed ones on three and the last on two."""
     if keypoints == "mediapipe":
         pytest.importorskip("mediapipe")
     args = [*LAGGED_ARGS[:-1], keypoints]
     whole = tmp_path / "whole"
-    assert main(["track", str(sequence), "--out", str(whole), *args]) == 0
+    assert main(["track", str(sequence), "--out", str(whole), *args, "--threads", "1"]) == 0
     out = tmp_path / "run"
     cmd = lambda mode, n: [sys.executable, "-m", "tests.killpoints", mode, str(n), "--", "track", str(sequence),
-                           "--out", str(out), *args]
+                           "--out", str(out), *args, "--threads", "3"]
     # checkpoints every 3 frames: after frames 2, 5 and 7
     for mode, n in (("after-state", 2), ("after-row", 2), ("after-state", 1)):
         proc = subprocess.run(cmd(mode, n), cwd=REPO_ROOT, capture_output=True, text=True, timeout=300)
         assert proc.returncode == -9, proc.stderr
     assert journal_rows(out) < N_FRAMES                      # frames still held back at the kill
-    assert main(["track", str(sequence), "--out", str(out), *args]) == 0
+    assert main(["track", str(sequence), "--out", str(out), *args, "--threads", "2"]) == 0
     a, b = PoseTable.read(whole / "poses.csv"), PoseTable.read(out / "poses.csv")
     np.testing.assert_array_equal(b.frames, np.arange(N_FRAMES))
     np.testing.assert_array_equal(b.poses, a.poses)

@@ -15,7 +15,7 @@ FIELD_OPTIONS = {"background": "background", "background_frames": "background_fr
                  "height_m": "height", "work_width": "work_width", "colour": "colour",
                  "ground_truth": "ground_truth", "start": "start", "max_frames": "max_frames",
                  "allow_damaged": "allow_damaged", "show": "show", "overwrite": "overwrite",
-                 "keypoints": "keypoints"}
+                 "keypoints": "keypoints", "threads": "threads"}
 
 
 def default(field: str):
@@ -61,6 +61,9 @@ def add_tracker_options(p: argparse.ArgumentParser) -> None:
                    help="the paper's method: one hypothesis, no recovery, re-acquisition, jumps or prior")
     p.add_argument("--config", type=Path, default=None, metavar="JSON",
                    help="TrackerConfig as JSON (options above override it)")
+    p.add_argument("--threads", type=int, default=None, metavar="N",
+                   help="threads the tracker's registrations run on (the same poses for every N; default: the "
+                        "cores, less one for MediaPipe's process)")
     add_max_frames_option(p, "track only the first N frames")
     p.add_argument("--overwrite", action="store_true", help="start afresh instead of resuming a run in --out")
     p.add_argument("--no-overlay", action="store_true", help="skip writing overlay.mp4")

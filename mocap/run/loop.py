@@ -411,13 +411,18 @@ class RunLoop:
         loop.resume(checkpoint)
         return loop
 
+    def new_tracker(self) -> Tracker:
+        """A fresh tracker of the person, on the run's threads (:attr:`RunChoices.threads`)."""
+        return Tracker(self.person.model, self.camera, self.config, self.person.calibration.initial_pose,
+                       threads=self.params.choices.threads)
+
     def resume(self, checkpoint) -> None:
         """The tracker: fresh (``run.json`` says running) or restored from ``checkpoint``."""
         if checkpoint is None:
             self.damage.made.extend([self.journal.path, self.run_json, self.journal.state_path,
                                      self.journal.keypoints_path, self.out_dir / files.COLOUR_MODEL_JSON,
                                      self.out_dir / files.OVERLAY_MP4])
-            self.tracker = Tracker(self.person.model, self.camera, self.config, self.person.calibration.initial_pose)
+            self.tracker = self.new_tracker()
             write_text_atomic(self.run_json, json.dumps({"status": "running", "settings": self.settings}, indent=2))
             return
         if self.frames_in.live:
@@ -435,7 +440,7 @@ class RunLoop:
                 raise ValueError(f"{self.out_dir}: the person found on frame {first} is not found again; start "
                                  "afresh with --overwrite")
             self.person = Person.of_setup(found, self.resolution)
-        self.tracker = Tracker(self.person.model, self.camera, self.config, self.person.calibration.initial_pose)
+        self.tracker = self.new_tracker()
         self.tracker.restore(resumed.tracker_state)
 
     def _open_overlay(self) -> OverlayGeometry | None:
@@ -480,7 +485,8 @@ class RunLoop:
         self.people.begin(index, self.person.calibration, self.person.colour_model,
                           None if found.record is None else found.record.calibration.to_dict(source=False))
         reader.colours = Colours(self.people.segment, self.person.colour_model, self.person.scene)
-        self.tracker = Tracker(self.person.model, self.camera, self.config, self.person.calibration.initial_pose)
+        self.tracker.close()
+        self.tracker = self.new_tracker()
         if self.overlay is not None:
             self.overlay.model = self.person.model
 
@@ -558,6 +564,7 @@ class RunLoop:
             interrupted = True          # Ctrl-C ends a live run: what was tracked is kept
             self.emit(self.tracker.finish())
         finally:
+            self.tracker.close()
             if self.bar is not None:
                 self.bar.close()
             if self.overlay is not None:

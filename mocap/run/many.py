@@ -39,7 +39,6 @@ import glob
 import io
 import json
 import logging
-import os
 import time
 import uuid
 from dataclasses import dataclass, field, replace
@@ -47,7 +46,7 @@ from pathlib import Path
 
 from mocap.io.files import write_bytes_atomic, write_text_atomic
 from mocap.run import files
-from mocap.run.options import OwnVideoOptions
+from mocap.run.options import OwnVideoOptions, available_cores, default_threads, resolve_keypoints
 from mocap.run.outputs import RunSummary
 
 __all__ = ["PER_VIDEO_OPTIONS", "ManySummary", "SUMMARY_COLUMNS", "expand_inputs", "track_input", "track_many",
@@ -283,8 +282,8 @@ class _JournalRows:
 
 
 def default_workers() -> int:
-    """The machine's cores available to this process."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    """The machine's cores available to this process (:func:`mocap.run.options.available_cores`)."""
+    return available_cores()
 
 
 def _dask_client(workers: int, scheduler: str | None):
@@ -344,7 +343,8 @@ def track_many(inputs: list[str | Path], out: str | Path, options: OwnVideoOptio
     items = expand_inputs([str(i) for i in inputs])
     out = Path(out)
     started = time.perf_counter()
-    _check_options(out, options.to_dict(), overwrite)
+    # the threads change no pose: a rerun with other threads resumes
+    _check_options(out, {k: v for k, v in options.to_dict().items() if k != "threads"}, overwrite)
     rows, todo = _plan(items, out, overwrite)
     summary = ManySummary(out, skipped=len(rows))
     bar = _ManyBar(out, items, rows, options, progress)
@@ -372,6 +372,9 @@ def _checked(options: OwnVideoOptions | None, workers: int | None,
     if per_video:
         raise ValueError(f"{', '.join(per_video)}: not for many videos (a sequence folder brings its own "
                          "background.png, calibration.json, ground_truth.csv)")
+    if options.threads is None and workers > 0:       # the cores shared between the clips and their threads
+        detector = resolve_keypoints(options.keypoints)[0] == "mediapipe"
+        options = replace(options, threads=default_threads(detector, cores=max(1, default_workers() // workers)))
     return replace(options, overwrite=False), options.overwrite, workers
 
 

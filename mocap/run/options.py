@@ -9,6 +9,7 @@ read.
 """
 from __future__ import annotations
 
+import os
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,7 +21,7 @@ from mocap.render.camera import DEFAULT_HFOV_DEG
 from mocap.track import TrackerConfig
 
 __all__ = ["BACKGROUND_MODES", "COLOUR_SOURCES", "KEYPOINT_CHOICES", "OwnVideoOptions", "RunChoices",
-           "background_mode", "keypoint_source", "resolve_keypoints"]
+           "available_cores", "background_mode", "default_threads", "keypoint_source", "resolve_keypoints"]
 
 #: How the background is found: ``auto`` (estimate, use if the person moves enough), ``image``
 #: (a file), ``frames`` (median of frames A:B), ``none`` (colour-only foreground).
@@ -30,6 +31,18 @@ KEYPOINT_CHOICES = ("auto", "mediapipe", "none")
 #: Where the colour classes are learnt: inside the calibrated model's projected parts, or from
 #: the detected face and a box under it (the paper's way).
 COLOUR_SOURCES = ("calibration", "face")
+
+
+def available_cores() -> int:
+    """The cores this process may run on (its affinity where the system tells it, else all)."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def default_threads(detector_process: bool, cores: int | None = None) -> int:
+    """The tracker's threads when none are asked for: the cores (``cores``, default
+    :func:`available_cores`) less the one a keypoint detector in its own process takes, at least 1."""
+    cores = available_cores() if cores is None else cores
+    return max(1, cores - (1 if detector_process else 0))
 
 
 def background_mode(image: bool, frames: bool, none: bool) -> str:
@@ -85,6 +98,9 @@ class OwnVideoOptions(JsonConfig):
         the optional extra ``keypoints``), a keypoint file (:mod:`mocap.io.keypoints`) or
         ``"none"`` (or None); the tracker adds them as a cue (``tracker.keypoint_weight``).
     tracker : TrackerConfig
+    threads : int or None
+        Threads the tracker's registrations run on (:class:`mocap.track.Tracker`); the poses are
+        the same for every count, and a run resumes with any. None: :func:`default_threads`.
     """
 
     background: str | None = None
@@ -104,6 +120,7 @@ class OwnVideoOptions(JsonConfig):
     overwrite: bool = False
     keypoints: str | None = "auto"
     tracker: TrackerConfig = field(default_factory=TrackerConfig)
+    threads: int | None = None
 
     def __post_init__(self) -> None:
         for key in ("background", "calibration", "ground_truth", "keypoints"):
@@ -130,6 +147,9 @@ class OwnVideoOptions(JsonConfig):
         if self.keypoints is not None and self.keypoints not in KEYPOINT_CHOICES and not Path(self.keypoints).is_file():
             raise FileNotFoundError(f"keypoint file not found: {self.keypoints} (or give --keypoints "
                                     f"{'|'.join(KEYPOINT_CHOICES)})")
+        if self.threads is not None and (isinstance(self.threads, bool) or not isinstance(self.threads, int)
+                                         or self.threads < 1):
+            raise ValueError(f"threads must be a positive integer, got {self.threads!r}")
         if self.work_width is not None and self.work_width < 16:
             raise ValueError(f"the working width must be at least 16 pixels, got {self.work_width}")
 
@@ -161,6 +181,9 @@ class RunChoices:
         run learns them itself (:meth:`check_colour`).
     background_mode : {"auto", "image", "frames", "none"}
         :data:`BACKGROUND_MODES`.
+    threads : int
+        The tracker's threads: the options' or :func:`default_threads` (less one core where
+        MediaPipe runs in its own process).
     """
 
     keypoints: str
@@ -168,6 +191,7 @@ class RunChoices:
     keypoint_source: KeypointSource | None
     colour: str
     background_mode: str
+    threads: int = 1
 
     @classmethod
     def of(cls, options: OwnVideoOptions, sequence_background: bool = False) -> "RunChoices":
@@ -177,7 +201,8 @@ class RunChoices:
         resolved, line = resolve_keypoints(options.keypoints)
         return cls(keypoints="none" if resolved is None else resolved, keypoints_line=line,
                    keypoint_source=_source(resolved, options.keypoints == "auto"), colour=options.colour,
-                   background_mode=options.background_mode(sequence_background))
+                   background_mode=options.background_mode(sequence_background),
+                   threads=options.threads or default_threads(detector_process=resolved == "mediapipe"))
 
     def close(self) -> None:
         """End the keypoint source's process, if it has one (safe to call twice)."""

@@ -47,8 +47,10 @@ from __future__ import annotations
 import functools
 import json
 import math
+import queue
 import time
 from collections import deque
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -175,11 +177,19 @@ class Tracker:
         > 0); default: ``config.lifter_file`` (None: the shipped one), loaded at the first frame
         with keypoints. The tracker's :class:`LifterSource` (:attr:`lifting`) owns it: lifts each
         such frame once, for the proposal stage and the score.
+    threads : int
+        Threads a frame's registrations and proposal scoring run on (the compiled costs hold
+        no interpreter lock): the leader beside the other hypotheses and the proposal stage,
+        then the recovery, re-acquisition, jumps and mirrors beside each other. The decisions
+        are the same, bit for bit, for every count; 1 (default) runs everything on the calling
+        thread. :meth:`close` stops the threads.
     """
 
     def __init__(self, model: BodyModel, camera: Camera, config: TrackerConfig, initial_pose,
                  prior: PosePrior | None = None, sources: Sequence[ProposalSource] | None = None,
-                 lifter: Lifter | None = None) -> None:
+                 lifter: Lifter | None = None, threads: int = 1) -> None:
+        if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
+            raise ValueError(f"threads must be a positive integer, got {threads!r}")
         if config.mesh_resolution and model.mesh.resolution != config.mesh_resolution:
             model = model.with_resolution(config.mesh_resolution)
         self.model, self.camera, self.config = model, camera, config
@@ -204,6 +214,9 @@ class Tracker:
         self.last_good = q
         #: The written poses' smoother (None when ``config.smoothing`` is off).
         self.smoother: Smoother | None = Smoother(config.smoothing) if config.smoothing.on else None
+        #: Threads a frame's registrations run on (the decisions are the same for every count).
+        self.threads = int(threads)
+        self._pool = ThreadPoolExecutor(self.threads, thread_name_prefix="mocap-tracker") if self.threads > 1 else None
 
     # -- streaming ---------------------------------------------------------------------------
     def push(self, frame_index: int, prepared, keypoints=None) -> list[FrameResult]:
@@ -316,51 +329,48 @@ class Tracker:
         region_cost, edge_cost = self.costs(prepared)
         # every registration of the frame, with the keypoint distance when keypoints are given
         keypoint_cost = self.keypoint_cost(keypoints, prepared.labels)
-        fit = functools.partial(register, region_cost, edge_cost, config=cfg, keypoint_cost=keypoint_cost)
+        work = _FrameWork(_FrameCosts(region_cost, edge_cost, keypoint_cost), self._pool)
+        t1 = time.perf_counter()
+        leading = work.submit(_timed_fit, self._beam[0].pose, cfg, cfg.evaluations)
         # the lifter reads the keypoints under both labellings (a candidate pays its own's energy)
         lifted = self.lifting.lift(keypoints, self.camera, self.model) if self.lifting is not None else None
         lifted_swapped = (self.lifting.lift(keypoints.swapped(), self.camera, self.model)
                           if lifted is not None and keypoint_cost is not None else None)
         lifts = (lifted, lifted_swapped)
-        candidates: list[tuple[Registration, str]] = []
-        evaluations = 0
-        t1 = time.perf_counter()
-        for rank, h in enumerate(self._beam[:cfg.beam]):      # past the beam: last frame's mirrors
-            budget = cfg.evaluations if rank == 0 else cfg.hypothesis_evaluations
-            if budget > 0 or rank == 0:                 # the leader always (0: its pose kept)
-                reg = fit(h.pose, evaluations=budget)
-                evaluations += reg.evaluations
-                candidates.append((reg, "tracked"))
-            if rank == 0:
-                t2 = time.perf_counter()
-                lead = candidates[0][0]
-                share = (lead.region.evaluations if lead.region else 0) / max(lead.evaluations, 1)
-                timings["region"] = 1e3 * (t2 - t1) * share
-                timings["edge"] = 1e3 * (t2 - t1) - timings["region"]
-        leader = candidates[0][0]
-        if cfg.recovery and leader.failed(cfg):
-            retry = fit(self.last_good, step_scale=RECOVERY_STEP_SCALE)
-            evaluations += retry.evaluations
-            candidates.append((retry, "recovery"))
-        if cfg.hand_reacquisition:
-            evaluations += self._reacquire(prepared, region_cost, fit, leader, candidates)
-        if cfg.jumps:
-            evaluations += self._jump(region_cost, fit, leader, candidates)
-        if cfg.mirrors and keypoint_cost is not None:
-            evaluations += self._mirror(fit, leader, candidates)
-        t3 = time.perf_counter()
+        # every other registration is scored on the thread that ran it
+        score = functools.partial(self._scored, lifts=lifts)
+        # what needs no leader runs beside it: the proposal stage (whose ranking this thread
+        # waits for), the beam's other hypotheses
+        proposed = []
         if self.sources and cfg.proposals_refined > 0:
             context = ProposalContext(lifted=lifted, lifted_swapped=lifted_swapped)
-            rough = functools.partial(self._rough_unary, region_cost, edge_cost, keypoint_cost, lifts)
-            for source in self.sources:
-                evaluations += self._propose(source, prepared, context, rough, fit, candidates)
-        timings["proposals"] = 1e3 * (time.perf_counter() - t3)
-        joints = [self.model.joint_positions(reg.pose) for reg, _ in candidates]
-        swapped = [keypoint_cost is not None and keypoint_cost.labelling(reg.pose) for reg, _ in candidates]
-        terms = [self._terms(reg.region_residual, reg.edge_residual, reg.keypoint_residual, reg.pose, j, lifts[s])
-                 for (reg, _), j, s in zip(candidates, joints, swapped)]
-        hypotheses = [self._hypothesis(reg, origin, j, t, s)
-                      for (reg, origin), j, t, s in zip(candidates, joints, terms, swapped)]
+            rough = functools.partial(self._rough_unary, lifts=lifts)
+            proposed = [self._propose(source, prepared, context, rough, score, work) for source in self.sources]
+        tracked = [work.submit(_fit, score, h.pose, cfg, cfg.hypothesis_evaluations)
+                   for h in self._beam[1:cfg.beam] if cfg.hypothesis_evaluations > 0]   # past the beam: mirrors
+        leader, leader_s = leading.result()
+        tracked.insert(0, work.submit(score, leader))
+        share = (leader.region.evaluations if leader.region else 0) / max(leader.evaluations, 1)
+        timings["region"] = 1e3 * leader_s * share
+        timings["edge"] = 1e3 * leader_s - timings["region"]
+        # what starts from the leader
+        recovered = [work.submit(_fit, score, self.last_good, cfg, None, RECOVERY_STEP_SCALE)] if (
+            cfg.recovery and leader.failed(cfg)) else []
+        reacquired = self._reacquire(prepared, leader, score, work) if cfg.hand_reacquisition else []
+        jumped = self._jump(leader, score, work) if cfg.jumps else []
+        mirrored = self._mirror(leader, score, work) if cfg.mirrors and keypoint_cost is not None else []
+        candidates: list[tuple[_Scored, str]] = []
+        for futures, origin in ((tracked, "tracked"), (recovered, "recovery"), (reacquired, "reacquisition"),
+                                (jumped, "jump"), (mirrored, "mirror")):
+            candidates += [(f.result(), origin) for f in futures]
+        t3 = time.perf_counter()
+        for stage in proposed:
+            candidates += [(f.result(), origin) for f, origin in stage.refined]
+        evaluations = work.evaluations + sum(c.registration.evaluations for c, _ in candidates)
+        timings["proposals"] = 1e3 * (sum(stage.seconds for stage in proposed) + time.perf_counter() - t3)
+        t2 = t1 + leader_s
+        terms = [c.terms for c, _ in candidates]
+        hypotheses = [self._hypothesis(c.registration, origin, c.joints, c.terms, c.swapped) for c, origin in candidates]
         motion = transition_term([h.joints for h in self._beam], [h.joints for h in hypotheses],
                                  [h.pose[_HEADING] for h in self._beam], [h.pose[_HEADING] for h in hypotheses])
         motion_weight = self.weights[MOTION]
@@ -389,13 +399,24 @@ class Tracker:
         values = {"region": region, "edge": edge, "keypoint": keypoint, "prior": prior, "lifter": lifter}
         return np.array([values[t.name] for t in UNARY_TERMS], dtype=np.float64)
 
-    def _rough_unary(self, region_cost, edge_cost, keypoint_cost,
-                     lifts: tuple[LiftedHypotheses | None, LiftedHypotheses | None], pose: np.ndarray) -> float:
+    def _scored(self, costs: "_FrameCosts", reg: Registration, *,
+                lifts: tuple[LiftedHypotheses | None, LiftedHypotheses | None]) -> "_Scored":
+        """A registration's joints, the labelling its keypoint distance takes, and its unary
+        terms (``lifts``: as :meth:`_rough_unary`'s)."""
+        joints = self.model.joint_positions(reg.pose)
+        swapped = costs.keypoint is not None and costs.keypoint.labelling(reg.pose)
+        terms = self._terms(reg.region_residual, reg.edge_residual, reg.keypoint_residual, reg.pose, joints,
+                            lifts[swapped])
+        return _Scored(reg, joints, bool(swapped), terms)
+
+    def _rough_unary(self, costs: "_FrameCosts", pose: np.ndarray, *,
+                     lifts: tuple[LiftedHypotheses | None, LiftedHypotheses | None]) -> float:
         """The unary score of an unrefined pose (one evaluation of each cost): what ranks proposals.
         ``lifts``: the frame's lifted hypotheses under the detector's labelling and the swapped
         one; the pose pays the lifter energy of the labelling its keypoint distance takes."""
+        keypoint_cost = costs.keypoint
         swapped = keypoint_cost is not None and keypoint_cost.labelling(pose)
-        return weighted_sum(self._terms(region_cost.evaluate_unchecked(pose), edge_cost(pose),
+        return weighted_sum(self._terms(costs.region.evaluate_unchecked(pose), costs.edge(pose),
                                         math.nan if keypoint_cost is None else keypoint_cost(pose), pose,
                                         self.model.joint_positions(pose), lifts[swapped]), self.weights)
 
@@ -429,57 +450,54 @@ class Tracker:
                 keep.append(int(i))
         return keep
 
-    def _reacquire(self, prepared, region_cost, fit, leader: Registration, candidates: list) -> int:
-        """Hand re-acquisition from the leader (see :class:`TrackerConfig`); returns evaluations used."""
+    def _reacquire(self, prepared, leader: Registration, score, work: "_FrameWork") -> list[Future]:
+        """Hand re-acquisition from the leader (see :class:`TrackerConfig`): the lowest-F reach
+        refined, as a future (none when no hand is left unexplained)."""
         joints = self.model.joint_positions(leader.pose)
         targets = unexplained_hands(prepared.labels, joints, self.model, self.camera, self.config)
         if len(targets) == 0:
-            return 0
+            return []
         proposals = reach_proposals(leader.pose, joints, targets, self.model, self.camera)
         if not proposals:
-            return 0
-        values = [region_cost.evaluate_unchecked(q) for q in proposals]
-        retry = fit(proposals[int(np.argmin(values))], evaluations=self.config.hypothesis_evaluations)
-        candidates.append((retry, "reacquisition"))
-        return len(proposals) + retry.evaluations
+            return []
+        work.evaluations += len(proposals)
+        return [work.submit(_refine_lowest, score, proposals, self.config, self.config.hypothesis_evaluations)]
 
-    def _jump(self, region_cost, fit, leader: Registration, candidates: list) -> int:
-        """The leader's kinematic jumps, the lowest-F ones refined; returns evaluations used."""
+    def _jump(self, leader: Registration, score, work: "_FrameWork") -> list[Future]:
+        """The leader's kinematic jumps, the ``JUMPS_REFINED`` lowest-F ones refined (futures)."""
+        cfg = self.config
         jumps = jump_proposals(leader.pose, self.model)
-        values = np.array([region_cost.evaluate_unchecked(q) for _, q in jumps])
-        used = len(jumps)
-        for i in np.argsort(values, kind="stable")[:JUMPS_REFINED]:
-            name, q = jumps[int(i)]
-            reg = fit(q, evaluations=self.config.jump_evaluations)
-            used += reg.evaluations
-            candidates.append((reg, "jump"))
-        return used
+        values = work.submit(_region_values, [q for _, q in jumps]).result()
+        work.evaluations += len(jumps)
+        return [work.submit(_fit, score, jumps[int(i)][1], cfg, cfg.jump_evaluations)
+                for i in np.argsort(values, kind="stable")[:JUMPS_REFINED]]
 
-    def _mirror(self, fit, leader: Registration, candidates: list) -> int:
+    def _mirror(self, leader: Registration, score, work: "_FrameWork") -> list[Future]:
         """The converged leader's depth alternatives (:mod:`mocap.track.branches`), each registered
-        with ``mirror_evaluations`` (0: its residuals where it stands); returns evaluations used."""
-        used = 0
-        for alternative in depth_alternatives(leader.pose, self.model, self.camera):
-            reg = fit(alternative.pose, evaluations=self.config.mirror_evaluations)
-            used += reg.evaluations
-            candidates.append((reg, "mirror"))
-        return used
+        with ``mirror_evaluations`` (0: its residuals where it stands), as futures."""
+        return [work.submit(_fit, score, alternative.pose, self.config, self.config.mirror_evaluations)
+                for alternative in depth_alternatives(leader.pose, self.model, self.camera)]
 
-    def _propose(self, source: ProposalSource, prepared, context: ProposalContext, rough, fit,
-                 candidates: list) -> int:
+    def _propose(self, source: ProposalSource, prepared, context: ProposalContext, rough, score,
+                 work: "_FrameWork") -> "_Proposed":
         """One source's proposals: each given its unary score unrefined (``rough``), the
-        ``proposals_refined`` lowest refined by a registration of ``proposal_evaluations``;
-        returns evaluations used."""
+        ``proposals_refined`` lowest refined by a registration of ``proposal_evaluations``."""
+        t0 = time.perf_counter()
         proposals = source.propose(prepared, context)
         if not proposals:
-            return 0
-        values = np.array([rough(p.pose) for p in proposals])
-        used = 2 * len(proposals)
-        for i in np.argsort(values, kind="stable")[: self.config.proposals_refined]:
-            reg = fit(proposals[int(i)].pose, evaluations=self.config.proposal_evaluations)
-            used += reg.evaluations
-            candidates.append((reg, proposals[int(i)].origin))
-        return used
+            return _Proposed([], time.perf_counter() - t0)
+        values = work.submit(_rough_values, rough, [p.pose for p in proposals]).result()
+        work.evaluations += 2 * len(proposals)
+        refined = [(work.submit(_fit, score, proposals[int(i)].pose, self.config, self.config.proposal_evaluations),
+                    proposals[int(i)].origin)
+                   for i in np.argsort(values, kind="stable")[: self.config.proposals_refined]]
+        return _Proposed(refined, time.perf_counter() - t0)
+
+    def close(self) -> None:
+        """Stop the tracker's threads (none with ``threads=1``); it tracks on one thread after."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None
 
     # -- exact state -------------------------------------------------------------------------
     def state(self) -> dict[str, np.ndarray]:
@@ -527,6 +545,119 @@ class Tracker:
         except (KeyError, TypeError, ValueError) as err:
             raise ValueError(f"not a tracker state of this version: {err}") from None
         self._beam, self._cost, self._window, self.last_good = beam, cost, window, last_good
+
+
+@dataclass
+class _FrameCosts:
+    """One frame's costs as one thread uses them (their render buffers are its own)."""
+
+    region: RegionCost
+    edge: EdgeCost
+    keypoint: KeypointCost | None       # None: no keypoints on the frame (or keypoint_weight 0)
+
+    def spare(self) -> "_FrameCosts":
+        """The same costs with buffers of their own, for another thread."""
+        return _FrameCosts(self.region.spare(), self.edge.spare(), None if self.keypoint is None else self.keypoint.spare())
+
+
+class _Done:
+    """A result computed at once on the calling thread (one thread): a future's ``result``."""
+
+    def __init__(self, value) -> None:
+        self._value = value
+
+    def result(self):
+        return self._value
+
+
+class _FrameWork:
+    """One frame's registrations and cost evaluations on the tracker's threads.
+
+    :meth:`submit` runs ``task(costs, *args)`` at once on the calling thread when the tracker has
+    no pool (``threads=1``), else on the pool; each task borrows a set of the frame's costs that
+    no other task uses meanwhile (a spare is made when none is free: at most one per thread).
+    Every task is a pure function of its arguments and the frame, so the results are the same,
+    bit for bit, whatever thread ran them and in whatever order: the tracker reads them in the
+    order it asked for them. ``evaluations`` counts the unrefined evaluations the tracker adds
+    (the registrations count their own).
+    """
+
+    def __init__(self, costs: _FrameCosts, pool: ThreadPoolExecutor | None) -> None:
+        self.costs, self.pool, self.evaluations = costs, pool, 0
+        self._free: queue.SimpleQueue[_FrameCosts] = queue.SimpleQueue()
+        self._free.put(costs)
+
+    def submit(self, task, *args) -> Future | _Done:
+        if self.pool is None:
+            return _Done(task(self.costs, *args))
+        return self.pool.submit(self._run, task, args)
+
+    def _run(self, task, args):
+        try:
+            costs = self._free.get_nowait()
+        except queue.Empty:
+            costs = self.costs.spare()
+        try:
+            return task(costs, *args)
+        finally:
+            self._free.put(costs)
+
+
+@dataclass
+class _Proposed:
+    """One proposal source's refinements on a frame: (future registration, origin) pairs, and the
+    seconds the calling thread spent proposing and ranking."""
+
+    refined: list[tuple[Future | _Done, str]]
+    seconds: float
+
+
+@dataclass
+class _Scored:
+    """A candidate's registration, joints (10, 3; metres), keypoint labelling (swapped or not)
+    and unary terms before their weights (:meth:`Tracker._terms`)."""
+
+    registration: Registration
+    joints: np.ndarray
+    swapped: bool
+    terms: np.ndarray
+
+
+def _register(costs: _FrameCosts, start: np.ndarray, config: TrackerConfig, evaluations: int | None,
+              step_scale: float = 1.0) -> Registration:
+    """The frame's two-step registration from ``start`` with ``costs`` (see :func:`register`)."""
+    return register(costs.region, costs.edge, start, config, evaluations=evaluations, step_scale=step_scale,
+                    keypoint_cost=costs.keypoint)
+
+
+def _fit(costs: _FrameCosts, score, start: np.ndarray, config: TrackerConfig, evaluations: int | None,
+         step_scale: float = 1.0) -> _Scored:
+    """:func:`_register`, scored by ``score(costs, registration)`` (:meth:`Tracker._scored`)."""
+    return score(costs, _register(costs, start, config, evaluations, step_scale))
+
+
+def _timed_fit(costs: _FrameCosts, start: np.ndarray, config: TrackerConfig,
+               evaluations: int) -> tuple[Registration, float]:
+    """:func:`_register` and the seconds it took."""
+    t0 = time.perf_counter()
+    reg = _register(costs, start, config, evaluations)
+    return reg, time.perf_counter() - t0
+
+
+def _region_values(costs: _FrameCosts, poses: list[np.ndarray]) -> np.ndarray:
+    """F at each pose, shape (len(poses),)."""
+    return np.array([costs.region.evaluate_unchecked(q) for q in poses])
+
+
+def _rough_values(costs: _FrameCosts, rough, poses: list[np.ndarray]) -> np.ndarray:
+    """``rough(costs, pose)`` (the unrefined unary score) at each pose, shape (len(poses),)."""
+    return np.array([rough(costs, q) for q in poses])
+
+
+def _refine_lowest(costs: _FrameCosts, score, poses: list[np.ndarray], config: TrackerConfig,
+                   evaluations: int) -> _Scored:
+    """The pose of lowest F among ``poses`` refined by a registration of ``evaluations``, scored."""
+    return _fit(costs, score, poses[int(np.argmin(_region_values(costs, poses)))], config, evaluations)
 
 
 def _evidence_from(state: dict[str, np.ndarray], i: int, frame: dict) -> _Evidence | None:

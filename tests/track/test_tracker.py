@@ -132,3 +132,51 @@ def test_keypoints_bring_a_single_hypothesis_back_to_the_true_branch():
                                  for r, q in zip(results, truth)])
     assert errors["with"][0] > 0.15 and errors["without"][:8].min() > 0.15      # both start on the wrong branch
     assert errors["with"][7:].max() < 0.07                                      # back within a few frames
+
+
+def _tracked(frames, keypoints, threads, config=TrackerConfig(lag=2)):
+    tracker = Tracker(MODEL, CAMERA, config, waving(1)[0], threads=threads)
+    out = []
+    scored = []
+    for i, (frame, k) in enumerate(zip(frames, keypoints)):
+        out += tracker.push(i, frame, k)
+        scored.append([(c.origin, c.pose.tobytes(), c.unary) for c in tracker.scored])
+    out += tracker.finish()
+    tracker.close()
+    return out, scored, tracker
+
+
+@pytest.mark.parametrize("with_keypoints", [False, True], ids=["no keypoints", "keypoints"])
+def test_threads_decide_the_same_bit_for_bit(with_keypoints):
+    """The default beam (recovery, jumps, re-acquisition; with keypoints the mirrors and the
+    lifter's proposals too) on 1, 2 and 3 threads: every candidate of every frame, its score,
+    and every written pose are the same to the bit; so is the resumed run's on 3 threads."""
+    from experiments.keypoints import oracle_keypoints
+
+    truth = waving(6)
+    frames = clean_frames(truth)
+    keypoints = (oracle_keypoints(np.array([MODEL.joint_positions(q) for q in truth]), CAMERA, 2.0, seed=1)
+                 if with_keypoints else [None] * len(frames))
+    one, scored_one, _ = _tracked(frames, keypoints, 1)
+    assert {o for frame in scored_one for o, _, _ in frame} >= ({"tracked", "jump", "mirror", "lifter"}
+                                                                 if with_keypoints else {"tracked", "jump"})
+    for threads in (2, 3):
+        many, scored_many, _ = _tracked(frames, keypoints, threads)
+        assert scored_many == scored_one
+        assert [r.pose.tobytes() for r in many] == [r.pose.tobytes() for r in one]
+        assert [(r.origin, r.hypothesis, r.score, r.evaluations) for r in many] == \
+               [(r.origin, r.hypothesis, r.score, r.evaluations) for r in one]
+    first = Tracker(MODEL, CAMERA, TrackerConfig(lag=2), waving(1)[0], threads=3)
+    part = [r for i in range(3) for r in first.push(i, frames[i], keypoints[i])]
+    first.close()
+    second = Tracker(MODEL, CAMERA, TrackerConfig(lag=2), neutral_pose(), threads=2)
+    second.restore({k: np.array(v) for k, v in first.state().items()})
+    part += [r for i in range(3, len(frames)) for r in second.push(i, frames[i], keypoints[i])] + second.finish()
+    second.close()
+    assert [r.pose.tobytes() for r in part] == [r.pose.tobytes() for r in one]
+
+
+def test_threads_must_be_a_positive_count():
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(ValueError, match="threads"):
+            Tracker(MODEL, CAMERA, SMALL, waving(1)[0], threads=bad)
