@@ -250,9 +250,9 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
         detector_swapped = swap_runs(len(prepared), swap_share, seed)
         keypoints = swap_labels(keypoints, detector_swapped)
     if detector:        # the frames MediaPipe's arms fit the truth's projection better swapped
-        from experiments.detector_size import ARMS, label_swapped
+        from experiments.peers import ARM_JOINTS, label_swapped
 
-        arms = [JOINT_INDEX[name] for name in ARMS]
+        arms = [JOINT_INDEX[name] for name in ARM_JOINTS]
         detected = np.array([np.where(k.present[arms, None], k.uv[arms], np.nan) for k in keypoints])
         truth_uv = camera.project(truth_joints[: len(prepared), arms].reshape(-1, 3)).reshape(len(prepared), len(arms), 2)
         detector_swapped = label_swapped(detected, truth_uv)
