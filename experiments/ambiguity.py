@@ -70,6 +70,7 @@ from experiments.config import sequence_list
 from experiments.units import (EXTENSIONS, PREPARED_FILE, PREPARED_FILE_PAPER, DataSpec, load_prepared, load_sequence,
                                prepare_data, prepared_file)
 from mocap.body import JOINT_NAMES, PARAMETER_INDEX
+from mocap.body.pose import HEADING
 from mocap.body.skeleton import JOINT_INDEX
 from mocap.io.files import read_json, write_json
 from mocap.metrics import (DEFAULT_FAILURE_MM, acceleration_error, failure_rate, mpjpe, pa_mpjpe, reprojection_error,
@@ -228,7 +229,9 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     truth's than the truth's with left and right swapped, about the neck), ``arms_centred_mm``
     (the arms' eight joints' mean error about their own centre, no rotation: a body turned around
     shows there), ``labels_swapped_rate`` (frames the tracker read the keypoints swapped on) and
-    ``detector_swapped_rate`` (frames the keypoints were swapped on)."""
+    ``detector_swapped_rate`` (frames the keypoints were swapped on), and
+    ``frame_heading_error_deg`` (each frame's written chest heading less the truth's, degrees on
+    the circle: :func:`heading_error_deg`)."""
     from experiments.keypoints import DETECTOR_FILE, detector_keypoints, oracle_keypoints, swap_labels, swap_runs
 
     if detector and oracle_sigma_px is not None:
@@ -250,9 +253,9 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
         detector_swapped = swap_runs(len(prepared), swap_share, seed)
         keypoints = swap_labels(keypoints, detector_swapped)
     if detector:        # the frames MediaPipe's arms fit the truth's projection better swapped
-        from experiments.detector_size import ARMS, label_swapped
+        from experiments.peers import ARM_JOINTS, label_swapped
 
-        arms = [JOINT_INDEX[name] for name in ARMS]
+        arms = [JOINT_INDEX[name] for name in ARM_JOINTS]
         detected = np.array([np.where(k.present[arms, None], k.uv[arms], np.nan) for k in keypoints])
         truth_uv = camera.project(truth_joints[: len(prepared), arms].reshape(-1, 3)).reshape(len(prepared), len(arms), 2)
         detector_swapped = label_swapped(detected, truth_uv)
@@ -322,6 +325,8 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
             "cost_equivalent_failure_rate": equivalent, "cost_equivalent_both_rate": equivalent_both,
             **jitter(joints, decoded, truth), **arm_labels(joints, truth),
             **written_against_decoded(np.array([r.pose for r in results]), joints, decoded),
+            "frame_heading_error_deg": heading_error_deg(np.array([r.pose for r in results]),
+                                                         loaded.ground_truth.poses[: len(joints)]).tolist(),
             "labels_swapped_rate": float(np.mean([getattr(r, "labels_swapped", False) for r in results])),
             "detector_swapped_rate": float(np.mean(detector_swapped)),
             **(beside_detector(joints, keypoints, truth) if detector else {}),
@@ -445,6 +450,25 @@ def written_against_decoded(written_poses: np.ndarray, joints: np.ndarray, decod
     return {"written_decoded_mm": 1e3 * float(distance.max(initial=0.0)),
             "written_decoded_mean_mm": 1e3 * float(distance.mean(axis=1).max(initial=0.0)),
             "heading_step_deg": math.degrees(float(np.abs(np.diff(yaw)).max(initial=0.0)))}
+
+
+def heading_error_deg(written_poses: np.ndarray, true_poses: np.ndarray) -> np.ndarray:
+    """Per frame, the written chest heading (:data:`mocap.body.pose.HEADING`) less the truth's, on
+    the circle: wrapped to (-180, 180] degrees, so that headings a whole turn apart (the tracker
+    keeps its heading unwrapped) differ by 0 and a body turned round by 180.
+
+    Parameters
+    ----------
+    written_poses, true_poses : ndarray, shape (N, 23), metres and radians
+        Pose vectors (:data:`mocap.body.PARAMETER_NAMES` order).
+
+    Returns
+    -------
+    ndarray, shape (N,), degrees
+    """
+    i = PARAMETER_INDEX[HEADING]
+    difference = np.degrees(np.asarray(written_poses, dtype=float)[:, i] - np.asarray(true_poses, dtype=float)[:, i])
+    return 180.0 - np.mod(180.0 - difference, 360.0)
 
 
 def register_from_truth(prepared, model, camera, true_poses: np.ndarray, config: TrackerConfig, lag: int,

@@ -12,7 +12,7 @@ truth's projection, in input pixels:
 
 - ``found``: share of frames where it found a person;
 - ``swapped``: share of those frames where its arms fit the truth better with left and right
-  exchanged (the person's left arm labelled right: :func:`label_swapped`);
+  exchanged (the person's left arm labelled right: :func:`experiments.peers.label_swapped`);
 - ``error_px``: median over the found frames and the six joints of the distance to the truth,
   each frame under its better labelling (so a swap does not count twice), and ``error_pct`` the
   same as a percentage of the image width;
@@ -42,31 +42,10 @@ from pathlib import Path
 import numpy as np
 
 from experiments import RESULTS_DIR
+from experiments.peers import ARM_JOINTS, CMU_SCENES, CMU_TRIALS, OTHER_SIDE, SYNTHETIC, label_swapped
 
-#: The arm joints compared, in the order :func:`label_swapped` pairs them (right, then left).
-ARMS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
-#: Each of :data:`ARMS` with its other side's.
-OTHER_SIDE = (3, 4, 5, 0, 1, 2)
 #: Default longer sides (pixels) the frames are enlarged to (0: as they are).
 SIDES = (0, 320, 480, 640, 960)
-
-
-def label_swapped(detected: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    """Per frame, whether the detected arms fit the truth better with left and right exchanged.
-
-    Parameters
-    ----------
-    detected, truth : ndarray, shape (N, 6, 2), pixels
-        :data:`ARMS` order; NaN rows of ``detected`` where nothing was found.
-
-    Returns
-    -------
-    ndarray of bool, shape (N,)
-        False where nothing was found.
-    """
-    as_given = np.linalg.norm(detected - truth, axis=2).sum(axis=1)
-    exchanged = np.linalg.norm(detected[:, OTHER_SIDE] - truth, axis=2).sum(axis=1)
-    return np.nan_to_num(exchanged, nan=np.inf) < np.nan_to_num(as_given, nan=np.inf)
 
 
 def enlargement(height: int, width: int, side: int) -> int:
@@ -94,7 +73,7 @@ def measure(frames: list[np.ndarray], truth_uv: np.ndarray, side: int) -> dict:
     from mocap.io.mediapipe_keypoints import keypoints_of_landmarks
     from mocap.io.mediapipe_pose import PoseLandmarks
 
-    index = [JOINT_NAMES.index(j) for j in ARMS]
+    index = [JOINT_NAMES.index(j) for j in ARM_JOINTS]
     pose = PoseLandmarks(image_mode=True)
     detected, ms = [], []
     try:
@@ -121,8 +100,6 @@ def measure(frames: list[np.ndarray], truth_uv: np.ndarray, side: int) -> dict:
 
 def clips(only: str | None, train: Path, seed: int, frames: int) -> list[tuple[str, str, Path | None]]:
     """``(clip name, scene, motion file or None)`` of the material."""
-    from experiments.peers import CMU_SCENES, CMU_TRIALS, SYNTHETIC
-
     out = []
     if only in (None, "synthetic"):
         out += [(name, name, None) for name in SYNTHETIC]
@@ -147,8 +124,8 @@ def clip_rows(name: str, scene: str, motion: Path | None, size: tuple[int, int],
     seq = generate_sequence(scene, work / f"{name}-{size[0]}x{size[1]}", frames=frames, seed=seed, size=size,
                             motion=motion, progress=False)
     camera = Calibration.from_json(seq / "calibration.json").camera
-    joints = PoseTable.read(seq / "ground_truth.csv").joints[:, [JOINT_NAMES.index(j) for j in ARMS]]
-    truth_uv = camera.project(joints.reshape(-1, 3)).reshape(len(joints), len(ARMS), 2)
+    joints = PoseTable.read(seq / "ground_truth.csv").joints[:, [JOINT_NAMES.index(j) for j in ARM_JOINTS]]
+    truth_uv = camera.project(joints.reshape(-1, 3)).reshape(len(joints), len(ARM_JOINTS), 2)
     images = list(iter_frames(seq / "frames"))[: len(truth_uv)]
     return [{"clip": name, "size": f"{size[0]}x{size[1]}", "frames": len(images),
              **measure(images, truth_uv[: len(images)], side)} for side in sides]

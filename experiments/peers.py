@@ -62,8 +62,10 @@ from mocap.io.mediapipe_keypoints import MEDIAPIPE_LANDMARKS
 from mocap.metrics import acceleration_error, centred_mpjpe, pa_mpjpe, pck_2d
 from mocap.run.files import POSES_CSV, RUN_JSON
 
-#: Joints compared (ours), in order.
+#: Joints compared (ours), in order (right, then left: the order :func:`label_swapped` pairs them in).
 ARM_JOINTS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
+#: Each of :data:`ARM_JOINTS` with its other side's.
+OTHER_SIDE = (3, 4, 5, 0, 1, 2)
 #: MediaPipe Pose landmark index of each of :data:`ARM_JOINTS` (its left/right are the person's).
 MEDIAPIPE_INDEX = {j: MEDIAPIPE_LANDMARKS[j][0] for j in ARM_JOINTS}
 #: Synthetic clips compared (the issue's four) and their length.
@@ -98,6 +100,24 @@ def arm_pa_mpjpe(pred: np.ndarray, true: np.ndarray) -> float:
     if not keep.any():
         return float("nan")
     return pa_mpjpe(pred[keep], true[keep])
+
+
+def label_swapped(detected: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """Per frame, whether the detected arms fit the truth better with left and right exchanged.
+
+    Parameters
+    ----------
+    detected, truth : ndarray, shape (N, 6, D), pixels (D = 2) or metres (D = 3)
+        :data:`ARM_JOINTS` order; NaN rows of ``detected`` where nothing was found.
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+        False where nothing was found.
+    """
+    as_given = np.linalg.norm(detected - truth, axis=2).sum(axis=1)
+    exchanged = np.linalg.norm(detected[:, OTHER_SIDE] - truth, axis=2).sum(axis=1)
+    return np.nan_to_num(exchanged, nan=np.inf) < np.nan_to_num(as_given, nan=np.inf)
 
 
 def shoulder_width(uv: np.ndarray) -> np.ndarray:
@@ -198,8 +218,6 @@ def arm_figures(pred: np.ndarray, true: np.ndarray) -> dict:
     shows there: :func:`mocap.metrics.centred_mpjpe`), the acceleration error and the share of
     frames whose arms carry the right labels (nearer the truth about their centre than with left
     and right exchanged), over the frames where ``pred`` (N, 6, 3) is found; ``true`` (N, 6, 3)."""
-    from experiments.detector_size import label_swapped
-
     found = np.isfinite(pred).all(axis=(1, 2))
     if not found.any():
         return {"pa_mpjpe_mm": float("nan"), "centred_mm": float("nan"), "accel": float("nan"),
@@ -217,8 +235,6 @@ def detector_figures(run: Path, truth_uv: np.ndarray) -> dict:
     frame under its better labelling)."""
     from mocap.io.keypoints import read_keypoints
     from mocap.run.files import KEYPOINTS_CSV
-
-    from experiments.detector_size import OTHER_SIDE, label_swapped
 
     stored = read_keypoints(run / KEYPOINTS_CSV)
     uv = np.full(truth_uv.shape, np.nan)

@@ -7,10 +7,14 @@ generator seed, through :func:`experiments.ambiguity.measure`: MPJPE, root-relat
 (about the neck), PA-MPJPE, frames over 100 mm, the flip-oracle and cost-equivalence shares,
 the acceleration error of the written poses (about the neck; issue 39) beside the decoded
 poses' (before the smoother) and the naive baseline's (a centred mean over +-4 frames of the
-decoded joints), and the tracking time per frame on one core. A second table gives each
-sequence's acceleration errors and per-frame median errors, written / decoded / naive, and how far
+decoded joints), the tracking time per frame on one core, and the units (configuration, sequence,
+seed) that failed as a whole (issue 49): "turned round", the written chest heading over
+:data:`TURNED_ROUND_DEG` from the truth's on more than :data:`TURNED_ROUND_SHARE` of the frames,
+and "lost", the median error about the neck over :data:`LOST_MM` (:func:`failure_marks`; counted
+"N of M" per configuration). A second table gives each
+sequence's acceleration errors and per-frame median errors, written / decoded / naive, how far
 the written poses stray from the decoded ones (the largest joint distance, and the largest step of
-the written heading from one frame to the next: issue 44).
+the written heading from one frame to the next: issue 44), and whether it turned round or was lost.
 
 ``mediapipe-keypoints`` gives the tracker what a user has: MediaPipe Pose's keypoints on the
 rendered frames, as ``--keypoints mediapipe`` runs it (image mode, at 160x120; detected once and
@@ -43,6 +47,16 @@ from mocap.track import TrackerConfig
 
 #: Name of the generated section of ``experiments/REPORT.md``.
 REPORT_SECTION = "tracking"
+
+#: A frame is turned round when its written chest heading is more than this from the truth's
+#: (degrees, on the circle: :func:`experiments.ambiguity.heading_error_deg`) ...
+TURNED_ROUND_DEG = 90.0
+#: ... and a unit (configuration, sequence, seed) is turned round when more than this share of
+#: its frames are (issue 49, item 6).
+TURNED_ROUND_SHARE = 0.2
+#: A unit is lost when the median over its frames of the error about the neck (root-relative
+#: MPJPE, :func:`mocap.metrics.root_relative_mpjpe`) is over this (mm; issue 49, item 6).
+LOST_MM = 300.0
 
 #: Named tracker configurations: changes from the defaults (``"paper"`` is the paper's method;
 #: ``"single"`` one hypothesis with recovery and hand re-acquisition, no jumps, no lag;
@@ -122,9 +136,30 @@ def unit_path(out: Path, name: str, sequence: str, seed: int) -> Path:
     return out / "units" / f"{sequence}-s{seed}-{config_key(config_of(name))}{model}{keypoints}.json"
 
 
+def failure_marks(row: dict) -> dict:
+    """Whether one unit's track failed as a whole (issue 49, item 6), from its measured row.
+
+    ``turned_round_rate``: the share of frames whose written chest heading is over
+    :data:`TURNED_ROUND_DEG` from the truth's (from ``frame_heading_error_deg``, degrees on the
+    circle); ``turned_round``: that share over :data:`TURNED_ROUND_SHARE`; ``lost``: the median
+    over frames of the error about the neck (``median_frame_root_relative_mm``, else the median of
+    ``frame_root_relative_mm``; mm) over :data:`LOST_MM`. Each is None where the row does not hold
+    what it is judged on (rows measured before it was recorded, made-up rows).
+    """
+    heading = row.get("frame_heading_error_deg")
+    rate = float(np.mean(np.abs(heading) > TURNED_ROUND_DEG)) if heading is not None and len(heading) else None
+    about_neck = row.get("median_frame_root_relative_mm")
+    if about_neck is None and row.get("frame_root_relative_mm") is not None and len(row["frame_root_relative_mm"]):
+        about_neck = float(np.median(row["frame_root_relative_mm"]))
+    return {"turned_round_rate": rate, "turned_round": None if rate is None else bool(rate > TURNED_ROUND_SHARE),
+            "lost": None if about_neck is None else bool(about_neck > LOST_MM)}
+
+
 def run_unit(out: Path, name: str, sequence: str, seed: int) -> dict:
     """Measure one (configuration, sequence, seed), reusing its file when the same code measured it
-    (:func:`experiments.ambiguity.cached_result`)."""
+    (:func:`experiments.ambiguity.cached_result`); the row carries its :func:`failure_marks`,
+    judged again on every call (this module is not part of the code key: a kept file is marked
+    under the thresholds as they are now)."""
     from experiments.ambiguity import cached_result, code_key, measure
     from experiments.units import EXTENSIONS
 
@@ -132,18 +167,25 @@ def run_unit(out: Path, name: str, sequence: str, seed: int) -> dict:
     code = code_key()
     row = cached_result(path, code, None)
     if row is not None:
-        return row
+        return row | failure_marks(row)
     config = config_of(name)
     row = measure(sequence, config, out, seed, without=EXTENSIONS if name in TWO_CLASS_MODEL else (),
                   oracle_sigma_px=ORACLE_KEYPOINTS.get(name), swap_share=SWAPPED_KEYPOINTS.get(name),
                   detector=name in DETECTOR_KEYPOINTS)
+    row |= failure_marks(row)
     write_json(path, {"config": config.to_dict(), "name": name, "seed": seed, "code": code, "result": row})
     return row
 
 
 def summarise(rows: list[dict]) -> dict:
-    """Medians over sequences, failure share over all frames pooled, worst sequence, time."""
+    """Medians over sequences, failure share over all frames pooled, worst sequence, time, and the
+    units turned round and lost (:func:`failure_marks`): ``units`` (all), ``turned_round_units``
+    and ``lost_units`` (how many are), ``turned_round_judged`` and ``lost_judged`` (how many could
+    be judged: rows that hold what the mark is judged on)."""
     errors = np.concatenate([r["frame_mpjpe_mm"] for r in rows])
+    marks = [failure_marks(r) for r in rows]
+    counts = {f"{key}_{what}": sum(m[key] is not None and (what == "judged" or m[key]) for m in marks)
+              for key in ("turned_round", "lost") for what in ("units", "judged")}
     return {"median_mpjpe_mm": float(np.median([r["mpjpe_mm"] for r in rows])),
             "median_root_relative_mm": float(np.median([r["root_relative_mpjpe_mm"] for r in rows])),
             "median_pa_mpjpe_mm": float(np.median([r["pa_mpjpe_mm"] for r in rows])),
@@ -162,13 +204,16 @@ def summarise(rows: list[dict]) -> dict:
             "ms_per_frame": float(np.average([r["tracking_ms_per_frame"] + r["prepare_ms_per_frame"] for r in rows],
                                              weights=[r["frames"] for r in rows])),
             "evaluations_per_frame": float(np.average([r.get("evaluations_per_frame", math.nan) for r in rows],
-                                                      weights=[r["frames"] for r in rows]))}
+                                                      weights=[r["frames"] for r in rows])),
+            "units": len(rows), **counts}
 
 
 def table(summaries: dict[str, dict]) -> str:
     """Markdown table of :func:`summarise` results by configuration name."""
     head = ("configuration", "median MPJPE mm", "median root-rel. mm", "median PA-MPJPE mm",
-            f"frames > {DEFAULT_FAILURE_MM:g} mm", f"root-rel. > {DEFAULT_FAILURE_MM:g} mm", "worst sequence mm", "beam oracle > 100 mm",
+            f"frames > {DEFAULT_FAILURE_MM:g} mm", f"root-rel. > {DEFAULT_FAILURE_MM:g} mm", "worst sequence mm",
+            f"turned round (> {TURNED_ROUND_DEG:g}° on > {100 * TURNED_ROUND_SHARE:g} % of frames)",
+            f"lost (median root-rel. > {LOST_MM:g} mm)", "beam oracle > 100 mm",
             "proposal oracle > 100 mm", "caught by a proposal alone", "lifter's best of K > 100 mm root-rel.",
             "branch missed (root-rel.)", "failing, costs <= truth's",
             "accel mm/frame² (decoded, naive)", "ms / frame (fps)")
@@ -177,6 +222,7 @@ def table(summaries: dict[str, dict]) -> str:
         lines.append(f"| {name} | {s['median_mpjpe_mm']:.0f} | {s['median_root_relative_mm']:.0f} | "
                      f"{s['median_pa_mpjpe_mm']:.0f} | {100 * s['failure_rate']:.1f} % | "
                      f"{_percent(s['root_relative_failure_rate'])} | {s['worst_mpjpe_mm']:.0f} | "
+                     f"{_units(s, 'turned_round')} | {_units(s, 'lost')} | "
                      f"{100 * s['beam_oracle_failure_rate']:.1f} % | {_percent(s['proposal_oracle_failure_rate'])} | "
                      f"{_percent(s['proposal_catches_rate'])} | {_percent(s['lifter_oracle_failure_rate'])} | "
                      f"{_percent(s['branch_miss_rate'])} | {100 * s['cost_equivalent_both_rate']:.1f} % | "
@@ -193,10 +239,13 @@ def jitter_table(rows: dict[str, list[dict]]) -> str:
     the written poses stray from the decoded ones: the largest mean joint distance over the frames
     (``FrameResult.smoothed_mm``) and the largest distance of any one joint (mm), and the largest
     step of the written chest heading from one frame to the next (degrees; issue 44,
-    :func:`experiments.ambiguity.written_against_decoded`)."""
+    :func:`experiments.ambiguity.written_against_decoded`); and the unit's :func:`failure_marks`:
+    turned round (yes or no, with the share of frames turned round) and lost (a dash where not
+    judged)."""
     lines = ["| configuration | sequence | seed | accel about the neck | accel arms (PA) | median about the neck | "
-             "median in the camera | written from decoded, max mm (mean joint / worst joint) | heading step, max ° |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "median in the camera | written from decoded, max mm (mean joint / worst joint) | heading step, max ° | "
+             "turned round (frames) | lost |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     three = lambda r, key: " / ".join(f"{r.get(p + key, math.nan):.1f}" for p in ("", "decoded_", "naive_"))
     for name, rs in rows.items():
         for r in rs:
@@ -204,8 +253,20 @@ def jitter_table(rows: dict[str, list[dict]]) -> str:
                          f"{three(r, 'accel_arms_pa_mm')} | {three(r, 'median_frame_root_relative_mm')} | "
                          f"{three(r, 'median_frame_mm')} | {r.get('written_decoded_mean_mm', math.nan):.0f} / "
                          f"{r.get('written_decoded_mm', math.nan):.0f} | "
-                         f"{r.get('heading_step_deg', math.nan):.1f} |")
+                         f"{r.get('heading_step_deg', math.nan):.1f} | {_turned(failure_marks(r))} | "
+                         f"{_yes_no(failure_marks(r)['lost'])} |")
     return "\n".join(lines)
+
+
+def _yes_no(mark: bool | None) -> str:
+    return "-" if mark is None else ("yes" if mark else "no")
+
+
+def _turned(marks: dict) -> str:
+    """A unit's turned-round mark with its share of frames turned round, or a dash where not judged."""
+    if marks["turned_round"] is None:
+        return "-"
+    return f"{_yes_no(marks['turned_round'])} ({100 * marks['turned_round_rate']:.1f} %)"
 
 
 def detector_table(rows: dict[str, list[dict]]) -> str:
@@ -226,6 +287,16 @@ def detector_table(rows: dict[str, list[dict]]) -> str:
                          f"{r['arms_accel']:.1f} / {r['mediapipe_arms_accel']:.1f} | "
                          f"{r['arms_accel'] / r['mediapipe_arms_accel']:.2f} |")
     return "\n".join(lines)
+
+
+def _units(s: dict, mark: str) -> str:
+    """How many units of a summary carry a :func:`failure_marks` mark: "N of M" (M all units),
+    "N of M judged" where fewer could be judged, a dash where none could (or a summary from before
+    the marks)."""
+    judged, units = s.get(f"{mark}_judged", 0), s.get("units", 0)
+    if not judged:
+        return "-"
+    return f"{s[f'{mark}_units']} of {units}" if judged == units else f"{s[f'{mark}_units']} of {judged} judged"
 
 
 def _unseen_heading(seeds: list[int]) -> str:
@@ -331,7 +402,10 @@ def write_report_section(rows: dict[str, list[dict]], summaries: dict[str, dict]
         "share of frames on which no kept hypothesis is within 100 mm (what the search leaves); the proposal "
         "oracle the share on which no refined proposal of the proposal stage is within 100 mm, and 'caught by a "
         "proposal alone' the frames on which every other candidate (tracked hypotheses, recovery, re-acquisition, "
-        "jumps) is over 100 mm but a refined proposal is not; the last "
+        "jumps) is over 100 mm but a refined proposal is not; 'turned round' counts the sequences whose written "
+        f"chest heading is over {TURNED_ROUND_DEG:g}° from the truth's (on the circle) on more than "
+        f"{100 * TURNED_ROUND_SHARE:g} % of their frames, 'lost' those whose median error about the neck is over "
+        f"{LOST_MM:g} mm; the last "
         "columns are the failing frames that both costs rate no worse than the truth, and the tracking "
         "time per frame (image side included) as measured in the run, while other jobs shared the machine's "
         "two cores: for speed see `python -m mocap bench` (`frame_beam`, `frame_500`). `default` is the beam "

@@ -23,7 +23,8 @@ def test_summary_pools_frames_and_takes_medians_over_sequences():
     assert s["worst_mpjpe_mm"] == pytest.approx(110.0)
     assert s["ms_per_frame"] == pytest.approx(25.0)
     text = table({"default": s})
-    assert "| default | 60 | 30 | 20 | 22.2 % | - | 110 | 0.0 % | - | - | - | - | 0.0 % | - | 25.0 (40) |" in text
+    # rows without headings or errors about the neck (made before issue 49): neither mark judged, a dash
+    assert "| default | 60 | 30 | 20 | 22.2 % | - | 110 | - | - | 0.0 % | - | - | - | - | 0.0 % | - | 25.0 (40) |" in text
     assert all(line.count("|") == text.splitlines()[0].count("|") for line in text.splitlines())
 
 
@@ -43,6 +44,120 @@ def test_summary_of_the_proposal_stage_weights_rates_by_frames():
     assert s["proposal_oracle_failure_rate"] == pytest.approx(4 / 9)  # (1 + 3) of nine frames
     assert s["proposal_catches_rate"] == pytest.approx(3 / 9)
     assert "| 44.4 % | 33.3 % |" in table({"both": s})
+
+
+def sequence_truth(frames=40):
+    """A benchmark sequence's true poses and the body model that poses them (the generator's, not
+    rendered), and the joints of each pose (N, 10, 3), metres."""
+    from mocap.body import BodyModel
+    from mocap.synth import sequence_poses, setup_sequence
+
+    setup = setup_sequence("turning", seed=0)
+    poses, _ = sequence_poses(setup, frames=frames)
+    model = BodyModel.build(setup.actor.dims)
+    return poses, model, np.array([model.joint_positions(q) for q in poses])
+
+
+def measured_row(written_poses, true_poses, model, sequence="turning"):
+    """The fields of an experiments.ambiguity.measure row the failure marks are judged on, from
+    written poses against true ones (made through the same functions measure uses)."""
+    from experiments.ambiguity import heading_error_deg, jitter
+
+    joints = np.array([model.joint_positions(q) for q in written_poses])
+    truth = np.array([model.joint_positions(q) for q in true_poses])
+    errors = np.linalg.norm(joints - truth, axis=2).mean(axis=1) * 1e3
+    return row(sequence, errors) | jitter(joints, joints, truth) | {
+        "frame_heading_error_deg": heading_error_deg(written_poses, true_poses).tolist()}
+
+
+def test_a_unit_turned_round_is_counted_and_the_truth_is_not():
+    """Written poses that are the truth turned by 180 degrees in heading (the turning sequence,
+    whose own heading sweeps through +-180 degrees): every frame is turned round, so the unit is,
+    and the summary counts it; its arms on the wrong sides put it about 470 mm from the truth about
+    the neck, so it is lost too. The truth itself, and the truth a whole turn on (the tracker's
+    heading is unwrapped: the same body), are neither turned round nor lost."""
+    from experiments.tracking import LOST_MM, failure_marks, summarise, table
+    from mocap.body.pose import HEADING, PARAMETER_INDEX
+
+    truth, model, _ = sequence_truth(120)
+    turned, whole_turn = truth.copy(), truth.copy()
+    turned[:, PARAMETER_INDEX[HEADING]] += np.pi
+    whole_turn[:, PARAMETER_INDEX[HEADING]] -= 2 * np.pi
+    rows = [measured_row(p, truth, model) for p in (turned, truth, whole_turn)]
+    marks = [failure_marks(r) for r in rows]
+    assert marks[0]["turned_round"] is True and marks[0]["turned_round_rate"] == 1.0
+    assert np.allclose(np.abs(rows[0]["frame_heading_error_deg"]), 180.0)
+    assert rows[0]["median_frame_root_relative_mm"] > LOST_MM and marks[0]["lost"] is True
+    for m in marks[1:]:
+        assert m == {"turned_round_rate": 0.0, "turned_round": False, "lost": False}
+    s = summarise(rows)
+    assert (s["units"], s["turned_round_units"], s["turned_round_judged"], s["lost_units"]) == (3, 1, 3, 1)
+    assert "| 1 of 3 | 1 of 3 |" in table({"default": s})
+    assert "| 0 of 2 | 0 of 2 |" in table({"default": summarise(rows[1:])})
+
+
+def test_turned_round_needs_more_than_its_share_of_frames_on_the_circle():
+    """Headings off by 100 degrees (and by 100 + 360, the same on the circle) on some frames:
+    a unit is turned round when more than TURNED_ROUND_SHARE of its frames are; 170 degrees one
+    way and 190 the other are 20 apart on the circle, not turned round."""
+    from experiments.tracking import TURNED_ROUND_DEG, TURNED_ROUND_SHARE, failure_marks
+    from mocap.body.pose import HEADING, PARAMETER_INDEX
+
+    truth, model, _ = sequence_truth(20)
+    i = PARAMETER_INDEX[HEADING]
+    assert (TURNED_ROUND_DEG, TURNED_ROUND_SHARE) == (90.0, 0.2)
+    for off, turned in ((range(0, 5), True), (range(0, 4), False)):       # 25 % and 20 % of 20 frames
+        written = truth.copy()
+        written[list(off), i] += np.radians([100.0, 460.0, -100.0, 100.0, -460.0][:len(off)])
+        marks = failure_marks(measured_row(written, truth, model))
+        assert marks["turned_round_rate"] == pytest.approx(len(off) / 20)
+        assert marks["turned_round"] is turned
+    written, shifted = truth.copy(), truth.copy()
+    written[:, i] += np.radians(170.0)
+    shifted[:, i] -= np.radians(190.0)
+    assert failure_marks(measured_row(written, shifted, model))["turned_round_rate"] == 0.0
+
+
+@pytest.mark.parametrize("shift_mm, lost", [(350.0, True), (310.0, False)])
+def test_a_unit_is_lost_when_its_median_error_about_the_neck_is_over_the_threshold(shift_mm, lost):
+    """Joints built with known offsets: on 11 of 20 frames every joint but the neck is moved
+    ``shift_mm`` along x (about the neck: 9 of 10 joints off, 0.9 * shift_mm a frame), on the others
+    nothing is; the whole body is also moved 1 m (nothing about the neck). The median error about
+    the neck by hand (numpy: each joint less the frame's neck) is 315 or 279 mm against LOST_MM 300."""
+    from experiments.ambiguity import jitter
+    from experiments.tracking import LOST_MM, failure_marks, summarise
+    from mocap.body.skeleton import JOINT_NAMES
+
+    _, _, truth = sequence_truth(20)
+    neck = JOINT_NAMES.index("neck")
+    written = truth + np.array([1.0, 0.0, 0.0])
+    moved = np.ones(len(JOINT_NAMES), bool)
+    moved[neck] = False
+    written[:11, moved] += np.array([shift_mm / 1e3, 0.0, 0.0])
+    about_neck = lambda x: x - x[:, neck:neck + 1]
+    by_hand = np.median(np.linalg.norm(about_neck(written) - about_neck(truth), axis=2).mean(axis=1)) * 1e3
+    assert by_hand == pytest.approx(0.9 * shift_mm)
+    assert bool(by_hand > LOST_MM) is lost
+    measured = row("gestures-1", np.linalg.norm(written - truth, axis=2).mean(axis=1) * 1e3) | jitter(written, written, truth)
+    assert failure_marks(measured)["lost"] is lost and failure_marks(measured)["turned_round"] is None
+    # a row from before the median was kept: judged on its per-frame errors about the neck
+    older = {k: v for k, v in measured.items() if k != "median_frame_root_relative_mm"}
+    older["frame_root_relative_mm"] = (np.linalg.norm(about_neck(written) - about_neck(truth), axis=2).mean(axis=1)
+                                       * 1e3).tolist()
+    assert failure_marks(older)["lost"] is lost
+    s = summarise([measured, row("b", [10.0])])
+    assert (s["lost_units"], s["lost_judged"], s["units"]) == (int(lost), 1, 2)
+
+
+def test_the_per_sequence_table_marks_each_unit():
+    from experiments.tracking import jitter_table
+
+    marked = {"sequence": "turning", "seed": 3, "frame_heading_error_deg": [180.0, 179.0, 10.0, -170.0],
+              "median_frame_root_relative_mm": 420.0}
+    text = jitter_table({"default": [marked, {"sequence": "old", "seed": 0}]})
+    assert text.splitlines()[2].endswith("| yes (75.0 %) | yes |")
+    assert text.splitlines()[3].endswith("| - | - |")
+    assert all(line.count("|") == text.splitlines()[0].count("|") for line in text.splitlines())
 
 
 def test_named_configurations():
