@@ -446,7 +446,7 @@ def written_against_decoded(written_poses: np.ndarray, joints: np.ndarray, decod
     metres and radians; written and decoded joints (N, 10, 3), metres.
     """
     distance = np.linalg.norm(np.asarray(joints) - np.asarray(decoded), axis=2)        # (N, 10), metres
-    yaw = np.asarray(written_poses)[:, PARAMETER_INDEX["chest_yaw"]]
+    yaw = np.asarray(written_poses)[:, PARAMETER_INDEX[HEADING]]
     return {"written_decoded_mm": 1e3 * float(distance.max(initial=0.0)),
             "written_decoded_mean_mm": 1e3 * float(distance.mean(axis=1).max(initial=0.0)),
             "heading_step_deg": math.degrees(float(np.abs(np.diff(yaw)).max(initial=0.0)))}
