@@ -59,14 +59,18 @@ def pinned(cores: int):
     return lambda: os.sched_setaffinity(0, chosen)
 
 
-def track_run(clip: Path, out: Path, cores: int, keypoints: str, max_frames: int | None) -> dict:
-    """One ``track`` run pinned to ``cores`` cores; its figures (see the module)."""
+def track_run(clip: Path, out: Path, cores: int, keypoints: str, max_frames: int | None,
+              threads: int | None = None) -> dict:
+    """One ``track`` run pinned to ``cores`` cores (``threads``: its ``--threads``, None: track's
+    default); its figures (see the module)."""
     from mocap.run import files
 
     command = [sys.executable, "-m", "mocap", "track", str(clip), "--out", str(out), "--overwrite",
                "--keypoints", keypoints]
     if max_frames is not None:
         command += ["--max-frames", str(max_frames)]
+    if threads is not None:
+        command += ["--threads", str(threads)]
     load = os.getloadavg()[0]
     started = time.perf_counter()
     done = subprocess.run(command, preexec_fn=pinned(cores), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
@@ -77,11 +81,17 @@ def track_run(clip: Path, out: Path, cores: int, keypoints: str, max_frames: int
     run = json.loads((out / files.RUN_JSON).read_text())
     frames = int(run["frames"])
     size = run["settings"]["working_resolution"]
-    return {"cores": cores, "keypoints": keypoints, "frames": frames, "fps": float(run["fps"]),
+    return {"cores": cores, "keypoints": keypoints, "threads": run.get("threads"), "frames": frames,
+            "fps": float(run["fps"]),
             "size": f"{size['input_width']}x{size['input_height']}",
             "loop_fps": frames / float(run["wall_seconds_this_session"]), "end_to_end_fps": frames / wall,
             "wall_s": wall, "keypoints_ms_per_frame": run.get("keypoints_ms_per_frame"), "load": load,
             "command": f"taskset -c {_cpu_list(cores)} " + " ".join(["python", *command[1:]])}
+
+
+def _label(keypoints: str) -> str:
+    """A folder name's part for a ``--keypoints`` value (a keypoint file: ``file-<its stem>``)."""
+    return keypoints if keypoints in ("auto", "mediapipe", "none") else f"file-{Path(keypoints).stem}"
 
 
 def _cpu_list(cores: int) -> str:
@@ -134,14 +144,16 @@ def table(result: dict) -> str:
              f"median of {result['repeats']} alternating run(s); load average (1 min) "
              f"{min(loads):.1f}–{max(loads):.1f} during the runs, {result['cpu_count']} cores, CPU: {result['cpu']}.",
              "",
-             "| cores | keypoints | frames/s (run.json) | frames/s, decoding to outputs | frames/s, command end to end "
-             "| MediaPipe in the run (ms/frame) |",
-             "|---|---|---|---|---|---|"]
+             "| cores | keypoints | threads | frames/s (run.json) | frames/s, decoding to outputs "
+             "| frames/s, command end to end | MediaPipe in the run (ms/frame) |",
+             "|---|---|---|---|---|---|---|"]
     for cores in result["cores"]:
         for keypoints in result["keypoints"]:
             rows = [r for r in result["runs"] if r["cores"] == cores and r["keypoints"] == keypoints]
             kp = _median(rows, "keypoints_ms_per_frame")
-            lines.append(f"| {cores} | {keypoints} | {_median(rows, 'fps'):.1f} | {_median(rows, 'loop_fps'):.1f} | "
+            threads = sorted({r.get("threads") or "?" for r in rows}, key=str)
+            lines.append(f"| {cores} | {_shown(keypoints) if _label(keypoints) != keypoints else keypoints} | "
+                         f"{', '.join(map(str, threads))} | {_median(rows, 'fps'):.1f} | {_median(rows, 'loop_fps'):.1f} | "
                          f"{_median(rows, 'end_to_end_fps'):.1f} | {'' if kp is None else f'{kp:.1f}'} |")
     if max(loads) > result["cpu_count"]:
         lines += ["", f"The machine was shared (load average above its {result['cpu_count']} cores): a second core "
@@ -208,7 +220,7 @@ def _cpu_name() -> str:
 
 def measure(clip: Path, out: Path, *, cores=(1, 2), keypoints=("none", "mediapipe"), repeats: int = 1,
             max_frames: int | None = None, detector: bool = True, progress=print,
-            command: str = "python -m experiments.throughput") -> dict:
+            command: str = "python -m experiments.throughput", threads: int | None = None) -> dict:
     """Every run (see the module); writes ``out/throughput.json`` and ``out/throughput.md`` and
     returns the result (``command``: the command line that asked, kept with it)."""
     out.mkdir(parents=True, exist_ok=True)
@@ -218,7 +230,7 @@ def measure(clip: Path, out: Path, *, cores=(1, 2), keypoints=("none", "mediapip
     pairs = [(c, k) for c in cores for k in keypoints]
     for repeat in range(repeats):
         for c, k in (pairs if repeat % 2 == 0 else pairs[::-1]):
-            run = track_run(clip, out / f"run-{c}core-{k}", c, k, max_frames)
+            run = track_run(clip, out / f"run-{c}core-{_label(k)}", c, k, max_frames, threads)
             result["runs"].append(run)
             progress(f"{c} core(s), keypoints {k}: {run['fps']:.1f} frames/s (run.json), {run['loop_fps']:.1f} "
                      f"decoding to outputs, {run['end_to_end_fps']:.1f} end to end; load {run['load']:.1f}")
@@ -241,6 +253,8 @@ def main(argv=None) -> int:
     parser.add_argument("--repeats", type=int, default=1, help="runs of each pair, alternating (default 1)")
     parser.add_argument("--max-frames", type=int, default=None, help="track only the first N frames (default all)")
     parser.add_argument("--no-detector", action="store_true", help="leave out MediaPipe alone")
+    parser.add_argument("--threads", type=int, default=None, metavar="N",
+                        help="track's --threads for every run (default: track's own, the cores less MediaPipe's)")
     parser.add_argument("--docs", type=Path, default=None, metavar="PAGE",
                         help=f"also write the table as the '{SECTION}' section of PAGE (docs/results.md)")
     parser.add_argument("--from-json", type=Path, default=None, metavar="JSON",
@@ -270,6 +284,7 @@ def main(argv=None) -> int:
         asked = " ".join(["python -m experiments.throughput", *(sys.argv[1:] if argv is None else argv)])
         result = measure(args.clip, args.out, cores=cores, keypoints=keypoints, repeats=args.repeats,
                          max_frames=args.max_frames, detector=not args.no_detector and "mediapipe" in keypoints,
+                         threads=args.threads,
                          command=asked)
     except (ValueError, RuntimeError, OSError) as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -588,7 +588,7 @@ class RunLoop:
             self.out_dir, table, self.settings, self.setup.calibration, self.camera, self.params.fps,
             self.span.start, time.perf_counter() - self.started, self.damage.damaged, self.colour_frame,
             self.people.segments, self.truth, float(np.median(detector_ms)) if detector_ms else None,
-            self.live_record(table)))
+            self.live_record(table), threads=self.params.choices.threads))
 
     def live_record(self, table: PoseTable) -> dict | None:
         """``run.json`` ``live`` of a live run: frames dropped (the gaps between the tracked ones:

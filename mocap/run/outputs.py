@@ -232,6 +232,8 @@ class FinishedRun:
         The keypoint detector's median time per frame.
     live : dict or None
         A live run's ``run.json`` ``live`` (frames dropped, latency: :meth:`mocap.run.loop.RunLoop.live_record`).
+    threads : int
+        The tracker's threads this session (``run.json`` ``threads``; the poses do not depend on it).
     """
 
     out_dir: Path
@@ -248,6 +250,7 @@ class FinishedRun:
     ground_truth: PoseTable | None = None
     keypoints_ms: float | None = None
     live: dict | None = None
+    threads: int = 1
 
 
 def _metrics(run: FinishedRun, ms_total: np.ndarray) -> dict | None:
@@ -280,7 +283,7 @@ def finish_run(run: FinishedRun) -> RunSummary:
     failures = int(extra["failed"].sum())
     record = {"status": "finished", "settings": run.settings, "versions": versions(), "frames": len(table),
               "resumed_from_frame": run.start, "wall_seconds_this_session": run.wall_s,
-              "fps": float(1e3 / np.mean(ms_total)), "timings_ms": timings,
+              "fps": float(1e3 / np.mean(ms_total)), "threads": run.threads, "timings_ms": timings,
               "failures": failures, "empty_frames": int(extra["empty"].sum()),
               "units": {"positions": "metres", "angles_in_csv": "degrees", "residual_edge": "pixels",
                         "time_s": "seconds from the first frame (the frame's own timestamp)"}}
