@@ -97,6 +97,33 @@ def test_edge_step_lowers_the_edge_residual_it_starts_from():
     assert only.edge is None and only.region.evaluations == 150
 
 
+def test_a_registration_that_does_not_move_the_pose_renders_its_edges_once():
+    """With no budget (the tracker's mirrors, ``mirror_evaluations`` 0) or no edge step, the edge
+    distance at the result is the one after the region step, evaluated once: each residual is
+    that of a direct evaluation at the returned pose, bit for bit."""
+    class CountedEdge(EdgeCost):
+        calls = 0
+
+        def __call__(self, pose) -> float:
+            CountedEdge.calls += 1
+            return super().__call__(pose)
+
+    truth = neutral_pose()
+    truth[P["r_elbow_flex"]] = 1.2
+    r = render(truth, MODEL, CAMERA)
+    distance = np.minimum(ndimage.distance_transform_edt(~r.edges), 20.0).astype(np.float32)
+    region, edge, counted = RegionCost(r.labels, MODEL, CAMERA), EdgeCost(distance, MODEL, CAMERA), \
+        CountedEdge(distance, MODEL, CAMERA)
+    start = clamp_to_limits(truth + np.r_[0.01, -0.01, 0.03, np.full(20, 0.04)])
+    for evaluations, edge_calls in ((0, 1), (150, 1), (400, 2)):     # 150: all region, 400: both steps
+        CountedEdge.calls = 0
+        reg = register(region, counted, start, TrackerConfig(evaluations=evaluations, split="1:1" if evaluations == 400
+                                                             else "auto"))
+        assert CountedEdge.calls == edge_calls
+        assert (reg.region_residual, reg.edge_residual) == (region(reg.pose), edge(reg.pose))
+    assert reg.edge_residual_after_region == edge(reg.region.x)
+
+
 def test_fresh_edge_simplex_option_starts_elsewhere():
     truth = neutral_pose()
     region, edge = clean_frame(truth)

@@ -531,6 +531,8 @@ class RunLoop:
     def run(self) -> None:
         """Track the session's frames (Ctrl-C ends a live run and keeps what was tracked)."""
         span, frames_in = self.span, self.frames_in
+        # every kernel the frames need, loaded (compiled on a cold cache) before the first one
+        self.tracker.warm_up(keypoints=self.params.keypoints is not None)
         geometry = self._open_overlay()
         reader = FrameReader(frames_in, self.setup, span,
                              Colours(self.people.segment, self.person.colour_model, self.person.scene),

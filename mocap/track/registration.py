@@ -131,6 +131,7 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
         if region.evaluations > 0:
             pose = region.x.copy()
     edge_after_region = edge_cost(pose)
+    moved = False               # by the edge or gradient step: else the edge distance is edge_after_region
     if n_edge > 0:
         if region is not None and config.edge_start == "region_simplex":
             simplex = region.simplex
@@ -139,13 +140,13 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
         edge = minimize_cost(edge_cost, simplex, lower, upper, budget=n_edge, ftol=config.ftol,
                              keypoint_cost=keypoint_cost, keypoint_weight=edge_kw)
         if edge.evaluations > 0:
-            pose = edge.x.copy()
+            pose, moved = edge.x.copy(), True
     gradient = None
     if n_gradient > 0:
         gradient = minimize_edge_gauss_newton(edge_cost, pose, lower, upper, budget=n_gradient,
                                               scale=steps * GRADIENT_SCALE, region_cost=region_cost,
                                               region_weight=GRADIENT_REGION_WEIGHT)
-        pose = gradient.x.copy()
+        pose, moved = gradient.x.copy(), True
     keypoint_residual = keypoint_cost(pose) if keypoint_cost is not None else float("nan")
-    return Registration(pose.copy(), region_cost(pose), edge_cost(pose), edge_after_region, region, edge,
-                        keypoint_residual, gradient)
+    return Registration(pose.copy(), region_cost(pose), edge_cost(pose) if moved else edge_after_region,
+                        edge_after_region, region, edge, keypoint_residual, gradient)

@@ -56,13 +56,18 @@ from typing import Sequence
 
 import numpy as np
 
+from mocap.body.ik import ARM_JOINTS, place_arm, reach_arm
 from mocap.body.model import BodyModel
 from mocap.body.pose import HEADING, PARAMETER_INDEX, check_pose, clamp_to_limits, heading_near
 from mocap.body.prior import PosePrior, default_prior
+from mocap.body.skeleton import JOINT_INDEX
 from mocap.cost import EdgeCost, KeypointCost, RegionCost
-from mocap.io.keypoints import SWAPPED_JOINTS
+from mocap.imaging.edges import distance_map
+from mocap.imaging.prepare import PreparedFrame
+from mocap.io.keypoints import SWAPPED_JOINTS, Keypoints
 from mocap.labels import BACKGROUND
 from mocap.render.camera import Camera
+from mocap.render.rasterize import render
 from mocap.track.branches import depth_alternatives
 from mocap.track.config import JUMPS_REFINED, MERGE_DISTANCE_M, RECOVERY_STEP_SCALE, TrackerConfig, split_budget
 from mocap.track.decode import backtrack, viterbi_step
@@ -73,6 +78,10 @@ from mocap.track.registration import Registration, failed_residuals, register
 from mocap.track.score import MOTION, UNARY_TERMS, ScoredCandidate, transition_term, weighted_sum, weights
 from mocap.track.smooth import Smoother
 
+#: Arm angles (degrees) of :meth:`Tracker.warm_up`'s pose: both forearms raised in front, where
+#: each arm's depth mirrors are inside the limits.
+WARM_UP_ARMS_DEG = {"r_shoulder_flex": 30.0, "r_shoulder_abd": 20.0, "r_elbow_flex": 90.0,
+                    "l_shoulder_flex": 30.0, "l_shoulder_abd": 20.0, "l_elbow_flex": 90.0}
 #: Index of the chest's heading in the pose vector.
 _HEADING = PARAMETER_INDEX[HEADING]
 
@@ -217,6 +226,47 @@ class Tracker:
         #: Threads a frame's registrations run on (the decisions are the same for every count).
         self.threads = int(threads)
         self._pool = ThreadPoolExecutor(self.threads, thread_name_prefix="mocap-tracker") if self.threads > 1 else None
+
+    def warm_up(self, keypoints: bool = True) -> None:
+        """Load every compiled kernel this tracker's frames call (on a cold cache: compile them,
+        seconds each) before its first frame, leaving this tracker as it was.
+
+        A tracker of the same model, camera, configuration, prior and sources tracks a frame of
+        the model rendered in :data:`WARM_UP_ARMS_DEG` at this tracker's pose (both arms' depth
+        mirrors inside the limits) without keypoints and, with ``keypoints``, a second one with
+        its joints projected as keypoints (the mirrors, the keypoint distance and the lifter,
+        loaded now when the configuration uses it); then the arm solvers of the stages that run
+        only on some frames are called once for each arm (hand re-acquisition's
+        :func:`~mocap.body.ik.reach_arm`; with ``keypoints`` the mirrors'
+        :func:`~mocap.body.ik.place_arm`, whose polish is compiled with it). Each kernel gets
+        the types of a real frame's (the costs convert their images), so no later frame
+        compiles or loads one (``tests/track/test_tracker.py``).
+
+        Parameters
+        ----------
+        keypoints : bool
+            Whether frames may come with 2D keypoints (a run with a keypoint source).
+        """
+        pose = self._beam[0].pose.copy()
+        for name, degrees in WARM_UP_ARMS_DEG.items():
+            pose[PARAMETER_INDEX[name]] = math.radians(degrees)
+        pose = clamp_to_limits(pose)
+        lifter = self.lifting.lifter if self.lifting is not None and keypoints else None
+        shadow = Tracker(self.model, self.camera, self.config, pose, prior=self.prior, sources=self.sources,
+                         lifter=lifter)
+        rendered = render(pose, self.model, self.camera)
+        frame = PreparedFrame(rendered.labels, rendered.labels != BACKGROUND, rendered.edges,
+                              distance_map(rendered.edges), False, {})
+        joints = self.model.joint_positions(pose)
+        shadow.push(0, frame)
+        if keypoints:
+            shadow.push(1, frame, Keypoints(self.camera.project(joints), np.ones(len(joints))))
+        shadow.finish()
+        for side in ("r", "l"):
+            arm = [JOINT_INDEX[f"{side}_{j}"] for j in ARM_JOINTS]
+            reach_arm(pose, self.model.skeleton, side, joints[arm[-1]])
+            if keypoints:
+                place_arm(pose, self.model.skeleton, side, joints[arm])
 
     # -- streaming ---------------------------------------------------------------------------
     def push(self, frame_index: int, prepared, keypoints=None) -> list[FrameResult]:

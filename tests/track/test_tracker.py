@@ -180,3 +180,61 @@ def test_threads_must_be_a_positive_count():
     for bad in (0, -1, 1.5, True):
         with pytest.raises(ValueError, match="threads"):
             Tracker(MODEL, CAMERA, SMALL, waving(1)[0], threads=bad)
+
+
+#: Run in a fresh interpreter by the warm-up test (kernels loaded by other tests would hide a
+#: missing warm-up): after ``Tracker.warm_up`` no frame adds a signature to any kernel.
+WARMED = """
+import json, sys
+import numpy as np
+from numba.core.registry import CPUDispatcher
+from mocap.body import BodyModel
+from mocap.io.keypoints import Keypoints
+from mocap.render import Camera
+from mocap.track import Tracker, TrackerConfig
+from tests.track.test_tracker import clean_frames, waving
+
+def signatures():
+    return {f"{name}.{key}": len(value.signatures) for name, module in list(sys.modules.items())
+            if name.startswith("mocap") for key, value in vars(module).items() if isinstance(value, CPUDispatcher)}
+
+model, camera = BodyModel.build(resolution=8, class_names=("skin", "clothes")), Camera.default(160, 120)
+poses = waving(5)
+frames = clean_frames(poses)
+keypoints = [None] + [Keypoints(camera.project(model.joint_positions(q)), np.ones(10)) for q in poses[1:]]
+tracker = Tracker(model, camera, TrackerConfig(lag=2), poses[0])
+tracker.warm_up()
+before = signatures()
+mirrors, results = [], []
+for i, (frame, k) in enumerate(zip(frames, keypoints)):
+    results += tracker.push(i, frame, k)
+    mirrors.append(sum(origin == "mirror" for origin, _ in tracker.candidates))
+results += tracker.finish()
+after = signatures()
+unwarmed = Tracker(model, camera, TrackerConfig(lag=2), poses[0])
+again = [r for i, (frame, k) in enumerate(zip(frames, keypoints)) for r in unwarmed.push(i, frame, k)] + unwarmed.finish()
+unchanged = [(r.pose.tolist(), r.score, r.origin, r.hypothesis) for r in results] == \
+            [(r.pose.tolist(), r.score, r.origin, r.hypothesis) for r in again]
+print(json.dumps({"unchanged": unchanged, "mirrors": mirrors, "kernels": len(before),
+                  "grown": sorted(k for k, n in after.items() if n > before.get(k, 0))}))
+"""
+
+
+def test_after_the_warm_up_no_frame_loads_or_compiles_a_kernel():
+    """In a fresh interpreter, the frames after ``Tracker.warm_up`` (what a run calls before its
+    first frame), the first without keypoints and then frames with keypoints and mirrors, add no
+    signature to any of the package's compiled kernels: none is loaded from the cache or
+    compiled during a frame (issue 50: ``place_arm``'s polish compiled for 4.2 s at the first
+    mirror on a cold cache). The warmed tracker's results are those of one not warmed, bit for bit."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    out = subprocess.run([sys.executable, "-c", WARMED], cwd=root, capture_output=True, text=True, check=True)
+    result = json.loads(out.stdout.strip().splitlines()[-1])
+    assert result["unchanged"]
+    assert result["kernels"] > 20
+    assert result["mirrors"][0] == 0 and min(result["mirrors"][1:]) > 0      # the mirrors' frames were tracked
+    assert result["grown"] == []
