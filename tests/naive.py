@@ -8,7 +8,6 @@ compiled kernel                                            twin                 
 =========================================================  ===============================  =====================================
 ``body.kinematics`` (segment transforms, points)           :func:`naive_segment_transforms`  ``tests/body/test_kinematics.py``
 ``body.ik`` (arm reach, Levenberg–Marquardt)               :func:`naive_reach_arm` (scipy)   ``tests/body/test_ik.py``
-``body.ik`` (arm placement: closed form, polish)           :func:`naive_place_arm`           ``tests/body/test_ik.py``
 ``body.mesh`` (templates scaled per part; not compiled)    :func:`naive_build_mesh`          ``tests/body/test_mesh_and_dimensions.py``
 ``optimize`` (ask/tell Nelder–Mead, compiled cost loop)    :func:`naive_nelder_mead`         ``tests/test_optimize.py``
 ``cost`` (region counts, eq. 1; edge mean, eq. 2)          :func:`naive_non_overlapping_ratio`, ``tests/test_cost.py``
@@ -188,99 +187,6 @@ def naive_reach_arm(pose, model, side, target, regularization, scale=0.01):
     out = np.array(pose, float)
     out[idx] = least_squares(residual, np.clip(start, lo + 1e-9, hi - 1e-9), bounds=(lo, hi)).x
     return out
-
-
-def naive_place_arm(pose, skeleton, side, targets, *, regularization=1e-4, iterations=30, limits=None,
-                    polish_within_m=np.inf):
-    """Twin of :func:`mocap.body.ik.place_arm`: its closed form as first written, in NumPy and
-    Python (complex exponentials for the angles' wrap, NumPy's ``@``, a ``min`` over the two
-    shoulder solutions, ``lexsort`` over the forearm twists), with the same compiled
-    Levenberg–Marquardt polish (``mocap.body.ik._reach``, checked against scipy by
-    :func:`naive_reach_arm`). Returns (pose, shape (23,), radians and metres; largest miss, metres)."""
-    from mocap.body import JOINT_LIMITS, JOINT_NAMES
-    from mocap.body.ik import ARM_JOINTS, ARM_PARAMETERS, PLACE_TOLERANCE_M, REACH_SCALE_M, _reach
-    from mocap.body.kinematics import joint_positions, segment_transforms_into
-
-    limits = JOINT_LIMITS if limits is None else limits
-
-    def wrap(angle):
-        return float(np.angle(np.exp(1j * angle)))
-
-    def rx(a):
-        c, s = np.cos(a), np.sin(a)
-        return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-    def ry(a):
-        c, s = np.cos(a), np.sin(a)
-        return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-    def rz(a):
-        c, s = np.cos(a), np.sin(a)
-        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-    def violation_of(values, lower, upper):
-        v = np.asarray(values, dtype=np.float64)
-        return float(np.sum(np.maximum(lower - v, 0.0) + np.maximum(v - upper, 0.0)))
-
-    def arm_angles(q, targets):
-        k = 0 if side == "r" else 1
-        m = 1.0 if k == 0 else -1.0
-        base = 9 + 7 * k
-        transforms = np.empty((skeleton.offsets.shape[0], 3, 4))
-        segment_transforms_into(q, skeleton.offsets, transforms)
-        chest, shoulder = transforms[0, :, :3], transforms[2 + 3 * k, :, 3]
-        elbow, wrist, hand = targets
-        upper = elbow - shoulder
-        upper = upper / np.linalg.norm(upper)
-        u = chest.T @ upper
-        phi = float(np.arcsin(np.clip(-u[0], -1.0, 1.0)))
-        options = [(wrap(np.arctan2(-u[2], u[1])), wrap(m * phi)),
-                   (wrap(np.arctan2(u[2], -u[1])), wrap(m * (np.pi - phi)))]
-        fore = wrist - elbow
-        fore = fore / np.linalg.norm(fore)
-        bend = float(np.arccos(np.clip(upper @ fore, -1.0, 1.0)))
-        lo, hi = limits[base:base + 3, 0], limits[base:base + 3, 1]
-        shoulders = []
-        for flex, abd in options:
-            b = chest @ rx(-flex) @ rz(m * abd)
-            v = b.T @ fore
-            rot = m * float(np.arctan2(-v[0], -v[2])) if np.sin(bend) > 1e-6 else float(q[base + 2])
-            angles = (flex, abd, rot)
-            change = float(np.sum(np.abs(np.subtract(angles, q[base:base + 3]))))
-            shoulders.append((round(violation_of(angles, lo, hi), 9), change, angles, b))
-        _, _, (flex, abd, rot), b = min(shoulders, key=lambda o: o[:2])
-        c = b @ ry(m * rot) @ rx(-bend)
-        palm = hand - wrist
-        h = c.T @ (palm / np.linalg.norm(palm))
-        lo, hi = limits[base + 5:base + 7, 0], limits[base + 5:base + 7, 1]
-        t_lo, t_hi = limits[base + 4]
-        twists = np.concatenate([[q[base + 4]], t_lo + np.linspace(0.0, 1.0, 17) * (t_hi - t_lo)])
-        cos, sin = np.cos(m * twists), np.sin(m * twists)
-        g = np.stack([cos * h[0] - sin * h[2], np.full_like(twists, h[1]), sin * h[0] + cos * h[2]], axis=1)
-        wrists = np.stack([np.angle(np.exp(1j * np.arctan2(-g[:, 2], g[:, 1]))),
-                           m * np.arcsin(np.clip(-g[:, 0], -1.0, 1.0))], axis=1)
-        violation = np.round(np.sum(np.maximum(lo - wrists, 0.0) + np.maximum(wrists - hi, 0.0), axis=1), 9)
-        best = np.lexsort((np.abs(twists - twists[0]), violation))[0]
-        out = np.array([flex, abd, rot, bend, twists[best], *wrists[best]])
-        return np.clip(out, limits[base:base + 7, 0], limits[base:base + 7, 1])
-
-    q = np.array(pose, dtype=np.float64)
-    t = np.asarray(targets, dtype=np.float64)
-    active = np.array([P[f"{side}_{p}"] for p in ARM_PARAMETERS], dtype=np.int64)
-    lower, upper = limits[active, 0].astype(np.float64), limits[active, 1].astype(np.float64)
-    rows = np.array([JOINT_NAMES.index(f"{side}_{j}") for j in ARM_JOINTS])
-    segments, local = skeleton.joint_segment[rows], skeleton.joint_local[rows]
-    closed = q.copy()
-    closed[active] = arm_angles(q, t)
-    best, best_miss = closed, float(np.max(np.linalg.norm(joint_positions(closed, skeleton)[rows] - t, axis=1)))
-    if best_miss <= PLACE_TOLERANCE_M or best_miss > polish_within_m:
-        return best, best_miss
-    out = _reach(closed, skeleton.offsets, segments, local, active, lower, upper, t, REACH_SCALE_M,
-                 float(regularization), int(iterations))
-    miss = float(np.max(np.linalg.norm(joint_positions(out, skeleton)[rows] - t, axis=1)))
-    if miss < best_miss:
-        best, best_miss = out, miss
-    return best, best_miss
 
 
 def naive_nelder_mead(f, simplex, lower, upper, budget, ftol, coef=(1.0, 2.0, 0.5, 0.5)):

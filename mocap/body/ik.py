@@ -13,7 +13,6 @@ reaching the point, one close to where the arm was.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -199,188 +198,88 @@ class ArmPlacement:
     miss_m: float
 
 
+def _wrap(angle: float) -> float:
+    """The same angle in (-pi, pi]."""
+    return float(np.angle(np.exp(1j * angle)))
+
+
+def _rx(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _ry(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def _rz(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _violation(values, lower, upper) -> float:
+    v = np.asarray(values, dtype=np.float64)
+    return float(np.sum(np.maximum(lower - v, 0.0) + np.maximum(v - upper, 0.0)))
+
+
 #: Forearm twists (as fractions of its range) :func:`_arm_angles` tries when the start's twist
 #: leaves the wrist's angles outside their limits.
 _TWIST_STEPS = np.linspace(0.0, 1.0, 17)
 
 
-@jit
-def _wrap(angle):
-    """The same angle in (-pi, pi] (radians)."""
-    return math.atan2(math.sin(angle), math.cos(angle))
-
-
-@jit
-def _round9(x):
-    """``x`` rounded to 9 decimals as NumPy rounds (scaled, rounded half to even, scaled back)."""
-    return np.rint(x * 1e9) / 1e9
-
-
-@jit
-def _excess(value, lo, hi):
-    """How far ``value`` lies outside ``[lo, hi]`` (0 inside)."""
-    return max(lo - value, 0.0) + max(value - hi, 0.0)
-
-
-@jit
-def _rotate_x(r, a):
-    """``r @ Rx(a)`` for a 3x3 ``r`` (a new array)."""
-    c, s = math.cos(a), math.sin(a)
-    out = np.empty((3, 3))
-    for i in range(3):
-        out[i, 0] = r[i, 0]
-        out[i, 1] = r[i, 1] * c + r[i, 2] * s
-        out[i, 2] = -r[i, 1] * s + r[i, 2] * c
-    return out
-
-
-@jit
-def _rotate_y(r, a):
-    """``r @ Ry(a)`` for a 3x3 ``r`` (a new array)."""
-    c, s = math.cos(a), math.sin(a)
-    out = np.empty((3, 3))
-    for i in range(3):
-        out[i, 0] = r[i, 0] * c - r[i, 2] * s
-        out[i, 1] = r[i, 1]
-        out[i, 2] = r[i, 0] * s + r[i, 2] * c
-    return out
-
-
-@jit
-def _rotate_z(r, a):
-    """``r @ Rz(a)`` for a 3x3 ``r`` (a new array)."""
-    c, s = math.cos(a), math.sin(a)
-    out = np.empty((3, 3))
-    for i in range(3):
-        out[i, 0] = r[i, 0] * c + r[i, 1] * s
-        out[i, 1] = -r[i, 0] * s + r[i, 1] * c
-        out[i, 2] = r[i, 2]
-    return out
-
-
-@jit
-def _unit(a, b):
-    """``(b - a) / |b - a|`` for 3-vectors."""
-    d = np.empty(3)
-    for r in range(3):
-        d[r] = b[r] - a[r]
-    n = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-    for r in range(3):
-        d[r] /= n
-    return d
-
-
-@jit
-def _transposed_times(r, v):
-    """``r.T @ v`` for a 3x3 ``r`` and a 3-vector."""
-    out = np.empty(3)
-    for j in range(3):
-        out[j] = r[0, j] * v[0] + r[1, j] * v[1] + r[2, j] * v[2]
-    return out
-
-
-@jit
-def _arm_angles(q, offsets, k, targets, limits, active, twist_steps, transforms):
-    """The seven arm angles (radians, :data:`ARM_PARAMETERS` order, shape (7,)) that put the elbow,
-    wrist and hand on ``targets`` (shape (3, 3), metres) in closed form, each bone's direction
-    taken from the targets (its length from the skeleton), clipped to the limits; ``k``: 0 for
-    the right arm, 1 for the left; ``active``: the arm's seven pose indices; ``transforms``:
-    scratch of shape (segments, 3, 4).
+def _arm_angles(q: np.ndarray, skeleton: Skeleton, side: str, targets: np.ndarray, limits: np.ndarray) -> np.ndarray:
+    """The seven arm angles that put the elbow, wrist and hand on ``targets`` in closed form, each
+    bone's direction taken from the targets (its length from the skeleton), clipped to the limits.
 
     The rotations are those of :func:`mocap.body.kinematics.segment_transforms_into`: the upper arm's
     axis fixes the shoulder's flexion and abduction (two solutions; the one inside the limits and
     nearest ``q`` wins), the forearm's the elbow's flexion and the shoulder's rotation, the hand's
-    the wrist's flexion and deviation at the start's forearm twist (or the nearest twist of
-    ``twist_steps``, fractions of its range, that keeps them inside the limits).
+    the wrist's flexion and deviation at the start's forearm twist (or the nearest twist that
+    keeps them inside the limits).
     """
+    k = 0 if side == "r" else 1
     m = 1.0 if k == 0 else -1.0
-    segment_transforms_into(q, offsets, transforms)
-    chest = transforms[0, :, :3]
-    shoulder = transforms[2 + 3 * k, :, 3]
-    upper = _unit(shoulder, targets[0])
-    u = _transposed_times(chest, upper)
-    phi = math.asin(min(max(-u[0], -1.0), 1.0))
-    fore = _unit(targets[0], targets[1])
-    bend = math.acos(min(max(upper[0] * fore[0] + upper[1] * fore[1] + upper[2] * fore[2], -1.0), 1.0))
-    best_violation, best_change = np.inf, np.inf
-    flex = abd = rot = 0.0
-    b = np.empty((3, 3))
-    for option in range(2):         # the two shoulder solutions, the first kept on a tie
-        if option == 0:
-            f, a = _wrap(math.atan2(-u[2], u[1])), _wrap(m * phi)
-        else:
-            f, a = _wrap(math.atan2(u[2], -u[1])), _wrap(m * (np.pi - phi))
-        bo = _rotate_z(_rotate_x(chest, -f), m * a)
-        v = _transposed_times(bo, fore)
-        r = m * math.atan2(-v[0], -v[2]) if math.sin(bend) > 1e-6 else q[active[2]]
-        change = abs(f - q[active[0]]) + abs(a - q[active[1]]) + abs(r - q[active[2]])
-        violation = _round9(_excess(f, limits[active[0], 0], limits[active[0], 1])
-                            + _excess(a, limits[active[1], 0], limits[active[1], 1])
-                            + _excess(r, limits[active[2], 0], limits[active[2], 1]))
-        if violation < best_violation or (violation == best_violation and change < best_change):
-            best_violation, best_change = violation, change
-            flex, abd, rot = f, a, r
-            b[:, :] = bo
-    c = _rotate_x(_rotate_y(b, m * rot), -bend)
-    h = _transposed_times(c, _unit(targets[1], targets[2]))
-    t_lo, t_hi = limits[active[4], 0], limits[active[4], 1]
-    twist = w_flex = w_dev = 0.0
-    best_violation, best_change = np.inf, np.inf
-    for i in range(twist_steps.shape[0] + 1):     # the start's twist first, then the steps
-        t = q[active[4]] if i == 0 else t_lo + twist_steps[i - 1] * (t_hi - t_lo)
-        cos, sin = math.cos(m * t), math.sin(m * t)
-        g0, g1, g2 = cos * h[0] - sin * h[2], h[1], sin * h[0] + cos * h[2]
-        wf = _wrap(math.atan2(-g2, g1))
-        wd = m * math.asin(min(max(-g0, -1.0), 1.0))
-        violation = _round9(_excess(wf, limits[active[5], 0], limits[active[5], 1])
-                            + _excess(wd, limits[active[6], 0], limits[active[6], 1]))
-        change = abs(t - q[active[4]])
-        if violation < best_violation or (violation == best_violation and change < best_change):
-            best_violation, best_change = violation, change
-            twist, w_flex, w_dev = t, wf, wd
-    out = np.array([flex, abd, rot, bend, twist, w_flex, w_dev])
-    for i in range(7):
-        out[i] = min(max(out[i], limits[active[i], 0]), limits[active[i], 1])
-    return out
+    base = 9 + 7 * k
+    transforms = np.empty((skeleton.offsets.shape[0], 3, 4))
+    segment_transforms_into(q, skeleton.offsets, transforms)
+    chest, shoulder = transforms[0, :, :3], transforms[2 + 3 * k, :, 3]
+    elbow, wrist, hand = targets
+    upper = elbow - shoulder
+    upper = upper / np.linalg.norm(upper)
+    u = chest.T @ upper
+    phi = float(np.arcsin(np.clip(-u[0], -1.0, 1.0)))
+    options = [(_wrap(np.arctan2(-u[2], u[1])), _wrap(m * phi)),
+               (_wrap(np.arctan2(u[2], -u[1])), _wrap(m * (np.pi - phi)))]
+    fore = wrist - elbow
+    fore = fore / np.linalg.norm(fore)
+    bend = float(np.arccos(np.clip(upper @ fore, -1.0, 1.0)))
+    lo, hi = limits[base:base + 3, 0], limits[base:base + 3, 1]
+    shoulders = []
+    for flex, abd in options:
+        b = chest @ _rx(-flex) @ _rz(m * abd)
+        v = b.T @ fore
+        rot = m * float(np.arctan2(-v[0], -v[2])) if np.sin(bend) > 1e-6 else float(q[base + 2])
+        angles = (flex, abd, rot)
+        change = float(np.sum(np.abs(np.subtract(angles, q[base:base + 3]))))
+        shoulders.append((round(_violation(angles, lo, hi), 9), change, angles, b))
+    _, _, (flex, abd, rot), b = min(shoulders, key=lambda o: o[:2])
+    c = b @ _ry(m * rot) @ _rx(-bend)
+    palm = hand - wrist
+    h = c.T @ (palm / np.linalg.norm(palm))
+    lo, hi = limits[base + 5:base + 7, 0], limits[base + 5:base + 7, 1]
+    t_lo, t_hi = limits[base + 4]
 
-
-@jit
-def _largest_miss(pose, offsets, segments, local, targets, transforms, points):
-    """Largest distance (metres) of the body points ``(segments, local)`` of ``pose`` from
-    ``targets`` (shape (k, 3), metres)."""
-    _points(pose, offsets, segments, local, transforms, points)
-    worst = -np.inf
-    for p in range(targets.shape[0]):
-        dx, dy, dz = points[p, 0] - targets[p, 0], points[p, 1] - targets[p, 1], points[p, 2] - targets[p, 2]
-        worst = max(worst, math.sqrt(dx * dx + dy * dy + dz * dz))
-    return worst
-
-
-@jit
-def _place(pose, offsets, segments, local, k, targets, limits, active, twist_steps, regularization, iterations,
-           tolerance, polish_within):
-    """:func:`place_arm` past its checks: the closed form (:func:`_arm_angles`), then the
-    Levenberg–Marquardt polish (:func:`_reach`) when the closed form misses by more than
-    ``tolerance`` and at most ``polish_within`` (metres). Returns the pose (shape (23,), float64)
-    and its largest miss (metres)."""
-    transforms = np.empty((offsets.shape[0], 3, 4))
-    points = np.empty((targets.shape[0], 3))
-    closed = pose.copy()
-    angles = _arm_angles(pose, offsets, k, targets, limits, active, twist_steps, transforms)
-    for i in range(active.shape[0]):
-        closed[active[i]] = angles[i]
-    miss = _largest_miss(closed, offsets, segments, local, targets, transforms, points)
-    if miss <= tolerance or miss > polish_within:
-        return closed, miss
-    lower, upper = np.empty(active.shape[0]), np.empty(active.shape[0])
-    for i in range(active.shape[0]):
-        lower[i], upper[i] = limits[active[i], 0], limits[active[i], 1]
-    out = _reach(closed, offsets, segments, local, active, lower, upper, targets, REACH_SCALE_M, regularization,
-                 iterations)
-    polished = _largest_miss(out, offsets, segments, local, targets, transforms, points)
-    if polished < miss:
-        return out, polished
-    return closed, miss
+    twists = np.concatenate([[q[base + 4]], t_lo + _TWIST_STEPS * (t_hi - t_lo)])
+    cos, sin = np.cos(m * twists), np.sin(m * twists)
+    g = np.stack([cos * h[0] - sin * h[2], np.full_like(twists, h[1]), sin * h[0] + cos * h[2]], axis=1)
+    wrists = np.stack([np.angle(np.exp(1j * np.arctan2(-g[:, 2], g[:, 1]))),
+                       m * np.arcsin(np.clip(-g[:, 0], -1.0, 1.0))], axis=1)
+    violation = np.round(np.sum(np.maximum(lo - wrists, 0.0) + np.maximum(wrists - hi, 0.0), axis=1), 9)
+    best = np.lexsort((np.abs(twists - twists[0]), violation))[0]     # the start's twist when it fits
+    twist, angles = twists[best], wrists[best]
+    out = np.array([flex, abd, rot, bend, twist, *angles])
+    return np.clip(out, limits[base:base + 7, 0], limits[base:base + 7, 1])
 
 
 def place_arm(pose, skeleton: Skeleton, side: str, targets, *, regularization: float = PLACE_REGULARIZATION,
@@ -392,8 +291,7 @@ def place_arm(pose, skeleton: Skeleton, side: str, targets, *, regularization: f
     misses by more than :data:`PLACE_TOLERANCE_M` (a limit was hit), a bounded Levenberg–Marquardt
     (the kernel of :func:`reach_arm`) on the three joints' positions from the closed form takes
     the arm as close as the limits allow; the closer of the two is returned. The torso, head and other arm are kept,
-    so the shoulder stays where ``pose`` has it. Both run in one compiled kernel; its slow twin
-    is ``tests/naive.py``'s ``naive_place_arm``.
+    so the shoulder stays where ``pose`` has it.
 
     Parameters
     ----------
@@ -427,16 +325,22 @@ def place_arm(pose, skeleton: Skeleton, side: str, targets, *, regularization: f
         raise ValueError(f"targets must be {len(ARM_JOINTS)} rows of 3 finite coordinates in metres, got {targets!r}")
     if regularization < 0 or not np.isfinite(regularization):
         raise ValueError(f"regularization must be finite and non-negative, got {regularization!r}")
-    limits = np.ascontiguousarray(limits, dtype=np.float64)
-    if limits.shape != (len(q), 2):
-        raise ValueError(f"limits must have shape ({len(q)}, 2), got {limits.shape}")
     active = np.array([PARAMETER_INDEX[f"{side}_{p}"] for p in ARM_PARAMETERS], dtype=np.int64)
+    lower, upper = limits[active, 0].astype(np.float64), limits[active, 1].astype(np.float64)
     rows = np.array([JOINT_NAMES.index(f"{side}_{j}") for j in ARM_JOINTS])
     segments, local = skeleton.joint_segment[rows], skeleton.joint_local[rows]
-    out, miss = _place(q, skeleton.offsets, segments, local, 0 if side == "r" else 1, np.ascontiguousarray(t), limits,
-                       active, _TWIST_STEPS, float(regularization), int(iterations), PLACE_TOLERANCE_M,
-                       float(polish_within_m))
-    return ArmPlacement(pose=out, miss_m=float(miss))
+    closed = q.copy()
+    closed[active] = _arm_angles(q, skeleton, side, t, limits)
+    best = closed
+    best_miss = float(np.max(np.linalg.norm(joint_positions(closed, skeleton)[rows] - t, axis=1)))
+    if best_miss <= PLACE_TOLERANCE_M or best_miss > polish_within_m:
+        return ArmPlacement(pose=best, miss_m=best_miss)
+    out = _reach(closed, skeleton.offsets, segments, local, active, lower, upper, t, REACH_SCALE_M,
+                 float(regularization), int(iterations))
+    miss = float(np.max(np.linalg.norm(joint_positions(out, skeleton)[rows] - t, axis=1)))
+    if miss < best_miss:
+        best, best_miss = out, miss
+    return ArmPlacement(pose=best, miss_m=best_miss)
 
 
 __all__ = ["ARM_JOINTS", "ARM_PARAMETERS", "ArmPlacement", "REACH_PARAMETERS", "place_arm", "reach_arm"]
