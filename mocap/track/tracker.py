@@ -238,7 +238,7 @@ class Tracker:
         loaded now when the configuration uses it); then the arm solvers of the stages that run
         only on some frames are called once for each arm (hand re-acquisition's
         :func:`~mocap.body.ik.reach_arm`; with ``keypoints`` the mirrors'
-        :func:`~mocap.body.ik.place_arm`, whose polish is compiled with it). Each kernel gets
+        :func:`~mocap.body.ik.place_arm`, on targets beyond the arm's reach so that its polish runs). Each kernel gets
         the types of a real frame's (the costs convert their images), so no later frame
         compiles or loads one (``tests/track/test_tracker.py``).
 
@@ -266,7 +266,10 @@ class Tracker:
             arm = [JOINT_INDEX[f"{side}_{j}"] for j in ARM_JOINTS]
             reach_arm(pose, self.model.skeleton, side, joints[arm[-1]])
             if keypoints:
-                place_arm(pose, self.model.skeleton, side, joints[arm])
+                # targets 10 % farther from the shoulder than the arm reaches: the closed form
+                # misses them, so the polish (a kernel of its own) runs too
+                shoulder = joints[JOINT_INDEX[f"{side}_shoulder"]]
+                place_arm(pose, self.model.skeleton, side, shoulder + 1.1 * (joints[arm] - shoulder))
 
     # -- streaming ---------------------------------------------------------------------------
     def push(self, frame_index: int, prepared, keypoints=None) -> list[FrameResult]:
