@@ -406,16 +406,23 @@ class Tracker:
         share = (leader.region.evaluations if leader.region else 0) / max(leader.evaluations, 1)
         timings["region"] = 1e3 * leader_s * share
         timings["edge"] = 1e3 * leader_s - timings["region"]
-        # what starts from the leader
-        recovered = [work.submit(_fit, score, self.last_good, cfg, None, RECOVERY_STEP_SCALE)] if (
-            cfg.recovery and leader.failed(cfg)) else []
-        reacquired = self._reacquire(prepared, leader, score, work) if cfg.hand_reacquisition else []
-        jumped = self._jump(leader, score, work) if cfg.jumps else []
-        mirrored = self._mirror(leader, score, work) if cfg.mirrors and keypoint_cost is not None else []
-        candidates: list[tuple[_Scored, str]] = []
-        for futures, origin in ((tracked, "tracked"), (recovered, "recovery"), (reacquired, "reacquisition"),
-                                (jumped, "jump"), (mirrored, "mirror")):
-            candidates += [(f.result(), origin) for f in futures]
+        # what starts from the leader: each stage a task of its own, proposing and refining on
+        # its thread (the heaviest first)
+        stages: list[tuple[Future | _Done, str]] = []
+        if cfg.recovery and leader.failed(cfg):
+            stages.append((work.submit(_recover, score, self.last_good, cfg), "recovery"))
+        if cfg.jumps:
+            stages.append((work.submit(self._jump, score, leader.pose), "jump"))
+        if cfg.hand_reacquisition:
+            stages.append((work.submit(self._reacquire, score, prepared, leader.pose), "reacquisition"))
+        if cfg.mirrors and keypoint_cost is not None:
+            stages.append((work.submit(self._mirror, score, leader.pose), "mirror"))
+        candidates: list[tuple[_Scored, str]] = [(f.result(), "tracked") for f in tracked]
+        done = {origin: f.result() for f, origin in stages}
+        for origin in ("recovery", "reacquisition", "jump", "mirror"):      # the candidates' order
+            if origin in done:
+                candidates += [(c, origin) for c in done[origin].candidates]
+                work.evaluations += done[origin].evaluations
         t3 = time.perf_counter()
         for stage in proposed:
             candidates += [(f.result(), origin) for f, origin in stage.refined]
@@ -503,33 +510,33 @@ class Tracker:
                 keep.append(int(i))
         return keep
 
-    def _reacquire(self, prepared, leader: Registration, score, work: "_FrameWork") -> list[Future]:
-        """Hand re-acquisition from the leader (see :class:`TrackerConfig`): the lowest-F reach
-        refined, as a future (none when no hand is left unexplained)."""
-        joints = self.model.joint_positions(leader.pose)
+    def _reacquire(self, costs: "_FrameCosts", score, prepared, pose: np.ndarray) -> "_Stage":
+        """Hand re-acquisition from the leader's ``pose`` (see :class:`TrackerConfig`): the
+        lowest-F reach refined and scored (none when no hand is left unexplained)."""
+        joints = self.model.joint_positions(pose)
         targets = unexplained_hands(prepared.labels, joints, self.model, self.camera, self.config)
         if len(targets) == 0:
-            return []
-        proposals = reach_proposals(leader.pose, joints, targets, self.model, self.camera)
+            return _Stage([], 0)
+        proposals = reach_proposals(pose, joints, targets, self.model, self.camera)
         if not proposals:
-            return []
-        work.evaluations += len(proposals)
-        return [work.submit(_refine_lowest, score, proposals, self.config, self.config.hypothesis_evaluations)]
+            return _Stage([], 0)
+        start = proposals[int(np.argmin(_region_values(costs, proposals)))]
+        return _Stage([_fit(costs, score, start, self.config, self.config.hypothesis_evaluations)], len(proposals))
 
-    def _jump(self, leader: Registration, score, work: "_FrameWork") -> list[Future]:
-        """The leader's kinematic jumps, the ``JUMPS_REFINED`` lowest-F ones refined (futures)."""
+    def _jump(self, costs: "_FrameCosts", score, pose: np.ndarray) -> "_Stage":
+        """The kinematic jumps of the leader's ``pose``, the ``JUMPS_REFINED`` lowest-F ones
+        refined and scored."""
         cfg = self.config
-        jumps = jump_proposals(leader.pose, self.model)
-        values = work.submit(_region_values, [q for _, q in jumps]).result()
-        work.evaluations += len(jumps)
-        return [work.submit(_fit, score, jumps[int(i)][1], cfg, cfg.jump_evaluations)
-                for i in np.argsort(values, kind="stable")[:JUMPS_REFINED]]
+        jumps = jump_proposals(pose, self.model)
+        values = _region_values(costs, [q for _, q in jumps])
+        return _Stage([_fit(costs, score, jumps[int(i)][1], cfg, cfg.jump_evaluations)
+                       for i in np.argsort(values, kind="stable")[:JUMPS_REFINED]], len(jumps))
 
-    def _mirror(self, leader: Registration, score, work: "_FrameWork") -> list[Future]:
+    def _mirror(self, costs: "_FrameCosts", score, pose: np.ndarray) -> "_Stage":
         """The converged leader's depth alternatives (:mod:`mocap.track.branches`), each registered
-        with ``mirror_evaluations`` (0: its residuals where it stands), as futures."""
-        return [work.submit(_fit, score, alternative.pose, self.config, self.config.mirror_evaluations)
-                for alternative in depth_alternatives(leader.pose, self.model, self.camera)]
+        with ``mirror_evaluations`` (0: its residuals where it stands) and scored."""
+        return _Stage([_fit(costs, score, alternative.pose, self.config, self.config.mirror_evaluations)
+                       for alternative in depth_alternatives(pose, self.model, self.camera)], 0)
 
     def _propose(self, source: ProposalSource, prepared, context: ProposalContext, rough, score,
                  work: "_FrameWork") -> "_Proposed":
@@ -657,6 +664,15 @@ class _FrameWork:
 
 
 @dataclass
+class _Stage:
+    """A stage's scored candidates, in order, and the unrefined evaluations it spent (the
+    registrations count their own)."""
+
+    candidates: list["_Scored"]
+    evaluations: int
+
+
+@dataclass
 class _Proposed:
     """One proposal source's refinements on a frame: (future registration, origin) pairs, and the
     seconds the calling thread spent proposing and ranking."""
@@ -707,10 +723,9 @@ def _rough_values(costs: _FrameCosts, rough, poses: list[np.ndarray]) -> np.ndar
     return np.array([rough(costs, q) for q in poses])
 
 
-def _refine_lowest(costs: _FrameCosts, score, poses: list[np.ndarray], config: TrackerConfig,
-                   evaluations: int) -> _Scored:
-    """The pose of lowest F among ``poses`` refined by a registration of ``evaluations``, scored."""
-    return _fit(costs, score, poses[int(np.argmin(_region_values(costs, poses)))], config, evaluations)
+def _recover(costs: _FrameCosts, score, last_good: np.ndarray, config: TrackerConfig) -> _Stage:
+    """Recovery: the last good pose registered with the full budget and a wider simplex, scored."""
+    return _Stage([_fit(costs, score, last_good, config, None, RECOVERY_STEP_SCALE)], 0)
 
 
 def _evidence_from(state: dict[str, np.ndarray], i: int, frame: dict) -> _Evidence | None:
