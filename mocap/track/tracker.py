@@ -37,6 +37,11 @@ the frame's residuals (region, edge, keypoint distance, the failure flag) are th
 smoothed pose, evaluated on the frame's image then (the window keeps each frame's label image,
 distance map and keypoints for that).
 
+A frame's registrations and proposal scoring run on ``threads`` threads (:class:`Tracker`): the
+compiled costs hold no interpreter lock, each task has cost objects of its own, and the tracker
+reads the results in the order it asked for them, so the decisions are the same, bit for bit,
+for every thread count.
+
 The tracker streams: :meth:`Tracker.push` takes a prepared frame and returns the frames whose
 pose is now final, :meth:`Tracker.finish` the rest; :meth:`Tracker.state` and
 :meth:`Tracker.restore` carry its exact state across a resumed run. Online, its memory holds
