@@ -57,6 +57,10 @@ observers and its box), measured in this process; run under ``taskset -c 0`` for
 Results go to ``--out`` (default ``experiments/results/front_back``): one JSON of per-frame
 records per (material, size, seed or clip) under ``frames/`` (reused when present), and
 ``front_back.md`` and ``summary.json`` from ``report``.
+
+Measured on 2026-11-29 (docs/research-log.md): MediaPipe's "facing" is right on 96-100 % of the
+frames it says it and on every real frame; its "away" is not evidence; a hidden face reads as a
+back to every observer; head colour fails on the real clips; the cascade sees real faces only.
 """
 from __future__ import annotations
 
