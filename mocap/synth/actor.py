@@ -222,6 +222,10 @@ class Appearance:
         Stripe or check period on the body, metres.
     bare_forearms : bool
         Short sleeves: forearms are skin (and belong to the skin class).
+    face : bool
+        A face on the head (skin below a hairline, eyes, brows, a mouth); False draws hair all
+        round the head (no face features and no face skin: a figure whose face is never seen,
+        issue 49).
     """
 
     skin: tuple[float, float, float]
@@ -232,6 +236,7 @@ class Appearance:
     pattern: str = "plain"
     pattern_period_m: float = 0.06
     bare_forearms: bool = False
+    face: bool = True
 
     def __post_init__(self) -> None:
         if self.pattern not in PATTERNS:
@@ -248,10 +253,13 @@ class Appearance:
         """JSON-ready description, colours as sRGB 0-255 (for ``meta.json``)."""
         def rgb(c):
             return [int(round(255 * v)) for v in c]
-        return {"skin_srgb": rgb(self.skin), "clothes_srgb": rgb(self.clothes),
-                "clothes_secondary_srgb": rgb(self.clothes_secondary), "trousers_srgb": rgb(self.trousers),
-                "hair_srgb": rgb(self.hair), "pattern": self.pattern,
-                "pattern_period_m": self.pattern_period_m, "bare_forearms": self.bare_forearms}
+        out = {"skin_srgb": rgb(self.skin), "clothes_srgb": rgb(self.clothes),
+               "clothes_secondary_srgb": rgb(self.clothes_secondary), "trousers_srgb": rgb(self.trousers),
+               "hair_srgb": rgb(self.hair), "pattern": self.pattern,
+               "pattern_period_m": self.pattern_period_m, "bare_forearms": self.bare_forearms}
+        if not self.face:                   # only then: the meta.json of a figure with a face is unchanged
+            out["face"] = False
+        return out
 
 
 def _hsv(h: float, s: float, v: float) -> tuple[float, float, float]:

@@ -16,7 +16,7 @@ from __future__ import annotations
 import hashlib
 import json
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
 from typing import Callable
@@ -233,7 +233,8 @@ class SequenceSetup:
                                                             spawn_key=(*self.noise_seed.spawn_key, index + 1)))
 
 
-def setup_sequence(name: str, *, seed: int = 0, size=(160, 120), sensor: SensorConfig | None = None) -> SequenceSetup:
+def setup_sequence(name: str, *, seed: int = 0, size=(160, 120), sensor: SensorConfig | None = None,
+                   face: bool = True) -> SequenceSetup:
     """The fixed part of a sequence: camera, actor, scene, light, sensor.
 
     Parameters
@@ -245,6 +246,9 @@ def setup_sequence(name: str, *, seed: int = 0, size=(160, 120), sensor: SensorC
     size : (int, int)
         Output width and height, pixels.
     sensor : SensorConfig, optional
+    face : bool
+        Draw the actor's face; False draws hair all round the head
+        (:attr:`~mocap.synth.actor.Appearance.face`), everything else as with the face.
 
     Returns
     -------
@@ -258,6 +262,8 @@ def setup_sequence(name: str, *, seed: int = 0, size=(160, 120), sensor: SensorC
     s = supersampling(width)
     actor = Actor.random(np.random.default_rng(streams["actor"]), bare_forearms=spec.bare_forearms,
                          pattern=spec.pattern)
+    if not face:
+        actor = replace(actor, appearance=replace(actor.appearance, face=False))
     scene_rng = np.random.default_rng(streams["scene"])
     light = Light.random(scene_rng)
     background = make_background(scene_rng, width * s, height * s)

@@ -161,8 +161,10 @@ def _head_albedo(actor: Actor, p: np.ndarray, base: np.ndarray, noise: np.ndarra
     v = (-p[:, 1] - (start + 0.5 * length)) / (0.5 * length)    # -1 chin ... +1 crown
     x = p[:, 0] / half_w
     z = p[:, 2] / half_d                                        # -1 face ... +1 back of the head
-    out = base.copy()
     hair = srgb_to_linear(actor.appearance.hair) * (1.0 + 0.12 * noise)[:, None]
+    if not actor.appearance.face:                               # hair all round: no face skin, no features
+        return hair
+    out = base.copy()
     # hairline: high on the forehead, low at the back, with a ragged edge
     line = ACTOR_HAIRLINE - 0.8 * _smoothstep(-0.3, 0.6, z) + 0.05 * noise
     w_hair = _smoothstep(line - 0.04, line + 0.04, v)
