@@ -195,16 +195,21 @@ def reach_proposals(pose: np.ndarray, joints: np.ndarray, targets: np.ndarray, m
     list of ndarray, shape (23,)
     """
     reach = {side: arm_reach_m(pose, model, side) for side in SIDES}
-    out = []
-    for uv in targets:
-        ray = pixel_ray(camera, uv)
-        for side in SIDES:
-            shoulder = joints[JOINT_INDEX[f"{side}_shoulder"]]
-            depths = [float(shoulder @ ray)]
-            for fraction in REACH_FRACTIONS:
-                depths += list(ray_sphere_depths(ray, shoulder, fraction * reach[side]))
-            out += [reach_arm(pose, model.skeleton, side, t * ray) for t in depths if t > 0]
-    return out
+    return [q for uv in targets for side in SIDES
+            for q in arm_reach_proposals(pose, joints, uv, side, reach[side], model, camera)]
+
+
+def arm_reach_proposals(pose: np.ndarray, joints: np.ndarray, uv, side: str, reach_m: float, model: BodyModel,
+                        camera: Camera) -> list[np.ndarray]:
+    """:func:`reach_proposals` of one target pixel ``uv`` (pixels, shape (2,)) and one arm
+    (``side`` ``"r"`` or ``"l"``, its reach ``reach_m`` metres: :func:`arm_reach_m`), in its
+    order: the tracker runs the pixels and arms on threads of their own."""
+    ray = pixel_ray(camera, uv)
+    shoulder = joints[JOINT_INDEX[f"{side}_shoulder"]]
+    depths = [float(shoulder @ ray)]
+    for fraction in REACH_FRACTIONS:
+        depths += list(ray_sphere_depths(ray, shoulder, fraction * reach_m))
+    return [reach_arm(pose, model.skeleton, side, t * ray) for t in depths if t > 0]
 
 
 def jump_proposals(pose: np.ndarray, model: BodyModel) -> list[tuple[str, np.ndarray]]:

@@ -62,6 +62,7 @@ from typing import Sequence
 import numpy as np
 
 from mocap.body.ik import ARM_JOINTS, place_arm, reach_arm
+from mocap.body.jumps import SIDES
 from mocap.body.model import BodyModel
 from mocap.body.pose import HEADING, PARAMETER_INDEX, check_pose, clamp_to_limits, heading_near
 from mocap.body.prior import PosePrior, default_prior
@@ -77,8 +78,8 @@ from mocap.track.branches import depth_alternatives
 from mocap.track.config import JUMPS_REFINED, MERGE_DISTANCE_M, RECOVERY_STEP_SCALE, TrackerConfig, split_budget
 from mocap.track.decode import backtrack, viterbi_step
 from mocap.track.lifter import LiftedHypotheses, Lifter
-from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, jump_proposals, reach_proposals,
-                                   unexplained_hands)
+from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, arm_reach_m, arm_reach_proposals,
+                                   jump_proposals, unexplained_hands)
 from mocap.track.registration import Registration, failed_residuals, register
 from mocap.track.score import MOTION, UNARY_TERMS, ScoredCandidate, transition_term, weighted_sum, weights
 from mocap.track.smooth import Smoother
@@ -418,10 +419,10 @@ class Tracker:
             stages.append((work.submit(_recover, score, self.last_good, cfg), "recovery"))
         if cfg.jumps:
             stages.append((work.submit(self._jump, score, leader.pose), "jump"))
-        if cfg.hand_reacquisition:
-            stages.append((work.submit(self._reacquire, score, prepared, leader.pose), "reacquisition"))
         if cfg.mirrors and keypoint_cost is not None:
             stages.append((work.submit(self._mirror, score, leader.pose), "mirror"))
+        if cfg.hand_reacquisition:     # its reaches spread over the threads, then one task ranks and refines
+            stages.append((self._reacquire(prepared, leader.pose, score, work), "reacquisition"))
         candidates: list[tuple[_Scored, str]] = [(f.result(), "tracked") for f in tracked]
         done = {origin: f.result() for f, origin in stages}
         for origin in ("recovery", "reacquisition", "jump", "mirror"):      # the candidates' order
@@ -515,18 +516,22 @@ class Tracker:
                 keep.append(int(i))
         return keep
 
-    def _reacquire(self, costs: "_FrameCosts", score, prepared, pose: np.ndarray) -> "_Stage":
-        """Hand re-acquisition from the leader's ``pose`` (see :class:`TrackerConfig`): the
-        lowest-F reach refined and scored (none when no hand is left unexplained)."""
+    def _reacquire(self, prepared, pose: np.ndarray, score, work: "_FrameWork") -> "Future | _Done":
+        """Hand re-acquisition from the leader's ``pose`` (see :class:`TrackerConfig`): each
+        unexplained skin region's reaches (:func:`~mocap.track.proposals.arm_reach_proposals`),
+        one task a region and arm; then a task that refines the lowest-F reach and scores it
+        (a stage of none when no hand is left unexplained)."""
         joints = self.model.joint_positions(pose)
         targets = unexplained_hands(prepared.labels, joints, self.model, self.camera, self.config)
         if len(targets) == 0:
-            return _Stage([], 0)
-        proposals = reach_proposals(pose, joints, targets, self.model, self.camera)
+            return _Done(_Stage([], 0))
+        reach = {side: arm_reach_m(pose, self.model, side) for side in SIDES}
+        reaches = [work.submit(_arm_reaches, pose, joints, uv, side, reach[side], self.model, self.camera)
+                   for uv in targets for side in SIDES]
+        proposals = [q for f in reaches for q in f.result()]      # reach_proposals' order
         if not proposals:
-            return _Stage([], 0)
-        start = proposals[int(np.argmin(_region_values(costs, proposals)))]
-        return _Stage([_fit(costs, score, start, self.config, self.config.hypothesis_evaluations)], len(proposals))
+            return _Done(_Stage([], 0))
+        return work.submit(_refine_lowest, score, proposals, self.config, self.config.hypothesis_evaluations)
 
     def _jump(self, costs: "_FrameCosts", score, pose: np.ndarray) -> "_Stage":
         """The kinematic jumps of the leader's ``pose``, the ``JUMPS_REFINED`` lowest-F ones
@@ -726,6 +731,20 @@ def _region_values(costs: _FrameCosts, poses: list[np.ndarray]) -> np.ndarray:
 def _rough_values(costs: _FrameCosts, rough, poses: list[np.ndarray]) -> np.ndarray:
     """``rough(costs, pose)`` (the unrefined unary score) at each pose, shape (len(poses),)."""
     return np.array([rough(costs, q) for q in poses])
+
+
+def _arm_reaches(costs: _FrameCosts, pose: np.ndarray, joints: np.ndarray, uv: np.ndarray, side: str,
+                 reach_m: float, model: BodyModel, camera: Camera) -> list[np.ndarray]:
+    """:func:`~mocap.track.proposals.arm_reach_proposals` as a task (it needs no cost)."""
+    return arm_reach_proposals(pose, joints, uv, side, reach_m, model, camera)
+
+
+def _refine_lowest(costs: _FrameCosts, score, poses: list[np.ndarray], config: TrackerConfig,
+                   evaluations: int) -> _Stage:
+    """The pose of lowest F among ``poses`` refined by a registration of ``evaluations`` and
+    scored: a stage that spent ``len(poses)`` unrefined evaluations."""
+    start = poses[int(np.argmin(_region_values(costs, poses)))]
+    return _Stage([_fit(costs, score, start, config, evaluations)], len(poses))
 
 
 def _recover(costs: _FrameCosts, score, last_good: np.ndarray, config: TrackerConfig) -> _Stage:
