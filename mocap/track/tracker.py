@@ -419,10 +419,13 @@ class Tracker:
             stages.append((work.submit(_recover, score, self.last_good, cfg), "recovery"))
         if cfg.jumps:
             stages.append((work.submit(self._jump, score, leader.pose), "jump"))
+        reaches = self._reaches(prepared, leader.pose, work) if cfg.hand_reacquisition else []
         if cfg.mirrors and keypoint_cost is not None:
             stages.append((work.submit(self._mirror, score, leader.pose), "mirror"))
         if cfg.hand_reacquisition:     # its reaches spread over the threads, then one task ranks and refines
-            stages.append((self._reacquire(prepared, leader.pose, score, work), "reacquisition"))
+            proposals = [q for f in reaches for q in f.result()]      # reach_proposals' order
+            stages.append((work.submit(_refine_lowest, score, proposals, cfg, cfg.hypothesis_evaluations)
+                           if proposals else _Done(_Stage([], 0)), "reacquisition"))
         candidates: list[tuple[_Scored, str]] = [(f.result(), "tracked") for f in tracked]
         done = {origin: f.result() for f, origin in stages}
         for origin in ("recovery", "reacquisition", "jump", "mirror"):      # the candidates' order
@@ -516,22 +519,18 @@ class Tracker:
                 keep.append(int(i))
         return keep
 
-    def _reacquire(self, prepared, pose: np.ndarray, score, work: "_FrameWork") -> "Future | _Done":
+    def _reaches(self, prepared, pose: np.ndarray, work: "_FrameWork") -> list[Future | _Done]:
         """Hand re-acquisition from the leader's ``pose`` (see :class:`TrackerConfig`): each
         unexplained skin region's reaches (:func:`~mocap.track.proposals.arm_reach_proposals`),
-        one task a region and arm; then a task that refines the lowest-F reach and scores it
-        (a stage of none when no hand is left unexplained)."""
+        one task a region and arm, in :func:`~mocap.track.proposals.reach_proposals`' order
+        (none when no hand is left unexplained); the lowest-F reach is then refined."""
         joints = self.model.joint_positions(pose)
         targets = unexplained_hands(prepared.labels, joints, self.model, self.camera, self.config)
         if len(targets) == 0:
-            return _Done(_Stage([], 0))
+            return []
         reach = {side: arm_reach_m(pose, self.model, side) for side in SIDES}
-        reaches = [work.submit(_arm_reaches, pose, joints, uv, side, reach[side], self.model, self.camera)
-                   for uv in targets for side in SIDES]
-        proposals = [q for f in reaches for q in f.result()]      # reach_proposals' order
-        if not proposals:
-            return _Done(_Stage([], 0))
-        return work.submit(_refine_lowest, score, proposals, self.config, self.config.hypothesis_evaluations)
+        return [work.submit(_arm_reaches, pose, joints, uv, side, reach[side], self.model, self.camera)
+                for uv in targets for side in SIDES]
 
     def _jump(self, costs: "_FrameCosts", score, pose: np.ndarray) -> "_Stage":
         """The kinematic jumps of the leader's ``pose``, the ``JUMPS_REFINED`` lowest-F ones
