@@ -118,3 +118,17 @@ def test_calibration_numbers_are_numbers():
     bad["dimensions"]["parts"][part]["length"] = True
     with pytest.raises(ValueError, match=f"part '{part}' length must be a number of metres"):
         Calibration.from_dict(bad)
+
+
+def test_threads_default_to_the_cores_less_the_detector_but_two_where_there_are_two():
+    """``OwnVideoOptions.threads``: a positive integer or None; None resolves to the cores less
+    one for MediaPipe's process, but never below two on a machine of two (the measured rule)."""
+    from mocap.run.options import OwnVideoOptions, default_threads
+
+    table = {(1, False): 1, (1, True): 1, (2, False): 2, (2, True): 2, (3, True): 2, (16, True): 15, (16, False): 16}
+    assert {key: default_threads(key[1], cores=key[0]) for key in table} == table
+    assert OwnVideoOptions(threads=3).threads == 3
+    assert OwnVideoOptions.from_dict(json.loads(json.dumps(OwnVideoOptions(threads=2).to_dict()))).threads == 2
+    for bad in (0, -2, True, 1.5):
+        with pytest.raises(ValueError, match="threads"):
+            OwnVideoOptions(threads=bad)

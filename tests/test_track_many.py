@@ -326,3 +326,20 @@ def test_a_hung_worker_s_video_is_resumed_elsewhere_after_the_timeout_and_report
     assert json.loads((out / name / files.RUN_JSON).read_text())["resumed_from_frame"] == CHECKPOINT_EVERY
     for clip in clips:
         assert_same_track(out / clip.name, single_runs[clip.name])
+
+
+def test_local_workers_share_the_cores_between_the_clips_and_their_threads(monkeypatch):
+    """On 8 cores, 2 local workers give each clip 4 threads (3 with MediaPipe in its own
+    process), 8 workers one each; threads asked for are kept; in this process (no workers) the
+    run's own default applies."""
+    from mocap.run import OwnVideoOptions
+    from mocap.run import many
+
+    monkeypatch.setattr(many, "default_workers", lambda: 8)
+    monkeypatch.setattr(many, "resolve_keypoints", lambda name: (None if name == "none" else "mediapipe", ""))
+    threads = lambda options, workers: many._checked(options, workers, 60.0)[0].threads
+    assert threads(OwnVideoOptions(keypoints="none"), 2) == 4
+    assert threads(OwnVideoOptions(keypoints="mediapipe"), 2) == 3
+    assert threads(OwnVideoOptions(keypoints="none"), 8) == 1
+    assert threads(OwnVideoOptions(keypoints="none", threads=5), 2) == 5
+    assert threads(OwnVideoOptions(keypoints="none"), 0) is None        # this process: run's own default

@@ -40,9 +40,12 @@ def available_cores() -> int:
 
 def default_threads(detector_process: bool, cores: int | None = None) -> int:
     """The tracker's threads when none are asked for: the cores (``cores``, default
-    :func:`available_cores`) less the one a keypoint detector in its own process takes, at least 1."""
+    :func:`available_cores`) less the one a keypoint detector in its own process takes, but not
+    fewer than two where there are two: MediaPipe works about half of a frame's time, and on two
+    cores a second thread took 16.0 frames a second against 15.4 with one (docs/research-log.md,
+    2026-11-29)."""
     cores = available_cores() if cores is None else cores
-    return max(1, cores - (1 if detector_process else 0))
+    return max(min(cores, 2), cores - (1 if detector_process else 0))
 
 
 def background_mode(image: bool, frames: bool, none: bool) -> str:
