@@ -142,6 +142,16 @@ class Keypoints:
         """Whether each joint is present, bool (10,)."""
         return self.confidence > 0.0
 
+    def shows_front(self) -> bool:
+        """Whether the detector's labels put the person facing the camera: its left shoulder on
+        the image's right of its right shoulder, both present (False otherwise, also when it
+        cannot tell). MediaPipe Pose is right 96-100 % of the times it says so, on drawn and real
+        faces; its contrary is no evidence of a back (docs/research-log.md, 2026-11-29)."""
+        left, right = _JOINT["l_shoulder"], _JOINT["r_shoulder"]
+        if not (self.confidence[left] > 0.0 and self.confidence[right] > 0.0):
+            return False
+        return bool(self.uv[left, 0] > self.uv[right, 0])
+
     def swapped(self) -> "Keypoints":
         """The same frame's keypoints with left and right swapped (:data:`SWAPPED_JOINTS`): the
         detector's ``r_elbow`` becomes ``l_elbow`` and so on; positions, confidences and 3D move

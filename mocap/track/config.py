@@ -123,6 +123,12 @@ class TrackerConfig(JsonConfig):
         every candidate of a frame, tracked or proposed, pays it. 0.5 was the best of 0 / 0.2 / 0.5 / 1.5 on seed 0; on the unseen seed 23
         with oracle keypoints it took the tracker from 78 to 71 mm median and from 19.9 % to 16.5 %
         of frames over 100 mm (the lifter's proposals alone; docs/research-log.md, issue 29).
+    labelling_weight : float
+        With keypoints, score per nat of the labelling term
+        (:func:`mocap.track.score.labelling_term`): a candidate that reads the keypoints with left
+        and right swapped on a frame whose detector shows the person's front pays
+        :data:`~mocap.track.score.FRONT_SWAP_NATS` (a body turned round with swapped labels
+        projects as the right one does); 0: off.
     lifter_file : str or None
         The lifter's file (:meth:`mocap.track.lifter.Lifter.load`); None: the shipped one. An
         experiment's lifter trained without a subject is measured on that subject this way
@@ -187,6 +193,7 @@ class TrackerConfig(JsonConfig):
     keypoint_weight: float = 2.0
     lifter_weight: float = 0.5
     lifter_file: str | None = None
+    labelling_weight: float = 1.0
     prior_weight: float = 0.05
     edge_weight: float = 2.0
     motion_weight: float = 1.0

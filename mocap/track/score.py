@@ -40,6 +40,12 @@ TURN_SIGMA_DEG = 45.0
 #: :data:`MOTION_CAP`, what an arm's jump pays); a 30° step pays 0.22 (docs/research-log.md,
 #: 2026-11-29).
 TURN_CAP = 40.0
+#: The labelling term's price of reading the keypoints swapped on a frame whose detector shows the
+#: front (:meth:`mocap.io.keypoints.Keypoints.shows_front`): ``ln(0.97 / 0.03)`` nats, the odds
+#: that MediaPipe's labels are right when it says so (96-100 % in the front/back audit,
+#: docs/research-log.md, 2026-11-29). A body turned round with the labels read swapped projects
+#: as the right one does: this is what tells them apart.
+FRONT_SWAP_NATS = math.log(0.97 / 0.03)
 
 
 @dataclass(frozen=True)
@@ -76,6 +82,7 @@ TERMS: tuple[Term, ...] = (
     Term("keypoint", "keypoint_weight", "pixels", beyond_paper=True),     # keypoint distance D_k
     Term("prior", "prior_weight", "nats", beyond_paper=True),             # the pose prior's energy
     Term("lifter", "lifter_weight", "nats", beyond_paper=True),           # the lifter's energy at the joints
+    Term("labelling", "labelling_weight", "nats", beyond_paper=True),     # the detector's front against the swap
     Term("motion", "motion_weight", "truncated quadratic", pairwise=True),
 )
 #: The terms' names, :data:`TERMS` order.
@@ -142,6 +149,15 @@ def weighted_sum(values, w):
     for j in range(x.shape[-1]):
         total = total + np.where(np.isnan(x[..., j]), 0.0, w[j] * x[..., j])
     return total
+
+
+def labelling_term(shows_front: bool | None, swapped: bool) -> float:
+    """A candidate's labelling term before its weight (nats): :data:`FRONT_SWAP_NATS` when it
+    reads the keypoints swapped on a frame whose detector shows the front, else 0; NaN on a frame
+    without keypoints (``shows_front`` None)."""
+    if shows_front is None:
+        return math.nan
+    return FRONT_SWAP_NATS if shows_front and swapped else 0.0
 
 
 def turn_term(previous, current) -> np.ndarray:
@@ -235,6 +251,8 @@ class ScoredCandidate:
         The pose prior's energy; NaN without a prior (``prior_weight`` 0).
     lifter : float, nats
         The lifter term (:meth:`~mocap.track.proposals.LifterSource.energy`); NaN on frames not lifted.
+    labelling : float, nats
+        :func:`labelling_term`; NaN on frames without keypoints.
     motion : ndarray, shape (K_prev,), float64
         The motion term (:func:`motion_term`) from each hypothesis of the previous frame's beam.
     unary : float
@@ -249,6 +267,7 @@ class ScoredCandidate:
     keypoint: float
     prior: float
     lifter: float
+    labelling: float
     motion: np.ndarray
     unary: float
 
