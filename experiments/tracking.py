@@ -78,6 +78,7 @@ CONFIGS = MappingProxyType({
     # the keypoint term alone; issue 34)
     "oracle-keypoints": {},
     "oracle-no-lifter": {"lifter_weight": 0.0},
+    "oracle-no-labelling": {"labelling_weight": 0.0},
     # the oracle's keypoints with left and right swapped on runs of half the frames, and on every
     # frame (SWAPPED_KEYPOINTS; a detector that does not see the face, issue 44)
     "oracle-swapped": {},
@@ -85,6 +86,8 @@ CONFIGS = MappingProxyType({
     # MediaPipe Pose's keypoints on the rendered frames, as `--keypoints mediapipe` runs it (image mode,
     # 160x120): the detector a user has, its errors and labels as they come (DETECTOR_KEYPOINTS)
     "mediapipe-keypoints": {},
+    # the same without the labelling term (issue 49: the detector's front against a swapped reading)
+    "mediapipe-no-labelling": {"labelling_weight": 0.0},
     # the written poses' smoother (issue 39): live (lag 0), offline, and off
     "oracle-L0": {"lag": 0},
     "oracle-offline": {"offline": True},
@@ -109,13 +112,14 @@ CONFIGS = MappingProxyType({
 #: lower body; :data:`experiments.units.EXTENSIONS` left out) instead of the default four classes.
 TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
 #: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
-ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter", "oracle-fitted",
+ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter", "oracle-no-labelling",
+                                                              "oracle-fitted",
                                                               "oracle-fitted-silhouette", "oracle-L0", "oracle-offline",
                                                               "oracle-unsmoothed", "oracle-swapped",
                                                               "oracle-swapped-all")})
 #: Configurations given MediaPipe's keypoints on the rendered frames
 #: (:func:`experiments.keypoints.detector_keypoints`; needs the keypoints extra).
-DETECTOR_KEYPOINTS = frozenset({"mediapipe-keypoints"})
+DETECTOR_KEYPOINTS = frozenset({"mediapipe-keypoints", "mediapipe-no-labelling"})
 #: Configurations whose oracle keypoints have left and right swapped: the share of frames
 #: (:func:`experiments.keypoints.swap_runs`).
 SWAPPED_KEYPOINTS = MappingProxyType({"oracle-swapped": 0.5, "oracle-swapped-all": 1.0})

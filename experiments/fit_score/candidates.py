@@ -85,7 +85,7 @@ class Choice:
 
 
 def default_weights() -> np.ndarray:
-    """The shipped weights, :data:`TERMS` order, shape (6,) (:func:`mocap.track.score.weights` of
+    """The shipped weights, :data:`TERMS` order, shape (len(TERMS),) (:func:`mocap.track.score.weights` of
     the default :class:`~mocap.track.TrackerConfig`; on frames without keypoints the keypoint and
     lifter weights apply to no term)."""
     from mocap.track import TrackerConfig

@@ -1,4 +1,6 @@
 """The learned lifter in the tracker: its hypotheses in the proposal stage, its density in the score."""
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy import ndimage
@@ -136,12 +138,13 @@ def test_started_wrong_the_lifter_brings_the_tracker_back(lifter, monkeypatch, w
     tracker keeps the one it started on (0.16-0.22 m, as without the lifter; docs/research-log.md,
     issue 29).
 
-    Turned round, the decoder's turn term (:func:`mocap.track.score.turn_term`) is what decides:
-    turning back pays it in one frame, more than the front's better fit on this clip (1-2 a frame),
-    so the tracker stays turned round (0.58 m over 10 frames). That is the price of not turning a
-    body round on a frame's evidence (docs/research-log.md, 2026-11-29: the benchmark's true 2D and
-    a real clip turned round without it); with the turn term off the image and the lifter under
-    both labellings bring it back from the fourth frame."""
+    Turned round, the decoder's turn term (:func:`mocap.track.score.turn_term`) makes turning back
+    pay in one frame more than the front's better fit on this clip (1-2 a frame). The labelling
+    term pays it back: the keypoints show the front (the left shoulder on the image's right), so
+    the turned body, which reads them swapped, pays :data:`~mocap.track.score.FRONT_SWAP_NATS` a
+    frame, and the tracker is back from the third frame (0.07 m; issue 49: within 5). Without it
+    (``labelling_weight`` 0) the tracker stays turned round (0.58 m over 10 frames); with the turn
+    term off too, the image and the lifter under both labellings bring it back from the fourth."""
     import mocap.track.score
 
     truth = reaching_pose()
@@ -156,9 +159,11 @@ def test_started_wrong_the_lifter_brings_the_tracker_back(lifter, monkeypatch, w
     config = TrackerConfig(lag=0, lifter_weight=weight, mirrors=False)
     with_lifter = tracked_errors(config, start, truth, lifter, n=10)
     if wrong == "facing away":
-        assert with_lifter.min() > 2 * BACK_M                      # the turn term holds the heading
+        assert with_lifter[2:].max() < BACK_M                      # the labelling term pays the turn back
+        blind = dataclasses.replace(config, labelling_weight=0.0)
+        assert tracked_errors(blind, start, truth, lifter, n=10).min() > 2 * BACK_M    # the turn term holds it
         monkeypatch.setattr(mocap.track.score, "TURN_CAP", 0.0)    # the turn term off
-        assert tracked_errors(config, start, truth, lifter, n=10)[3:].max() < BACK_M
+        assert tracked_errors(blind, start, truth, lifter, n=10)[3:].max() < BACK_M
         return
     assert with_lifter[2:].max() < BACK_M
     # without the lifter (lifter_weight 0): no proposal stage and no lifter term (keypoints, jumps and
@@ -186,9 +191,9 @@ def test_each_candidates_terms_weighted_give_its_score(lifter):
     assert tracker.lifted is not None and len(tracker.scored) == len(tracker.candidates) >= 2
     assert {c.origin for c in tracker.scored} >= {"tracked", "lifter"}
     for c in tracker.scored:
-        assert not np.isnan([c.region, c.edge, c.keypoint, c.prior, c.lifter]).any()
+        assert not np.isnan([c.region, c.edge, c.keypoint, c.prior, c.lifter, c.labelling]).any()
         assert c.unary == pytest.approx(REGION_WEIGHT * c.region + 3.0 * c.edge + 1.5 * c.keypoint + 0.1 * c.prior
-                                        + 0.7 * c.lifter, rel=1e-12)
+                                        + 0.7 * c.lifter + 1.0 * c.labelling, rel=1e-12)
         squared = [np.mean(np.sum((p - c.joints) ** 2, axis=1)) for p in previous]
         turned = [(np.degrees(c.pose[PARAMETER_INDEX[HEADING]]) - h + 180.0) % 360.0 - 180.0 for h in headings]
         np.testing.assert_allclose(c.motion, np.minimum(0.5 * np.array(squared) / MOTION_SIGMA_M ** 2, MOTION_CAP)

@@ -31,19 +31,20 @@ def test_every_term_is_an_attribute_of_a_scored_candidate_and_its_weight_a_valid
 
 def test_the_weights_of_a_config_in_the_tables_order_and_back():
     config = TrackerConfig(edge_weight=3.0, keypoint_weight=1.5, prior_weight=0.1, lifter_weight=0.7,
-                           motion_weight=0.25)
+                           labelling_weight=0.4, motion_weight=0.25)
     w = weights(config)
-    np.testing.assert_array_equal(w, [REGION_WEIGHT, 3.0, 1.5, 0.1, 0.7, 0.25])
+    np.testing.assert_array_equal(w, [REGION_WEIGHT, 3.0, 1.5, 0.1, 0.7, 0.4, 0.25])
     assert with_weights(TrackerConfig(beam=4), w) == dataclasses.replace(config, beam=4)
     with pytest.raises(ValueError):
         with_weights(config, w[:5])
 
 
 def test_a_scored_candidates_values_follow_the_table():
-    c = ScoredCandidate.from_terms("tracked", np.zeros(23), np.zeros((10, 3)), [0.1, 2.0, math.nan, 3.0, 4.0],
+    c = ScoredCandidate.from_terms("tracked", np.zeros(23), np.zeros((10, 3)), [0.1, 2.0, math.nan, 3.0, 4.0, 0.5],
                                    np.array([5.0, 6.0]), 7.0)
-    assert (c.region, c.edge, c.prior, c.lifter, c.unary) == (0.1, 2.0, 3.0, 4.0, 7.0) and math.isnan(c.keypoint)
-    np.testing.assert_array_equal(c.values(), [0.1, 2.0, math.nan, 3.0, 4.0, 5.0])
+    assert (c.region, c.edge, c.prior, c.lifter, c.labelling, c.unary) == (0.1, 2.0, 3.0, 4.0, 0.5, 7.0)
+    assert math.isnan(c.keypoint)
+    np.testing.assert_array_equal(c.values(), [0.1, 2.0, math.nan, 3.0, 4.0, 0.5, 5.0])
     np.testing.assert_array_equal(c.values(previous=1)[MOTION], 6.0)
     assert math.isnan(c.values(previous=2)[MOTION])
     with pytest.raises(ValueError):
@@ -55,7 +56,7 @@ def test_the_weighted_sum_leaves_out_what_does_not_apply_and_is_the_same_float_a
     values = rng.uniform(0, 10, size=(40, len(UNARY_TERMS)))
     values[::3, 2] = np.nan                                   # no keypoints
     values[::4, 3:5] = np.nan                                 # no prior, not lifted
-    w = np.array([50.0, 2.0, 1.5, 0.05, 0.5, 1.0])
+    w = np.array([50.0, 2.0, 1.5, 0.05, 0.5, 1.0, 1.0])
     together = weighted_sum(values, w)
     for row, total in zip(values, together):
         expected = 0.0
@@ -65,7 +66,7 @@ def test_the_weighted_sum_leaves_out_what_does_not_apply_and_is_the_same_float_a
         assert weighted_sum(row, w) == expected == total      # bit for bit
     assert isinstance(weighted_sum(values[0], w), float)
     with pytest.raises(ValueError):
-        weighted_sum(np.ones(7), w)
+        weighted_sum(np.ones(8), w)
 
 
 def test_the_motion_term_is_half_the_mean_squared_displacement_truncated():
@@ -112,8 +113,34 @@ def test_the_decoders_motion_term_adds_the_joints_and_the_heading():
 
 def test_the_papers_method_switches_off_the_terms_beyond_the_paper():
     paper = TrackerConfig.paper()
-    assert (paper.keypoint_weight, paper.prior_weight, paper.lifter_weight) == (0.0, 0.0, 0.0)
+    assert (paper.keypoint_weight, paper.prior_weight, paper.lifter_weight, paper.labelling_weight) == (0.0,) * 4
     assert (paper.edge_weight, paper.motion_weight) == (TrackerConfig().edge_weight, TrackerConfig().motion_weight)
     assert paper == TrackerConfig(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
                                   gradient_step=False, mirrors=False, prior_weight=0.0, keypoint_weight=0.0,
-                                  lifter_weight=0.0, smoothing=SmootherConfig(on=False))
+                                  lifter_weight=0.0, labelling_weight=0.0, smoothing=SmootherConfig(on=False))
+
+
+def test_the_labelling_term_prices_a_swapped_reading_only_where_the_detector_shows_the_front():
+    """ln(0.97 / 0.03) nats (the audit's odds that MediaPipe's labels are right where it shows the
+    front) for a swapped reading there; nothing for the detector's own reading, or where it shows
+    no front; NaN without keypoints."""
+    from mocap.track.score import FRONT_SWAP_NATS, labelling_term
+
+    assert FRONT_SWAP_NATS == pytest.approx(math.log(97 / 3))
+    assert labelling_term(True, True) == FRONT_SWAP_NATS
+    assert labelling_term(True, False) == labelling_term(False, True) == labelling_term(False, False) == 0.0
+    assert math.isnan(labelling_term(None, True)) and math.isnan(labelling_term(None, False))
+
+
+def test_keypoints_show_the_front_when_the_left_shoulder_is_on_the_images_right():
+    from mocap.body.skeleton import JOINT_INDEX
+    from mocap.io.keypoints import Keypoints
+
+    uv = np.full((10, 2), 50.0)
+    uv[JOINT_INDEX["l_shoulder"], 0], uv[JOINT_INDEX["r_shoulder"], 0] = 70.0, 30.0
+    front = Keypoints(uv, np.ones(10))
+    assert front.shows_front() and not front.swapped().shows_front()
+    confidence = np.ones(10)
+    confidence[JOINT_INDEX["r_shoulder"]] = 0.0
+    assert not Keypoints(uv, confidence).shows_front()                   # it cannot tell
+    assert not Keypoints.empty().shows_front()
