@@ -173,6 +173,7 @@ def write_record(path, frames=12, per_frame=3, seed=0):
     error = 1e3 * np.linalg.norm((joints - joints[:, 1:2]) - np.repeat(truth - truth[:, 1:2], per_frame, axis=0),
                                  axis=2).mean(axis=1)
     features = rng.uniform(0.0, 1.0, size=(frames * per_frame, len(TERMS)))
+    features[:, 0] = error / 1e3                      # F rises with the error: the fit gives it a weight
     tracked = joints[::per_frame]
     buffer = io.BytesIO()
     np.savez_compressed(buffer, frame=np.repeat(np.arange(frames), per_frame), features=features, error_mm=error,
@@ -194,7 +195,7 @@ def test_every_subcommand_reads_the_records_it_names(tmp_path, capsys):
     from experiments.fit_score.cli import main
 
     for i, sequence in enumerate(("gestures-2", "turning")):
-        write_record(record_path(tmp_path, sequence, 5), seed=i + 1)   # made-up features whose fit gives F a weight
+        write_record(record_path(tmp_path, sequence, 5), seed=i)
     common = ["--seeds", "5", "--sequences", "gestures-2,turning", "--out", str(tmp_path)]
     written = tmp_path / "fitted.json"
     assert main(["fit", *common, "--write", str(written)]) == 0
