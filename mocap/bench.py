@@ -121,10 +121,11 @@ def time_calls(call: Callable[[int], object], *, min_runs: int, min_seconds: flo
     return np.asarray(times, dtype=np.float64) / 1000.0
 
 
-def _row(stage: str, size: tuple[int, int], triangles: int, times_us: np.ndarray, clock: str = CLOCK) -> BenchRow:
+def _row(stage: str, size: tuple[int, int], triangles: int, times_us: np.ndarray) -> BenchRow:
+    """A row of times taken by :func:`time_calls` with the stage's clock (:func:`clock_of`)."""
     p10, med, p90 = np.percentile(times_us, [10, 50, 90])
     return BenchRow(stage, size[0], size[1], int(triangles), float(med), float(p10), float(p90), int(times_us.size),
-                    clock)
+                    clock_of(stage))
 
 
 def _poses(n: int, seed: int = 0) -> list[np.ndarray]:
@@ -191,10 +192,9 @@ def render_rows(sizes: Sequence[tuple[int, int]], *, min_runs: int, min_seconds:
                 with_llvmpipe = False
                 continue
             try:
-                clock = clock_of("llvmpipe_render")
                 rows.append(_row("llvmpipe_render", size, tri, time_calls(
                     lambda i: gl.render_labels(pick(i)), min_runs=min_runs, min_seconds=min_seconds,
-                    clock=clock), clock=clock))
+                    clock=clock_of("llvmpipe_render"))))
                 if len(notes) == 0 or not notes[0].startswith("llvmpipe renderer"):
                     notes.insert(0, f"llvmpipe renderer: {gl.renderer_name}, LP_NUM_THREADS=1")
             finally:

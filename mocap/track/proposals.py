@@ -194,9 +194,16 @@ def reach_proposals(pose: np.ndarray, joints: np.ndarray, targets: np.ndarray, m
     -------
     list of ndarray, shape (23,)
     """
+    return [q for uv, side, reach_m in reach_jobs(pose, targets, model)
+            for q in arm_reach_proposals(pose, joints, uv, side, reach_m, model, camera)]
+
+
+def reach_jobs(pose: np.ndarray, targets: np.ndarray, model: BodyModel) -> list[tuple[np.ndarray, str, float]]:
+    """The ``(uv, side, reach_m)`` of each target pixel and arm, in :func:`reach_proposals`' order
+    (targets first, then :data:`~mocap.body.jumps.SIDES`): each one call of
+    :func:`arm_reach_proposals` (``reach_m``: :func:`arm_reach_m`, metres)."""
     reach = {side: arm_reach_m(pose, model, side) for side in SIDES}
-    return [q for uv in targets for side in SIDES
-            for q in arm_reach_proposals(pose, joints, uv, side, reach[side], model, camera)]
+    return [(uv, side, reach[side]) for uv in targets for side in SIDES]
 
 
 def arm_reach_proposals(pose: np.ndarray, joints: np.ndarray, uv, side: str, reach_m: float, model: BodyModel,

@@ -62,7 +62,6 @@ from typing import Sequence
 import numpy as np
 
 from mocap.body.ik import ARM_JOINTS, place_arm, reach_arm
-from mocap.body.jumps import SIDES
 from mocap.body.model import BodyModel
 from mocap.body.pose import HEADING, PARAMETER_INDEX, check_pose, clamp_to_limits, heading_near
 from mocap.body.prior import PosePrior, default_prior
@@ -78,8 +77,8 @@ from mocap.track.branches import depth_alternatives
 from mocap.track.config import JUMPS_REFINED, MERGE_DISTANCE_M, RECOVERY_STEP_SCALE, TrackerConfig, split_budget
 from mocap.track.decode import backtrack, viterbi_step
 from mocap.track.lifter import LiftedHypotheses, Lifter
-from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, arm_reach_m, arm_reach_proposals,
-                                   jump_proposals, unexplained_hands)
+from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, arm_reach_proposals, jump_proposals,
+                                   reach_jobs, unexplained_hands)
 from mocap.track.registration import Registration, failed_residuals, register
 from mocap.track.score import (MOTION, UNARY_TERMS, ScoredCandidate, labelling_term, transition_term, weighted_sum,
                                weights)
@@ -397,8 +396,8 @@ class Tracker:
         lifted_swapped = (self.lifting.lift(keypoints.swapped(), self.camera, self.model)
                           if lifted is not None and keypoint_cost is not None else None)
         lifts = (lifted, lifted_swapped)
-        # every other registration is scored on the thread that ran it
-        # the detector's labels where it shows the person's front (None: no keypoints)
+        # every other registration is scored on the thread that ran it, with the detector's
+        # labels where it shows the person's front (None: no keypoints)
         front = None if keypoint_cost is None else keypoints.shows_front()
         score = functools.partial(self._scored, lifts=lifts, front=front)
         # what needs no leader runs beside it: the proposal stage (whose ranking this thread
@@ -537,9 +536,8 @@ class Tracker:
         targets = unexplained_hands(prepared.labels, joints, self.model, self.camera, self.config)
         if len(targets) == 0:
             return []
-        reach = {side: arm_reach_m(pose, self.model, side) for side in SIDES}
-        return [work.submit(_arm_reaches, pose, joints, uv, side, reach[side], self.model, self.camera)
-                for uv in targets for side in SIDES]
+        return [work.submit(_arm_reaches, pose, joints, uv, side, reach_m, self.model, self.camera)
+                for uv, side, reach_m in reach_jobs(pose, targets, self.model)]
 
     def _jump(self, costs: "_FrameCosts", score, pose: np.ndarray) -> "_Stage":
         """The kinematic jumps of the leader's ``pose``, the ``JUMPS_REFINED`` lowest-F ones
