@@ -232,6 +232,31 @@ def _silhouette_starts(foreground: np.ndarray, camera: Camera, base: BodyDimensi
 CALIBRATION_KEYPOINT_WEIGHT = 0.04
 
 
+def calibration_keypoint_cost(keypoints, model: BodyModel, camera: Camera, foreground: np.ndarray):
+    """The keypoint distance the calibration's fits add (:class:`~mocap.cost.KeypointCost`, pixels).
+
+    Read under the labelling the tracker would take (issue 49 item 5): where the detector shows
+    the person's front (:meth:`~mocap.io.keypoints.Keypoints.shows_front`: MediaPipe is right on
+    96-100 % of such frames), its own labels; elsewhere the lower of its labelling and the
+    left/right swapped one (``swap=True``), so that a detector that names the left arm the right
+    one does not turn the upright, camera-facing body the calibration assumes (the refinement's
+    colour classes, the face and the hair, see it).
+
+    Parameters
+    ----------
+    keypoints : Keypoints
+        The frame's 2D keypoints, ``camera`` pixels.
+    model : BodyModel
+    camera : Camera
+    foreground : ndarray, shape (H, W), bool
+        The frame's foreground: keypoints off it are gated out.
+    """
+    from mocap.cost import KeypointCost
+
+    return KeypointCost(keypoints.uv, keypoints.confidence, model, camera, foreground=foreground,
+                        swap=not keypoints.shows_front())
+
+
 def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: BodyDimensions,
               config: AutoCalibrationConfig, imaging, *, background=None, face=None, depths=None, seed_colour=None,
               keypoints=None):
@@ -240,15 +265,13 @@ def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: B
     With ``keypoints`` (:class:`mocap.io.keypoints.Keypoints`, ``camera`` pixels) both fits add
     :data:`CALIBRATION_KEYPOINT_WEIGHT` times the keypoint distance (the shoulders' width and
     place, the head, the arms), gated by the foreground, under the labelling the tracker would
-    take: the lower of the detector's and the left/right swapped one (``KeypointCost(swap=True)``),
-    so a detector that names the left arm the right one does not turn the upright, camera-facing
-    body the calibration assumes (the refinement's colour classes, the face and the hair, see it).
+    take (:func:`calibration_keypoint_cost`).
 
     Returns the Calibration and the ColourModel learnt inside the fitted model (``seed_colour``,
     when given, where the fitted model covers too few foreground pixels of a class).
     """
     from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX, neutral_pose
-    from mocap.cost import KeypointCost, RegionCost
+    from mocap.cost import RegionCost
     from mocap.imaging import prepare_frame
     from mocap.optimize import initial_simplex, minimize
 
@@ -278,9 +301,8 @@ def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: B
             model = BodyModel.build(dims, resolution=config.resolution, part_class=part_class, class_names=class_names)
             value = RegionCost(target, model, camera)(pose)
             if keypoints is not None:
-                value += CALIBRATION_KEYPOINT_WEIGHT * KeypointCost(keypoints.uv, keypoints.confidence, model,
-                                                                    camera, foreground=foreground,
-                                                                    swap=True)(pose)
+                value += CALIBRATION_KEYPOINT_WEIGHT * calibration_keypoint_cost(keypoints, model, camera,
+                                                                                 foreground)(pose)
             return value
         return cost
 

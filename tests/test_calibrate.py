@@ -124,3 +124,39 @@ def test_auto_calibrate_recovers_dimensions_and_silhouette(actor):
     got = render(fitted.initial_pose, fitted.body_model(), CAMERA).labels > 0
     truth = labels > 0
     assert np.count_nonzero(got & truth) / np.count_nonzero(got | truth) > 0.85
+
+
+def test_the_calibration_reads_the_detectors_labels_where_it_shows_the_front():
+    """Issue 49 item 5: where the detector shows the front (its left shoulder on the image's right),
+    the calibration's keypoint distance is its own labelling's, even where the swapped reading
+    would be lower; elsewhere it is the lower of the two. References: ``KeypointCost`` with
+    ``swap`` off and on."""
+    from mocap.body.skeleton import JOINT_NAMES
+    from mocap.calibrate import calibration_keypoint_cost
+    from mocap.cost import KeypointCost
+    from mocap.io.keypoints import Keypoints
+
+    model = BodyModel.build(BodyDimensions())
+    pose = neutral_pose()
+    pose[PARAMETER_INDEX["r_shoulder_abd"]] = np.radians(60.0)      # the arms apart, unlike
+    uv = CAMERA.project(model.joint_positions(pose))
+    index = {name: i for i, name in enumerate(JOINT_NAMES)}
+    # the shoulders 1 px apart, the front shown; every other arm keypoint on the other arm's joint
+    labelled = uv.copy()
+    centre = 0.5 * (uv[index["l_shoulder"]] + uv[index["r_shoulder"]])
+    labelled[index["l_shoulder"]], labelled[index["r_shoulder"]] = centre + (0.5, 0.0), centre - (0.5, 0.0)
+    for joint in ("elbow", "wrist", "hand"):
+        labelled[index[f"l_{joint}"]], labelled[index[f"r_{joint}"]] = uv[index[f"r_{joint}"]], uv[index[f"l_{joint}"]]
+    mirrored = labelled * (-1.0, 1.0) + (CAMERA.width, 0.0)          # the same seen from behind: no front
+    foreground = np.ones((CAMERA.height, CAMERA.width), bool)
+    values = {}
+    for points, front in ((labelled, True), (mirrored, False)):
+        keypoints = Keypoints(points, np.ones(len(points)))
+        assert keypoints.shows_front() is front
+        own, either = (KeypointCost(points, np.ones(len(points)), model, CAMERA, foreground=foreground, swap=s)(pose)
+                       for s in (False, True))
+        values[front] = own, either, calibration_keypoint_cost(keypoints, model, CAMERA, foreground)(pose)
+    own, either, got = values[True]
+    assert either < own and got == own           # the swapped reading is lower, and not taken
+    own, either, got = values[False]
+    assert got == either

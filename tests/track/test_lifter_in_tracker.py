@@ -84,7 +84,8 @@ def test_the_lifter_switches_on_with_its_own_weight(lifter):
     truth = reaching_pose()
     frames, keypoints = still_clip(truth, 1)
     for keypoint_weight in (2.0, 0.0):
-        on = Tracker(MODEL, CAMERA, TrackerConfig(keypoint_weight=keypoint_weight, lifter_weight=0.5), truth,
+        on = Tracker(MODEL, CAMERA, TrackerConfig(keypoint_weight=keypoint_weight, lifter_weight=0.5, proposal_gate=None),
+                     truth,
                      lifter=lifter)
         assert on.lifting is not None and on.sources == (on.lifting,) and on.lifting.lifter is lifter
         on.push(0, frames[0], keypoints[0])
@@ -182,7 +183,7 @@ def test_each_candidates_terms_weighted_give_its_score(lifter):
 
     truth = reaching_pose()
     frames, keypoints = still_clip(truth, 2)
-    config = TrackerConfig(edge_weight=3.0, keypoint_weight=1.5, prior_weight=0.1, lifter_weight=0.7)
+    config = TrackerConfig(edge_weight=3.0, keypoint_weight=1.5, prior_weight=0.1, lifter_weight=0.7, proposal_gate=None)
     tracker = Tracker(MODEL, CAMERA, config, truth, lifter=lifter)
     tracker.push(0, frames[0], keypoints[0])
     previous = [MODEL.joint_positions(q) for q in tracker.hypotheses]
