@@ -36,7 +36,7 @@ Three comparisons, on the same frames:
   and a second mover, arms in front of the chest). Two subjects with arm-heavy trials of the
   shipped lifter's training set (``experiments/fit_lifter.json``, so each held-out lifter really
   lacks them), and a clip count whose whole measurement (6 trials x 3 sizes x 2 heads = 36 runs)
-  takes about half an hour of one core once the two lifters are trained.
+  took 19 minutes of one core once the two lifters were trained (each about 5 minutes).
 
 With keypoints (issues 23 and 44), ours runs as a user runs it, ``python -m mocap track CLIP
 --keypoints mediapipe``: the run's own detector (image mode) on the same frames MediaPipe alone
@@ -647,7 +647,7 @@ def main(argv: list[str] | None = None) -> int:
                    help="the shared data folder (its video/ clips)")
     p.add_argument("--out", type=Path, default=EXPERIMENTS_DIR / "peers", help="results folder")
     p.add_argument("--work", type=Path, default=None, help="scratch folder for clips and runs (default OUT/work)")
-    p.add_argument("--seed", type=int, default=0, help="synthetic clips' seed")
+    p.add_argument("--seed", type=int, default=0, help="the synthetic and CMU-driven clips' seed")
     p.add_argument("--only", choices=("synthetic", "real", "cmu"), default=None,
                    help="run one part; the other parts' stored results in OUT are kept (cmu runs only when named)")
     p.add_argument("--train", type=Path, default=None, help="CMU trials folder (default DATA/mocap/train)")
