@@ -19,13 +19,24 @@ Three comparisons, on the same frames:
   MediaPipe is installed) on the clips of ``../shared/data/video/``, and the share of our projected
   shoulders, elbows and wrists (``poses.csv``'s ``_u``/``_v``) within half of MediaPipe's
   shoulder width of its 2D landmarks (:func:`mocap.metrics.pck_2d`).
-* **cmu** (issue 34, item 5; ground truth): the toolkit's generator
-  (:func:`mocap.synth.generate_sequence` with ``motion=``) driven by trials of ONE training subject
-  of ``../shared/data/mocap/train`` (``--subject``, default 14: boxing, jumping jacks, side twists,
-  directing traffic), rendered at ``--size``, and the tracker given a lifter trained without that
-  subject (``--lifter FILE``, the tracker's ``lifter_file``; ``python -m experiments.fit_lifter
-  --trials-from experiments/fit_lifter.json --exclude-subject 14 --out
-  experiments/peers/work/lifter_no14.npz``, never shipped).
+* **cmu** (issue 34, item 5; issue 49, item 6; ground truth): the toolkit's generator
+  (:func:`mocap.synth.generate_sequence` with ``motion=``) driven by trials of training subjects
+  of ``../shared/data/mocap/train``, each subject held out in turn (``--subjects``, default
+  :data:`CMU_TRIALS`'s), rendered at each of ``--cmu-sizes`` (default 160x120, 320x240 and
+  640x480) with the face and with hair all round the head (``--faces both``, the default; ``face``
+  or ``no-face`` for one: :attr:`mocap.synth.actor.Appearance.face`), and the tracker given a
+  lifter trained without that subject (the tracker's ``lifter_file``): ``LIFTERS/lifter_no<S>.npz``
+  (``--lifters``, default ``OUT/work``, which git ignores), used when present, else trained first,
+  about 6 minutes of one core each, as ``python -m experiments.fit_lifter --trials-from
+  experiments/fit_lifter.json --exclude-subject S --out LIFTERS/lifter_no<S>.npz`` (never shipped).
+
+  The subjects and trials (:data:`CMU_TRIALS`, 150 frames each, 25 fps, from each trial's start):
+  subject 14 (boxing, jumping jacks and side twists, jumping jacks again, directing traffic: arms
+  across the body, above the head and turning) and subject 02 (punching, washing: a second body
+  and a second mover, arms in front of the chest). Two subjects with arm-heavy trials of the
+  shipped lifter's training set (``experiments/fit_lifter.json``, so each held-out lifter really
+  lacks them), and a clip count whose whole measurement (6 trials x 3 sizes x 2 heads = 36 runs)
+  took 19 minutes of one core once the two lifters were trained (each about 5 minutes).
 
 With keypoints (issues 23 and 44), ours runs as a user runs it, ``python -m mocap track CLIP
 --keypoints mediapipe``: the run's own detector (image mode) on the same frames MediaPipe alone
@@ -54,6 +65,7 @@ import argparse
 import json
 import math
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -73,11 +85,23 @@ SYNTHETIC = ("turning", "arms-crossing", "not-facing", "gestures-2")
 SYNTHETIC_FRAMES = 60
 #: Real clips (in the shared data's video folder).
 REAL = ("intel_asl_no.mkv", "intel_asl_sister.mkv", "intel_asl_book.mkv")
-#: CMU-driven clips (``--only cmu``): the held-out subject's trials, each rendered with one of the
-#: synthetic sequences' actor and scene (in this order, cycled), and their length in frames (25 fps).
-CMU_TRIALS = {"14": ("14_02", "14_06", "14_20", "14_24")}
+#: CMU-driven clips (``--only cmu``): each held-out subject's trials (``train/cmu_<trial>.amc``), each
+#: rendered with one of the synthetic sequences' actor and scene (:data:`CMU_SCENES`, in this order
+#: within a subject, cycled), and their length in frames (25 fps). Subject 14's four keep the scenes
+#: they had when it was the only subject (``experiments.detector_size`` and ``branch_audit`` read them).
+CMU_TRIALS = {"14": ("14_02", "14_06", "14_20", "14_24"), "02": ("02_05", "02_10")}
 CMU_SCENES = ("gestures-2", "turning", "arms-crossing", "not-facing")
 CMU_FRAMES = 150
+#: Sizes (width, height, pixels) the CMU-driven clips are rendered at by default (issue 49 item 6).
+CMU_SIZES = ((160, 120), (320, 240), (640, 480))
+#: ``--faces``: the heads the CMU-driven clips are drawn with (True: the face; False: hair all round).
+FACES = {"both": (True, False), "face": (True,), "no-face": (False,)}
+#: Issue 49's targets for ours with MediaPipe's keypoints against MediaPipe's own 3D on the CMU-driven
+#: clips, with the face and without, every clip and size: the arms' PA-MPJPE ratio at most
+#: ``pa_ratio_max`` on every clip and ``pa_ratio_median_max`` on the median clip, the acceleration
+#: error ratio at most ``accel_ratio_max``, and our arms labelled right on at least
+#: ``labels_right_min`` of the frames.
+CMU_TARGETS = {"pa_ratio_max": 1.0, "pa_ratio_median_max": 0.85, "accel_ratio_max": 0.5, "labels_right_min": 0.95}
 #: Default size (width, height, pixels) the synthetic and CMU-driven clips are rendered at.
 SIZE = (160, 120)
 
@@ -294,26 +318,145 @@ def synthetic_row(name: str, work: Path, seed: int, size: tuple[int, int] = SIZE
             "ours_ms": float(np.median(table.extra["ms_total"][1:]))}
 
 
-def cmu_row(trial: str, scene: str, work: Path, *, train: Path, seed: int, frames: int,
-            lifter: Path | None, size: tuple[int, int] = SIZE) -> dict:
-    """One CMU-driven clip: ``trial``'s motion (``train/cmu_<trial>.amc``) rendered at ``size`` in
-    ``scene``'s setting, tracked with ``--keypoints mediapipe`` (the run's detector) and the
-    lifter file ``lifter``, beside MediaPipe's own 3D on the same frames. MediaPipe's landmarks
-    are kept in ``work/<trial>-mediapipe.npz`` (with ``world33``/``visibility33``)."""
+@dataclass(frozen=True)
+class CmuClip:
+    """One CMU-driven clip of ``--only cmu``.
+
+    Attributes
+    ----------
+    subject : str
+        The CMU subject held out of the clip's lifter (e.g. ``"14"``).
+    trial : str
+        The subject's trial (``train/cmu_<trial>.amc``), e.g. ``"14_02"``.
+    scene : str
+        The synthetic sequence whose actor, scene, light and camera draw it (:data:`CMU_SCENES`).
+    size : (int, int)
+        Width and height, pixels.
+    face : bool
+        The head drawn with its face; False: hair all round (no face seen from any side).
+    """
+    subject: str
+    trial: str
+    scene: str
+    size: tuple[int, int]
+    face: bool
+
+    @property
+    def tag(self) -> str:
+        """The suffix of its files in the work folder: ``-WxH`` unless 160x120, ``-noface`` without
+        the face (empty for 160x120 with the face, the names from before either option)."""
+        return ("" if self.size == SIZE else f"-{self.size[0]}x{self.size[1]}") + ("" if self.face else "-noface")
+
+
+def cmu_clips(subjects: list[str], trials: list[str] | None, sizes, faces) -> list[CmuClip]:
+    """The clips of ``--only cmu``: each subject's trials (``trials``: those of it, else its
+    :data:`CMU_TRIALS`), each at every size of ``sizes`` ((width, height) pixels) and with every head
+    of ``faces`` (bools), in that order. A trial's scene is :data:`CMU_SCENES` cycled over the
+    subject's trials in their order (``trials`` when given).
+
+    Raises
+    ------
+    ValueError
+        On a trial of none of ``subjects``, a subject left with no trial, or a subject without
+        default trials when ``trials`` is None.
+    """
+    if trials is not None:
+        strays = [t for t in trials if t.split("_")[0] not in subjects]
+        if strays:
+            raise ValueError(f"trials {', '.join(strays)} are not of the held-out subjects {', '.join(subjects)}")
+    out = []
+    for subject in subjects:
+        if trials is not None:
+            own = [t for t in trials if t.split("_")[0] == subject]
+        elif subject in CMU_TRIALS:
+            own = list(CMU_TRIALS[subject])
+        else:
+            raise ValueError(f"no default trials for subject {subject} (those of {', '.join(CMU_TRIALS)}): give --trials")
+        if not own:
+            raise ValueError(f"no trial of subject {subject} among --trials")
+        out += [CmuClip(subject, trial, CMU_SCENES[k % len(CMU_SCENES)], tuple(size), bool(face))
+                for k, trial in enumerate(own) for size in sizes for face in faces]
+    return out
+
+
+def lifter_path(folder: Path, subject: str) -> Path:
+    """The file of the lifter trained without ``subject`` in ``folder``: ``lifter_no<subject>.npz``."""
+    return folder / f"lifter_no{subject}.npz"
+
+
+def held_out_lifter(subject: str, folder: Path, train: Path) -> Path:
+    """The lifter trained without ``subject`` (:func:`lifter_path`): the file when present, else
+    trained first on the shipped lifter's trials less the subject's (``python -m
+    experiments.fit_lifter --trials-from experiments/fit_lifter.json --exclude-subject S --out
+    FILE --train TRAIN``, about 6 minutes of one core) and written there.
+
+    Raises
+    ------
+    RuntimeError
+        When the training fails.
+    """
+    path = lifter_path(folder, subject)
+    if path.exists():
+        return path
+    from experiments import fit_lifter
+
+    folder.mkdir(parents=True, exist_ok=True)
+    print(f"training {path.name} (the shipped lifter's trials without subject {subject}, about 6 minutes)", flush=True)
+    code = fit_lifter.main(["--trials-from", str(fit_lifter.RECORD), "--exclude-subject", subject,
+                            "--train", str(train), "--out", str(path)])
+    if code != 0 or not path.exists():
+        raise RuntimeError(f"training the lifter without subject {subject} failed (exit {code})")
+    return path
+
+
+def cmu_row(clip: CmuClip, work: Path, *, train: Path, seed: int, frames: int, lifter: Path | None) -> dict:
+    """One CMU-driven clip: ``clip.trial``'s motion (``train/cmu_<trial>.amc``) rendered at
+    ``clip.size`` in ``clip.scene``'s setting, with the face or hair all round (``clip.face``),
+    tracked with ``--keypoints mediapipe`` (the run's detector) and the lifter file ``lifter``,
+    beside MediaPipe's own 3D on the same frames. MediaPipe's landmarks are kept in
+    ``work/<trial><tag>-mediapipe.npz`` (with ``world33``/``visibility33``; :attr:`CmuClip.tag`).
+    ``wall_s``: the clip's seconds, rendering, MediaPipe and tracking, on this machine as loaded."""
     from mocap.io.video import iter_frames
     from mocap.synth import generate_sequence
 
-    tag = "" if size == SIZE else f"-{size[0]}x{size[1]}"
-    name = f"cmu_{trial}"
-    seq = generate_sequence(scene, work / f"{name}{tag}", frames=frames, seed=seed, size=size,
-                            motion=train / f"{name}.amc", progress=False)
+    started = time.perf_counter()
+    name = f"cmu_{clip.trial}"
+    seq = generate_sequence(clip.scene, work / f"{name}{clip.tag}", frames=frames, seed=seed, size=clip.size,
+                            motion=train / f"{name}.amc", progress=False, face=clip.face)
     mp = run_mediapipe(list(iter_frames(seq / "frames")))
-    np.savez(work / f"{trial}{tag}-mediapipe.npz", **mp)
-    run = work / f"{name}{tag}-keypoints-run"
+    np.savez(work / f"{clip.trial}{clip.tag}-mediapipe.npz", **mp)
+    run = work / f"{name}{clip.tag}-keypoints-run"
     keyed = _track(seq, run, overlay=False, keypoints="mediapipe", lifter=lifter)
     n = min(len(keyed), len(mp["world"]))
-    return {"clip": trial, "scene": scene, "size": f"{size[0]}x{size[1]}", "frames": n,
-            "lifter": None if lifter is None else lifter.name, **scored_clip(seq, run, keyed, mp, n)}
+    return {"clip": clip.trial, "subject": clip.subject, "scene": clip.scene, "size": f"{clip.size[0]}x{clip.size[1]}",
+            "face": clip.face, "frames": n, "lifter": None if lifter is None else lifter.name,
+            "wall_s": round(time.perf_counter() - started, 1), **scored_clip(seq, run, keyed, mp, n)}
+
+
+def target_summary(rows: list[dict]) -> list[dict]:
+    """Issue 49's targets (:data:`CMU_TARGETS`) over CMU rows, per head (face, no face) and for both:
+    ``group``, ``clips``, the PA ratio's highest (``pa_ratio_max``) and median (``pa_ratio_median``)
+    over the rows, the acceleration ratio's highest, the lowest share of frames labelled right,
+    and whether each target is met (``*_met``); NaN figures count as missed."""
+    out = []
+    groups = [("face", [r for r in rows if r.get("face", True)]), ("no face", [r for r in rows if not r.get("face", True)]),
+              ("all", rows)]
+    for group, members in groups:
+        if not members:
+            continue
+        pa = np.array([r["pa_ratio"] for r in members], float)
+        accel = np.array([r["accel_ratio"] for r in members], float)
+        labels = np.array([r["ours_keypoints_labels_right"] for r in members], float)
+        worst = lambda x, f: float(f(x)) if np.isfinite(x).all() else float("nan")
+        summary = {"group": group, "clips": len(members), "pa_ratio_max": worst(pa, np.max),
+                   "pa_ratio_median": worst(pa, np.median), "accel_ratio_max": worst(accel, np.max),
+                   "labels_right_min": worst(labels, np.min)}
+        summary["pa_ratio_max_met"] = bool(summary["pa_ratio_max"] <= CMU_TARGETS["pa_ratio_max"])
+        summary["pa_ratio_median_met"] = bool(summary["pa_ratio_median"] <= CMU_TARGETS["pa_ratio_median_max"])
+        summary["accel_ratio_max_met"] = bool(summary["accel_ratio_max"] <= CMU_TARGETS["accel_ratio_max"])
+        summary["labels_right_min_met"] = bool(summary["labels_right_min"] >= CMU_TARGETS["labels_right_min"])
+        out.append(summary)
+    return out
 
 
 def real_row(video: Path, work: Path, out: Path) -> dict:
@@ -397,11 +540,28 @@ def _keyed_table(rows: list[dict], first: str) -> list[str]:
             return f"**{value:.2f}**"
         return f"{value:.1f}" if key.endswith("_px") else f"{value:.0f}"
 
-    lines = ["| " + first + " | size | " + " | ".join(h for _, h in KEYED_COLUMNS) + " |",
-             "|---|---|" + "---|" * len(KEYED_COLUMNS)]
+    heads = any("face" in r for r in rows)             # CMU rows say which head they were drawn with
+    lines = ["| " + first + " | size | " + ("head | " if heads else "") + " | ".join(h for _, h in KEYED_COLUMNS)
+             + " |", "|---|---|" + ("---|" if heads else "") + "---|" * len(KEYED_COLUMNS)]
     for r in rows:
-        lines.append(f"| {r['clip']} | {r.get('size', '160x120')} | "
+        head = ("face | " if r.get("face", True) else "no face | ") if heads else ""
+        lines.append(f"| {r['clip']} | {r.get('size', '160x120')} | {head}"
                      + " | ".join(cell(k, r.get(k, float("nan"))) for k, _ in KEYED_COLUMNS) + " |")
+    return lines
+
+
+def _target_table(rows: list[dict]) -> list[str]:
+    """Issue 49's targets over the CMU rows (:func:`target_summary`), a line per head."""
+    t = CMU_TARGETS
+    mark = lambda met: "met" if met else "**missed**"
+    lines = [f"| CMU-driven clips, issue 49's targets | clips x sizes | PA ratio, highest (target ≤ {t['pa_ratio_max']:g}) "
+             f"| PA ratio, median clip (≤ {t['pa_ratio_median_max']:g}) | Accel ratio, highest (≤ {t['accel_ratio_max']:g}) "
+             f"| arms labelled right, lowest (≥ {100 * t['labels_right_min']:.0f} %) |", "|---|---|---|---|---|---|"]
+    for g in target_summary(rows):
+        lines.append(f"| {g['group']} | {g['clips']} | {g['pa_ratio_max']:.2f} {mark(g['pa_ratio_max_met'])} | "
+                     f"{g['pa_ratio_median']:.2f} {mark(g['pa_ratio_median_met'])} | "
+                     f"{g['accel_ratio_max']:.2f} {mark(g['accel_ratio_max_met'])} | "
+                     f"{100 * g['labels_right_min']:.0f} % {mark(g['labels_right_min_met'])} |")
     return lines
 
 
@@ -427,7 +587,7 @@ def markdown(results: dict) -> str:
         lines += ["", *_keyed_table(keyed_synthetic, "synthetic clip, `--keypoints mediapipe`")]
     if results.get("cmu"):
         lines += ["", *_keyed_table(results["cmu"], "CMU-driven clip (subject held out of the lifter), "
-                                                    "`--keypoints mediapipe`")]
+                                                    "`--keypoints mediapipe`"), "", *_target_table(results["cmu"])]
     if keyed_real:
         lines += ["", "| real clip | frames with all six arm joints within 1/4 shoulder width of MediaPipe: ours | "
                   "ours with `--keypoints mediapipe` | failed frames where MediaPipe found the person | "
@@ -469,6 +629,15 @@ def report_section(folder: Path, rel: str = "peers") -> list[str]:
     return L
 
 
+def _parse_size(text: str) -> tuple[int, int] | None:
+    """``"WxH"`` as (width, height) pixels, each at least 16; None when it is not that."""
+    try:
+        size = tuple(int(v) for v in text.strip().lower().split("x"))
+    except ValueError:
+        return None
+    return size if len(size) == 2 and min(size) >= 16 else None
+
+
 def main(argv: list[str] | None = None) -> int:
     from experiments import EXPERIMENTS_DIR
 
@@ -478,27 +647,46 @@ def main(argv: list[str] | None = None) -> int:
                    help="the shared data folder (its video/ clips)")
     p.add_argument("--out", type=Path, default=EXPERIMENTS_DIR / "peers", help="results folder")
     p.add_argument("--work", type=Path, default=None, help="scratch folder for clips and runs (default OUT/work)")
-    p.add_argument("--seed", type=int, default=0, help="synthetic clips' seed")
+    p.add_argument("--seed", type=int, default=0, help="the synthetic and CMU-driven clips' seed")
     p.add_argument("--only", choices=("synthetic", "real", "cmu"), default=None,
                    help="run one part; the other parts' stored results in OUT are kept (cmu runs only when named)")
     p.add_argument("--train", type=Path, default=None, help="CMU trials folder (default DATA/mocap/train)")
-    p.add_argument("--subject", default="14", help="cmu: the held-out subject (its trials: --trials, or the "
-                   f"default ones of subjects {sorted(CMU_TRIALS)})")
-    p.add_argument("--trials", default=None, help="cmu: comma-separated trials (default: the subject's four)")
+    p.add_argument("--subjects", default=",".join(CMU_TRIALS),
+                   help="cmu: comma-separated CMU subjects, each held out of its clips' lifter in turn "
+                        f"(default {','.join(CMU_TRIALS)}; their trials: --trials, else the defaults)")
+    p.add_argument("--trials", default=None,
+                   help="cmu: comma-separated trials of those subjects (default: each subject's own, CMU_TRIALS)")
     p.add_argument("--cmu-frames", type=int, default=CMU_FRAMES, help="cmu: frames per clip (25 fps)")
-    p.add_argument("--lifter", type=Path, default=None,
-                   help="cmu: the lifter file, trained without --subject (default: the shipped one, which saw it)")
-    p.add_argument("--size", default=f"{SIZE[0]}x{SIZE[1]}",
-                   help="synthetic and cmu: the clips' size WxH in pixels, for MediaPipe alone and the tracker alike "
-                        f"(default {SIZE[0]}x{SIZE[1]})")
+    p.add_argument("--cmu-sizes", default=",".join(f"{w}x{h}" for w, h in CMU_SIZES),
+                   help="cmu: comma-separated sizes WxH in pixels the clips are rendered at, for MediaPipe alone "
+                        "and the tracker alike (default: %(default)s)")
+    p.add_argument("--faces", choices=tuple(FACES), default="both",
+                   help="cmu: draw the head with its face, with hair all round (no face seen from any side), "
+                        "or each clip both ways (default)")
+    p.add_argument("--lifters", type=Path, default=None,
+                   help="cmu: folder of the lifters trained without each subject, lifter_no<S>.npz, used when "
+                        "present and trained there (about 6 minutes of one core each) when not (default OUT/work)")
+    p.add_argument("--size", default=None,
+                   help=f"synthetic: the clips' size WxH in pixels (default {SIZE[0]}x{SIZE[1]}; cmu: --cmu-sizes)")
     args = p.parse_args(argv)
+    size = SIZE if args.size is None else _parse_size(args.size)
+    if size is None:
+        p.error(f"--size takes WxH in pixels (at least 16 each), got {args.size!r}")
+    if args.only == "cmu" and args.size is not None:
+        p.error("--size is the synthetic clips'; the CMU-driven clips take --cmu-sizes")
+    if args.cmu_frames < 1:
+        p.error(f"--cmu-frames must be positive, got {args.cmu_frames}")
+    sizes = [_parse_size(v) for v in args.cmu_sizes.split(",")]
+    if not sizes or None in sizes:
+        p.error(f"--cmu-sizes takes comma-separated WxH in pixels (at least 16 each), got {args.cmu_sizes!r}")
+    subjects = [v.strip() for v in args.subjects.split(",") if v.strip()]
+    if not subjects or len(set(subjects)) != len(subjects):
+        p.error(f"--subjects takes distinct comma-separated CMU subjects, got {args.subjects!r}")
     try:
-        size = tuple(int(v) for v in args.size.lower().split("x"))
-        if len(size) != 2 or min(size) < 16:
-            raise ValueError
-    except ValueError:
-        print(f"error: --size takes WxH in pixels (at least 16 each), got {args.size!r}")
-        return 2
+        clips = cmu_clips(subjects, None if args.trials is None else [t.strip() for t in args.trials.split(",")],
+                          sizes, FACES[args.faces])
+    except ValueError as error:
+        p.error(str(error))
     from mocap.io.mediapipe_keypoints import available
 
     if not available():
@@ -510,17 +698,13 @@ def main(argv: list[str] | None = None) -> int:
     stored = args.out / "results.json"
     results = json.loads(stored.read_text()) if stored.exists() and args.only else {"synthetic": [], "real": []}
     if args.only == "cmu":
-        if not args.trials and args.subject not in CMU_TRIALS:
-            print(f"error: no default trials for subject {args.subject}: give --trials")
-            return 2
-        trials = args.trials.split(",") if args.trials else CMU_TRIALS[args.subject]
-        if any(t.split("_")[0] != args.subject for t in trials):
-            print(f"error: --trials must all be subject {args.subject}'s, got {trials}")
-            return 2
         train = args.train or args.data / "mocap" / "train"
-        results["cmu"] = [cmu_row(t, CMU_SCENES[i % len(CMU_SCENES)], work, train=train, seed=args.seed,
-                                  frames=args.cmu_frames, lifter=args.lifter, size=size)
-                          for i, t in enumerate(trials)]
+        missing = sorted({f"cmu_{c.trial}.amc" for c in clips if not (train / f"cmu_{c.trial}.amc").exists()})
+        if missing:
+            p.error(f"no {', '.join(missing)} in {train}")
+        lifters = {s: held_out_lifter(s, args.lifters or work, train) for s in subjects}
+        results["cmu"] = [cmu_row(c, work, train=train, seed=args.seed, frames=args.cmu_frames, lifter=lifters[c.subject])
+                          for c in clips]
     if args.only in (None, "synthetic"):
         results["synthetic"] = [synthetic_row(name, work, args.seed, size) for name in SYNTHETIC]
     if args.only in (None, "real"):

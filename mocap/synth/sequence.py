@@ -341,7 +341,7 @@ def _prepare_folder(out: Path) -> None:
 
 def generate_sequence(name: str, out_dir: str | Path, *, frames: int | None = None, seed: int = 0,
                       size=(160, 120), motion: str | Path | None = None, frame_format: str = "png",
-                      progress: bool = True) -> Path:
+                      progress: bool = True, face: bool = True) -> Path:
     """Write a synthetic benchmark sequence with ground truth.
 
     Parameters
@@ -365,6 +365,9 @@ def generate_sequence(name: str, out_dir: str | Path, *, frames: int | None = No
         (same pixels once decoded, about four times smaller).
     progress : bool
         Show a progress bar.
+    face : bool
+        Draw the actor's face (default); False draws hair all round the head, everything else
+        the same (:func:`setup_sequence`; ``meta.json``'s ``actor.appearance.face`` is then false).
 
     Returns
     -------
@@ -380,7 +383,7 @@ def generate_sequence(name: str, out_dir: str | Path, *, frames: int | None = No
     """
     if frame_format not in FRAME_FORMATS:
         raise ValueError(f"frame format must be one of {', '.join(FRAME_FORMATS)}, got {frame_format!r}")
-    setup = setup_sequence(name, seed=seed, size=size)
+    setup = setup_sequence(name, seed=seed, size=size, face=face)
     poses, motion_info = sequence_poses(setup, frames=frames, motion=motion)
     out = Path(out_dir)
     _prepare_folder(out)
