@@ -211,6 +211,28 @@ def test_unexplained_hands_of_a_body_reaching_behind_the_camera_is_nothing():
     assert unexplained_hands(frame.labels, joints, MODEL, CAMERA, TrackerConfig()).shape == (0, 2)
 
 
+def test_unexplained_hands_are_the_two_largest_regions_at_most():
+    """Noise in a real background leaves many small skin regions: re-acquisition reaches for the
+    MAX_REACH_TARGETS (2) largest unexplained ones, a body having two hands. Reference: the
+    rendered lost hand's projection and the centroid of the largest noise square, by hand."""
+    from mocap.body import JOINT_NAMES
+    from mocap.labels import class_label
+    from mocap.track import unexplained_hands
+    from mocap.track.config import MAX_REACH_TARGETS
+    truth, lost, frame = lost_arm_frame()
+    labels = frame.labels.copy()
+    skin = class_label("skin", MODEL.class_names)
+    noise = [(5, 5, 2), (5, 150, 3), (110, 5, 4), (110, 150, 5)]           # (row, col, side): far from the body
+    for row, col, side in noise:
+        labels[row:row + side, col:col + side] = skin
+    targets = unexplained_hands(labels, MODEL.joint_positions(lost), MODEL, CAMERA, TrackerConfig())
+    assert MAX_REACH_TARGETS == 2 and targets.shape == (2, 2)
+    true_hand = CAMERA.project(MODEL.joint_positions(truth)[JOINT_NAMES.index("r_hand")])
+    assert np.linalg.norm(targets[0] - true_hand) < 1.5                  # the lost hand, the largest
+    biggest_noise = np.array([150 + 2.0, 110 + 2.0])                      # (u, v) of the 5x5 square's centroid
+    assert np.allclose(targets[1], biggest_noise)
+
+
 def test_the_failure_flag_reads_the_keypoints_where_there_are_some():
     """A frame whose segmentation is wrong (skin and clothes colours mixed up: F peaks, the edges
     are clean): without keypoints the registration fails; with the true joints

@@ -30,6 +30,10 @@ FRESH_STEP_SCALE = 3.0
 RECOVERY_STEP_SCALE = 2.5
 #: Skin regions smaller than this (pixels) are left out by hand re-acquisition.
 MIN_SKIN_BLOB_PIXELS = 2
+#: Hand re-acquisition reaches for at most this many unexplained skin regions a frame, the
+#: largest: a body has two hands. On a real 128x96 clip the background left 7.6 such regions a
+#: frame, whose reaches took a quarter of the frame (docs/research-log.md, issue 50).
+MAX_REACH_TARGETS = 2
 #: Kinematic jumps refined per frame: the lowest-F ones.
 JUMPS_REFINED = 2
 #: Share of the edge step's evaluations that the gradient step takes when it is on (one

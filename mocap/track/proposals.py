@@ -33,7 +33,7 @@ from mocap.body.skeleton import JOINT_INDEX
 from mocap.imaging.blobs import label_blobs
 from mocap.labels import class_label
 from mocap.render.camera import Camera
-from mocap.track.config import MIN_SKIN_BLOB_PIXELS, TrackerConfig
+from mocap.track.config import MAX_REACH_TARGETS, MIN_SKIN_BLOB_PIXELS, TrackerConfig
 from mocap.track.lifter import MIN_VISIBLE, LiftedHypotheses, Lifter, relative_joints
 
 
@@ -158,17 +158,17 @@ def unexplained_hands(labels: np.ndarray, joints: np.ndarray, model: BodyModel, 
 
     Returns
     -------
-    ndarray, shape (n, 2), float64, pixels
+    ndarray, shape (n, 2), float64, pixels, n <= MAX_REACH_TARGETS
         ``(u, v)`` of each skin region, other than the one nearest the projected head centre,
         whose centroid is farther than ``reacquisition_distance_px`` from both projected hand
-        centres.
+        centres: the :data:`~mocap.track.config.MAX_REACH_TARGETS` largest such.
     """
     blobs = skin_blobs_off_head(labels, joints, model, camera, MIN_SKIN_BLOB_PIXELS)
     if len(blobs) == 0:
         return blobs
     hands = camera.project(joints)[[JOINT_INDEX["r_hand"], JOINT_INDEX["l_hand"]]]
     far = np.linalg.norm(blobs[:, None, :] - hands[None], axis=2).min(axis=1) > config.reacquisition_distance_px
-    return blobs[far]
+    return blobs[far][:MAX_REACH_TARGETS]       # largest first (skin_blobs_off_head's order)
 
 
 def reach_proposals(pose: np.ndarray, joints: np.ndarray, targets: np.ndarray, model: BodyModel,
