@@ -79,6 +79,8 @@ CONFIGS = MappingProxyType({
     "oracle-keypoints": {},
     "oracle-no-lifter": {"lifter_weight": 0.0},
     "oracle-no-labelling": {"labelling_weight": 0.0},
+    # every frame's lowest proposals refined, near the leader's pose or not (issue 50 item 6)
+    "oracle-ungated": {"proposal_gate": None},
     # the oracle's keypoints with left and right swapped on runs of half the frames, and on every
     # frame (SWAPPED_KEYPOINTS; a detector that does not see the face, issue 44)
     "oracle-swapped": {},
@@ -88,6 +90,7 @@ CONFIGS = MappingProxyType({
     "mediapipe-keypoints": {},
     # the same without the labelling term (issue 49: the detector's front against a swapped reading)
     "mediapipe-no-labelling": {"labelling_weight": 0.0},
+    "mediapipe-ungated": {"proposal_gate": None},
     # the written poses' smoother (issue 39): live (lag 0), offline, and off
     "oracle-L0": {"lag": 0},
     "oracle-offline": {"offline": True},
@@ -113,13 +116,14 @@ CONFIGS = MappingProxyType({
 TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
 #: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
 ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter", "oracle-no-labelling",
+                                                              "oracle-ungated",
                                                               "oracle-fitted",
                                                               "oracle-fitted-silhouette", "oracle-L0", "oracle-offline",
                                                               "oracle-unsmoothed", "oracle-swapped",
                                                               "oracle-swapped-all")})
 #: Configurations given MediaPipe's keypoints on the rendered frames
 #: (:func:`experiments.keypoints.detector_keypoints`; needs the keypoints extra).
-DETECTOR_KEYPOINTS = frozenset({"mediapipe-keypoints", "mediapipe-no-labelling"})
+DETECTOR_KEYPOINTS = frozenset({"mediapipe-keypoints", "mediapipe-no-labelling", "mediapipe-ungated"})
 #: Configurations whose oracle keypoints have left and right swapped: the share of frames
 #: (:func:`experiments.keypoints.swap_runs`).
 SWAPPED_KEYPOINTS = MappingProxyType({"oracle-swapped": 0.5, "oracle-swapped-all": 1.0})

@@ -557,16 +557,24 @@ class Tracker:
     def _propose(self, source: ProposalSource, prepared, context: ProposalContext, rough, score,
                  work: "_FrameWork") -> "_Proposed":
         """One source's proposals: each given its unary score unrefined (``rough``), the
-        ``proposals_refined`` lowest refined by a registration of ``proposal_evaluations``."""
+        ``proposals_refined`` lowest refined by a registration of ``proposal_evaluations``; with
+        ``proposal_gate``, only those whose unrefined score is at most that many nats above the
+        beam leader's pose's, unrefined on this frame (the last value ``rough`` gives)."""
+        cfg = self.config
         t0 = time.perf_counter()
         proposals = source.propose(prepared, context)
         if not proposals:
             return _Proposed([], time.perf_counter() - t0)
-        values = work.submit(_rough_values, rough, [p.pose for p in proposals]).result()
-        work.evaluations += 2 * len(proposals)
-        refined = [(work.submit(_fit, score, proposals[int(i)].pose, self.config, self.config.proposal_evaluations),
-                    proposals[int(i)].origin)
-                   for i in np.argsort(values, kind="stable")[: self.config.proposals_refined]]
+        poses = [p.pose for p in proposals]
+        if cfg.proposal_gate is not None:
+            poses.append(self._beam[0].pose)
+        values = work.submit(_rough_values, rough, poses).result()
+        work.evaluations += 2 * len(poses)
+        order = np.argsort(values[: len(proposals)], kind="stable")[: cfg.proposals_refined]
+        if cfg.proposal_gate is not None:
+            order = order[values[order] <= values[-1] + cfg.proposal_gate]
+        refined = [(work.submit(_fit, score, proposals[int(i)].pose, cfg, cfg.proposal_evaluations),
+                    proposals[int(i)].origin) for i in order]
         return _Proposed(refined, time.perf_counter() - t0)
 
     def close(self) -> None:
