@@ -205,7 +205,33 @@ def _rasterize(xs, ys, iz, triangles, triangle_part, width, height, cull,
                 by1 = max(by1, py1)
             continue
         drawn = False
-        if n < _NARROW and not (want_tri or want_count):
+        if n < _NARROW and not (want_tri or want_count) and py1 * width + px0 + _NARROW <= part_buf.size:
+            # narrow box, tried as _NARROW lanes a row (issue 50 item 2; slower: research log):
+            # the depth test of every lane, its wins as bits, then the parts
+            for py in range(py0, py1 + 1):
+                row = py * width + px0
+                wins = np.uint64(0)
+                for k in range(_NARROW):
+                    idx = np.uint64(row + k)
+                    w0 = w0_row - m0 * k
+                    w1 = w1_row - m1 * k
+                    w2 = w2_row - m2 * k
+                    inside = ((w0 | w1 | w2) >= 0) & (k <= n)
+                    zz = z_row + dzdx * k
+                    old_z = depth_buf[idx]
+                    win = inside & (zz > old_z)
+                    depth_buf[idx] = np.float32(zz) if win else old_z
+                    wins |= np.uint64(win) << np.uint64(k)
+                    drawn |= inside
+                for k in range(_NARROW):
+                    idx = np.uint64(row + k)
+                    old_part = part_buf[idx]
+                    part_buf[idx] = part_id if (wins >> np.uint64(k)) & np.uint64(1) else old_part
+                w0_row += d0
+                w1_row += d1
+                w2_row += d2
+                z_row += dzdy
+        elif n < _NARROW and not (want_tri or want_count):
             # narrow box: testing every pixel of the row is cheaper than finding the run's ends
             for py in range(py0, py1 + 1):
                 w0, w1, w2 = w0_row, w1_row, w2_row
