@@ -34,6 +34,10 @@ REACH_REGULARIZATION = 0.0025
 REACH_ITERATIONS = 30
 #: A hand this close to its target (metres) is taken as reached (no second start).
 REACH_TOLERANCE_M = 0.01
+#: The Levenberg–Marquardt solve ends once an accepted step lowers its squared residual by no
+#: more than this share of it (converged; before, it ran its ``iterations`` or until no step
+#: was accepted: 1.5x the time, docs/research-log.md issue 50).
+REACH_RTOL = 1e-6
 #: Further starting postures of the reaching angles (shoulder flexion, abduction, rotation,
 #: elbow flexion; degrees), tried in turn while the hand misses by more than
 #: :data:`REACH_TOLERANCE_M`: the bounded solver can stall against a limit (a straight elbow
@@ -50,9 +54,11 @@ def _points(pose, offsets, segments, local, transforms, points):
 
 @jit
 def _reach(pose, offsets, segments, local, active, lower, upper, targets, scale, regularization,
-           iterations):
+           iterations, rtol):
     """Bounded Levenberg–Marquardt putting the body points ``(segments, local)`` on ``targets``
-    (shape (k, 3)); returns the new pose (a copy of ``pose``)."""
+    (shape (k, 3)); returns the new pose (a copy of ``pose``). Ends after ``iterations``, when no
+    step lowers the squared residual, or when an accepted one lowers it by no more than ``rtol``
+    of it."""
     n = active.shape[0]
     k = targets.shape[0]
     q = pose.copy()
@@ -91,6 +97,7 @@ def _reach(pose, offsets, segments, local, active, lower, upper, targets, scale,
         jtj = jac.T @ jac
         g = jac.T @ residual
         improved = False
+        converged = False
         for _try in range(8):
             a = jtj.copy()
             for i in range(n):
@@ -103,6 +110,7 @@ def _reach(pose, offsets, segments, local, active, lower, upper, targets, scale,
             fill(trial, trial_res)
             trial_cost = np.sum(trial_res ** 2)
             if trial_cost < cost:
+                converged = cost - trial_cost <= rtol * cost
                 q = trial
                 residual[:] = trial_res
                 cost = trial_cost
@@ -110,7 +118,7 @@ def _reach(pose, offsets, segments, local, active, lower, upper, targets, scale,
                 improved = True
                 break
             lam *= 10.0
-        if not improved:
+        if not improved or converged:
             break
     return q
 
@@ -160,7 +168,7 @@ def reach_arm(pose, skeleton: Skeleton, side: str, target, *, regularization: fl
         s = q.copy()
         s[active] = np.clip(start, lower, upper)
         out = _reach(s, skeleton.offsets, segment, local, active, lower, upper, t[None, :], REACH_SCALE_M,
-                     float(regularization), int(iterations))
+                     float(regularization), int(iterations), REACH_RTOL)
         miss = float(np.linalg.norm(joint_positions(out, skeleton)[hand] - t))
         if miss < best_miss:
             best, best_miss = out, miss
@@ -336,7 +344,7 @@ def place_arm(pose, skeleton: Skeleton, side: str, targets, *, regularization: f
     if best_miss <= PLACE_TOLERANCE_M or best_miss > polish_within_m:
         return ArmPlacement(pose=best, miss_m=best_miss)
     out = _reach(closed, skeleton.offsets, segments, local, active, lower, upper, t, REACH_SCALE_M,
-                 float(regularization), int(iterations))
+                 float(regularization), int(iterations), REACH_RTOL)
     miss = float(np.max(np.linalg.norm(joint_positions(out, skeleton)[rows] - t, axis=1)))
     if miss < best_miss:
         best, best_miss = out, miss
