@@ -295,14 +295,17 @@ def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: B
         dims = _apply_factors(base, x[n_pose:n_pose + n_fac])
         return pose, (dims.with_hairline(float(x[-1])) if len(x) > n_pose + n_fac else dims)
 
+    # the keypoints' gates and scales once: each trial body only re-reads its joints (for_model)
+    keypoint_cost = None if keypoints is None else calibration_keypoint_cost(
+        keypoints, BodyModel.build(base, resolution=config.resolution), camera, foreground)
+
     def objective(target, part_class, class_names):
         def cost(x):
             pose, dims = unpack(x)
             model = BodyModel.build(dims, resolution=config.resolution, part_class=part_class, class_names=class_names)
             value = RegionCost(target, model, camera)(pose)
-            if keypoints is not None:
-                value += CALIBRATION_KEYPOINT_WEIGHT * calibration_keypoint_cost(keypoints, model, camera,
-                                                                                 foreground)(pose)
+            if keypoint_cost is not None:
+                value += CALIBRATION_KEYPOINT_WEIGHT * keypoint_cost.for_model(model)(pose)
             return value
         return cost
 

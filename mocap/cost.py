@@ -1268,7 +1268,7 @@ class KeypointCost:
         if not isinstance(swap, (bool, np.bool_)):
             raise ValueError(f"swap must be true or false, got {swap!r}")
         present = (conf > 0) & np.isfinite(uv).all(axis=1)
-        self.model, self.camera = model, camera
+        self.camera = camera
         self.present = present
         self.swap = bool(swap)
         self._uv = np.ascontiguousarray(uv[present])
@@ -1279,17 +1279,33 @@ class KeypointCost:
         weight = conf[present] * gate
         total = np.sort(weight).sum()                     # the same float whatever the labels' order
         self._weight = weight / total if total > 0 else np.zeros(0)
-        joints = np.flatnonzero(present)
+        twins = np.array([SWAPPED_JOINTS[j] for j in np.flatnonzero(present)], dtype=np.int64)
+        self._swapped_order = np.argsort(twins, kind="stable").astype(np.int64)
+        self._bind_joints(model)
+        self._transforms = np.zeros((len(SEGMENT_NAMES), 3, 4))
+        self._camera = camera.as_array()
+        self.behind_penalty = float(np.hypot(camera.width, camera.height))
+
+    def _bind_joints(self, model: BodyModel) -> None:
+        """Read the present joints' (and their left/right twins') segments and places off
+        ``model``'s skeleton."""
+        joints = np.flatnonzero(self.present)
         twins = np.array([SWAPPED_JOINTS[j] for j in joints], dtype=np.int64)
         skeleton = model.skeleton
+        self.model = model
         self._segment = np.ascontiguousarray(skeleton.joint_segment[joints])
         self._local = np.ascontiguousarray(skeleton.joint_local[joints])
         self._swapped_segment = np.ascontiguousarray(skeleton.joint_segment[twins])
         self._swapped_local = np.ascontiguousarray(skeleton.joint_local[twins])
-        self._swapped_order = np.argsort(twins, kind="stable").astype(np.int64)
-        self._transforms = np.zeros((len(SEGMENT_NAMES), 3, 4))
-        self._camera = camera.as_array()
-        self.behind_penalty = float(np.hypot(camera.width, camera.height))
+
+    def for_model(self, model: BodyModel) -> "KeypointCost":
+        """The same keypoints, scales, gates and labellings on another body model (other
+        proportions, as a calibration's fit tries): the value a new ``KeypointCost`` of ``model``
+        would give at every pose, without recomputing the gates' distance transform. The copy
+        has a scratch buffer of its own."""
+        twin = self.spare()
+        twin._bind_joints(model)
+        return twin
 
     @property
     def empty(self) -> bool:

@@ -343,6 +343,31 @@ def test_keypoint_gates_weigh_down_a_joint_off_the_silhouette():
     assert gated(q) < 0.05 * ungated(q)
 
 
+def test_keypoint_cost_for_another_body_is_a_new_cost_of_that_body():
+    """``for_model`` (the calibration's trial bodies) gives, bit for bit, what a KeypointCost built
+    on the other body gives (gates, scales and both labellings kept), and leaves the first one's
+    value alone."""
+    from mocap.body import BodyDimensions
+
+    rng = np.random.default_rng(5)
+    q = neutral_pose()
+    uv = CAMERA.project(MODEL.joint_positions(q)) + rng.normal(0.0, 3.0, (10, 2))
+    uv[JOINT_NAMES.index("r_hand")] += [0.0, 45.0]                  # gated: off the silhouette
+    conf = rng.uniform(0.3, 1.0, 10)
+    foreground = render(q, MODEL, CAMERA).labels != 0
+    other = BodyModel.build(BodyDimensions().scaled(1.15, parts=("r_upper_arm", "l_forearm", "torso")), resolution=8)
+    for swap in (False, True):
+        first = KeypointCost(uv, conf, MODEL, CAMERA, foreground=foreground, swap=swap)
+        fresh = KeypointCost(uv, conf, other, CAMERA, foreground=foreground, swap=swap)
+        moved = first.for_model(other)
+        for pose in (q, *(np.clip(q + rng.normal(0.0, 0.3, 23) * (np.arange(23) >= 6), *JOINT_LIMITS.T)
+                          for _ in range(5))):
+            before = first(pose)
+            assert moved(pose) == fresh(pose)
+            assert np.array_equal(moved.labellings(pose), fresh.labellings(pose), equal_nan=True)
+            assert first(pose) == before and first(pose) != fresh(pose)
+
+
 def test_keypoint_cost_without_keypoints_is_zero_and_joints_behind_the_camera_cost_the_diagonal():
     q = neutral_pose()
     assert KeypointCost(np.full((10, 2), np.nan), np.zeros(10), MODEL, CAMERA)(q) == 0.0
