@@ -84,6 +84,8 @@ CONFIGS = MappingProxyType({
     # the beam's other hypotheses (and re-acquisition) refined with 100 evaluations, not 150 (issue 50 item 6;
     # did not pay with MediaPipe's keypoints: docs/research-log.md)
     "oracle-h100": {"hypothesis_evaluations": 100},
+    # the body mesh at resolution 6 (264 triangles) instead of 160x120's 8 (416): issue 50 item 2
+    "oracle-r6": {"mesh_resolution": 6},
     # the oracle's keypoints with left and right swapped on runs of half the frames, and on every
     # frame (SWAPPED_KEYPOINTS; a detector that does not see the face, issue 44)
     "oracle-swapped": {},
@@ -95,6 +97,7 @@ CONFIGS = MappingProxyType({
     "mediapipe-no-labelling": {"labelling_weight": 0.0},
     "mediapipe-ungated": {"proposal_gate": None},
     "mediapipe-h100": {"hypothesis_evaluations": 100},
+    "mediapipe-r6": {"mesh_resolution": 6},
     # the written poses' smoother (issue 39): live (lag 0), offline, and off
     "oracle-L0": {"lag": 0},
     "oracle-offline": {"offline": True},
@@ -120,7 +123,7 @@ CONFIGS = MappingProxyType({
 TWO_CLASS_MODEL = frozenset({"paper", "two-class"})
 #: Configurations given 2D keypoints: the oracle's noise in pixels (:mod:`experiments.keypoints`).
 ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", "oracle-no-lifter", "oracle-no-labelling",
-                                                              "oracle-ungated", "oracle-h100",
+                                                              "oracle-ungated", "oracle-h100", "oracle-r6",
                                                               "oracle-fitted",
                                                               "oracle-fitted-silhouette", "oracle-L0", "oracle-offline",
                                                               "oracle-unsmoothed", "oracle-swapped",
@@ -128,7 +131,7 @@ ORACLE_KEYPOINTS = MappingProxyType({name: 2.0 for name in ("oracle-keypoints", 
 #: Configurations given MediaPipe's keypoints on the rendered frames
 #: (:func:`experiments.keypoints.detector_keypoints`; needs the keypoints extra).
 DETECTOR_KEYPOINTS = frozenset({"mediapipe-keypoints", "mediapipe-no-labelling", "mediapipe-ungated",
-                                "mediapipe-h100"})
+                                "mediapipe-h100", "mediapipe-r6"})
 #: Configurations whose oracle keypoints have left and right swapped: the share of frames
 #: (:func:`experiments.keypoints.swap_runs`).
 SWAPPED_KEYPOINTS = MappingProxyType({"oracle-swapped": 0.5, "oracle-swapped-all": 1.0})
