@@ -313,6 +313,8 @@ def serve(fd: int) -> None:
         return
     if not _send(conn, (True, None)):
         return
+    import os
+    os.nice(int(os.environ.get("MOCAP_DETECTOR_NICE", "0")))
     attached: dict[int, shared_memory.SharedMemory] = {}
     try:
         while True:
