@@ -19,8 +19,14 @@ of this process's cores (``os.sched_setaffinity`` in the child before it starts,
 
 MediaPipe's own time per frame is measured apart: :class:`mocap.io.mediapipe_keypoints.MediaPipeKeypoints`
 on the same frames (input size), alone in a subprocess pinned to one core (median and mean of
-its per-frame times; the decoding not counted). Runs with ``--keypoints mediapipe`` and that
-measurement need the optional extra ``keypoints``.
+its per-frame times; the decoding not counted), once in each repeat, after its runs. Runs with
+``--keypoints mediapipe`` and that measurement need the optional extra ``keypoints``.
+
+The table ends with the ratios issue 50 sets targets on, each taken within one repeat (whose
+runs follow each other) and given as the median and range over the repeats (:func:`ratios`): a
+run with MediaPipe on the most cores against MediaPipe alone (frames a second times MediaPipe
+alone's seconds a frame), and each keypoint mode's time per frame on the most cores against one
+core. The machine's speed drifts between calls by more than these ratios do within one.
 
 Writes ``OUT/throughput.json`` (every run, the commands, the load average (1 min) before each
 run, the cores, the CPU, the commit, the command) and ``OUT/throughput.md`` (one table: medians
@@ -40,6 +46,7 @@ import statistics
 import subprocess
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 from experiments import EXPERIMENTS_DIR
@@ -128,6 +135,44 @@ def _detector_only(clip: Path, max_frames: int | None) -> int:
     return 0
 
 
+@dataclass(frozen=True)
+class Ratio:
+    """One ratio over the repeats: what it compares, its median and range, and how many repeats
+    gave it."""
+
+    name: str
+    median: float
+    low: float
+    high: float
+    repeats: int
+
+
+def ratios(result: dict) -> list[Ratio]:
+    """The ratios within each repeat of ``result`` (:func:`measure`), median and range over the
+    repeats: ``"mediapipe / alone"``, frames a second (run.json) of the run with ``mediapipe`` on
+    the most cores times MediaPipe alone's median seconds a frame of the same repeat (1: the run
+    keeps pace with its detector); and for each keypoint mode ``K``, ``"K: N cores / 1"``, its time
+    per frame on the most cores (N) over its time on one core (the one-core frames a second over
+    the N-core ones). None of them where the runs carry no repeat (a JSON from before they
+    did)."""
+    runs = result["runs"]
+    if not runs or any("repeat" not in r for r in runs):
+        return []
+    alone = {a["repeat"]: a["ms_per_frame_median"] for a in result.get("mediapipe_alone_runs", [])}
+    most = max(result["cores"])
+    fps = {(r["repeat"], r["cores"], r["keypoints"]): r["fps"] for r in runs}
+    repeats = sorted({r["repeat"] for r in runs})
+    found: dict[str, list[float]] = {}
+    if "mediapipe" in result["keypoints"] and alone:
+        found["mediapipe / alone"] = [fps[(i, most, "mediapipe")] * alone[i] / 1000.0
+                                      for i in repeats if (i, most, "mediapipe") in fps and i in alone]
+    if most > 1 and 1 in result["cores"]:
+        for k in result["keypoints"]:
+            found[f"{_label(k)}: {most} cores / 1"] = [fps[(i, 1, k)] / fps[(i, most, k)] for i in repeats
+                                                     if (i, 1, k) in fps and (i, most, k) in fps]
+    return [Ratio(name, statistics.median(v), min(v), max(v), len(v)) for name, v in found.items() if v]
+
+
 def _median(rows: list[dict], key: str) -> float | None:
     values = [r[key] for r in rows if r.get(key) is not None]
     return statistics.median(values) if values else None
@@ -163,8 +208,19 @@ def table(result: dict) -> str:
         lines += ["", f"MediaPipe Pose alone (`MediaPipeKeypoints`, image mode, model complexity 1) on the same "
                       f"{alone['frames']} frames, one core: {alone['ms_per_frame_median']:.1f} ms a frame (median; "
                       f"mean {alone['ms_per_frame_mean']:.1f}), load {alone['load']:.1f} "
-                      f"(`{alone['command']}`)."]
+                      f"(`{alone['command']}`)" + _spread_of_alone(result) + "."]
+    found = ratios(result)
+    if found:
+        lines += ["", "Ratios within each repeat (median over the repeats, range in brackets): "
+                      + "; ".join(f"{r.name} **{r.median:.2f}** ({r.low:.2f}-{r.high:.2f}, {r.repeats} repeat(s))"
+                                  for r in found) + "."]
     return "\n".join(lines) + "\n"
+
+
+def _spread_of_alone(result: dict) -> str:
+    """", the median repeat of N (a-b ms)" where MediaPipe alone ran in more than one repeat."""
+    ms = [a["ms_per_frame_median"] for a in result.get("mediapipe_alone_runs", [])]
+    return f", the median repeat of {len(ms)} ({min(ms):.1f}-{max(ms):.1f} ms)" if len(ms) > 1 else ""
 
 
 def _shown(path: str) -> str:
@@ -228,16 +284,21 @@ def measure(clip: Path, out: Path, *, cores=(1, 2), keypoints=("none", "mediapip
               "repeats": repeats, "max_frames": max_frames, "commit": _commit(),
               "date": datetime.date.today().isoformat(), "cpu": _cpu_name(), "cpu_count": os.cpu_count(), "runs": []}
     pairs = [(c, k) for c in cores for k in keypoints]
+    alone_runs = []
     for repeat in range(repeats):
         for c, k in (pairs if repeat % 2 == 0 else pairs[::-1]):
             run = track_run(clip, out / f"run-{c}core-{_label(k)}", c, k, max_frames, threads)
-            result["runs"].append(run)
+            result["runs"].append({**run, "repeat": repeat})
             progress(f"{c} core(s), keypoints {k}: {run['fps']:.1f} frames/s (run.json), {run['loop_fps']:.1f} "
                      f"decoding to outputs, {run['end_to_end_fps']:.1f} end to end; load {run['load']:.1f}")
+        if detector:
+            alone_runs.append({**detector_alone(clip, max_frames), "repeat": repeat})
+            progress(f"MediaPipe alone, one core: {alone_runs[-1]['ms_per_frame_median']:.1f} ms a frame")
     result["frames"], result["size"] = result["runs"][0]["frames"], result["runs"][0]["size"]
     if detector:
-        result["mediapipe_alone"] = detector_alone(clip, max_frames)
-        progress(f"MediaPipe alone, one core: {result['mediapipe_alone']['ms_per_frame_median']:.1f} ms a frame")
+        # the repeat whose MediaPipe alone was the median one stands for them in the text
+        result["mediapipe_alone"] = sorted(alone_runs, key=lambda r: r["ms_per_frame_median"])[(len(alone_runs) - 1) // 2]
+        result["mediapipe_alone_runs"] = alone_runs
     (out / "throughput.json").write_text(json.dumps(result, indent=1) + "\n")
     (out / "throughput.md").write_text(table(result))
     return result
