@@ -1325,6 +1325,12 @@ class KeypointCost:
         direct, swapped = keypoint_labellings_kernel(check_pose(pose), self.kernel_args())
         return float(direct), (float(swapped) if self.swap else float("nan"))
 
+    def value_and_labelling(self, pose) -> tuple[float, bool]:
+        """``(cost(pose), labelling(pose))`` from one evaluation of the two labellings."""
+        direct, swapped = keypoint_labellings_kernel(check_pose(pose), self.kernel_args())
+        taken = bool(self.swap and swapped < direct)       # as keypoint_cost_kernel decides
+        return float(swapped if taken else direct), taken
+
     def labelling(self, pose) -> bool:
         """Whether the cost at ``pose`` is the swapped labelling's (lower than the detector's; a
         tie keeps the detector's; False when ``swap`` is off)."""

@@ -343,6 +343,26 @@ def test_keypoint_gates_weigh_down_a_joint_off_the_silhouette():
     assert gated(q) < 0.05 * ungated(q)
 
 
+def test_keypoint_value_and_labelling_are_the_cost_and_its_labelling():
+    """One evaluation of both labellings gives what ``cost(pose)`` and ``labelling(pose)`` give,
+    bit for bit, with ``swap`` off and on (the keypoints read swapped on half the poses)."""
+    rng = np.random.default_rng(11)
+    q = neutral_pose()
+    uv = CAMERA.project(MODEL.joint_positions(q))
+    swapped_uv = uv[[JOINT_NAMES.index(n.replace("r_", "#").replace("l_", "r_").replace("#", "l_")) for n in JOINT_NAMES]]
+    seen = set()
+    for swap in (False, True):
+        for points in (uv, swapped_uv):
+            cost = KeypointCost(points + rng.normal(0.0, 2.0, (10, 2)), rng.uniform(0.3, 1.0, 10), MODEL, CAMERA,
+                                swap=swap)
+            for _ in range(4):
+                pose = np.clip(q + rng.normal(0.0, 0.2, 23) * (np.arange(23) >= 6), *JOINT_LIMITS.T)
+                value, taken = cost.value_and_labelling(pose)
+                assert value == cost(pose) and taken == cost.labelling(pose)
+                seen.add(taken)
+    assert seen == {False, True}
+
+
 def test_keypoint_cost_for_another_body_is_a_new_cost_of_that_body():
     """``for_model`` (the calibration's trial bodies) gives, bit for bit, what a KeypointCost built
     on the other body gives (gates, scales and both labellings kept), and leaves the first one's

@@ -28,6 +28,8 @@ of the arrays, checked at load).
 """
 from __future__ import annotations
 
+import functools
+
 import hashlib
 import io
 import json
@@ -173,6 +175,22 @@ class LiftedHypotheses:
 
     def __len__(self) -> int:
         return len(self.poses)
+
+    @functools.cached_property
+    def top_log_density(self) -> float:
+        """:meth:`Lifter.log_density` at the most probable hypothesis's own joints, computed
+        once (every candidate's lifter energy is measured from it)."""
+        return _log_density(self, self.joints[0])
+
+
+def _log_density(lifted: LiftedHypotheses, x: np.ndarray) -> float:
+    """:meth:`Lifter.log_density` without its check of ``x`` (a float64 (10, 3) array)."""
+    d2 = np.sum((lifted.joints - x) ** 2, axis=(1, 2))
+    dims = 3 * (len(JOINT_NAMES) - 1)
+    s2 = DENSITY_SIGMA_M ** 2
+    terms = np.log(np.maximum(lifted.probabilities, 1e-300)) - 0.5 * d2 / s2
+    top = terms.max()
+    return float(top + np.log(np.exp(terms - top).sum()) - 0.5 * dims * np.log(2.0 * np.pi * s2))
 
 
 @dataclass(frozen=True, eq=False)
@@ -326,12 +344,7 @@ class Lifter:
         x = np.asarray(joints_rel, dtype=np.float64)
         if x.shape != (len(JOINT_NAMES), 3):
             raise ValueError(f"joints_rel must have shape ({len(JOINT_NAMES)}, 3), got {x.shape}")
-        d2 = np.sum((lifted.joints - x) ** 2, axis=(1, 2))
-        dims = 3 * (len(JOINT_NAMES) - 1)
-        s2 = DENSITY_SIGMA_M ** 2
-        terms = np.log(np.maximum(lifted.probabilities, 1e-300)) - 0.5 * d2 / s2
-        top = terms.max()
-        return float(top + np.log(np.exp(terms - top).sum()) - 0.5 * dims * np.log(2.0 * np.pi * s2))
+        return _log_density(lifted, x)
 
     # -- the file ------------------------------------------------------------------------------
     def save(self, path: str | Path) -> str:

@@ -305,8 +305,7 @@ class LifterSource:
         """The lifter term of the score before its weight (nats): the lifter's log-density at its
         most probable hypothesis minus that at ``joints`` (10, 3; camera coordinates, metres), at
         most :data:`LIFTER_ENERGY_CAP` (far from every hypothesis the lifter has no say)."""
-        top = self.lifter.log_density(lifted, lifted.joints[0])
-        return min(top - self.lifter.log_density(lifted, relative_joints(joints)), LIFTER_ENERGY_CAP)
+        return min(lifted.top_log_density - self.lifter.log_density(lifted, relative_joints(joints)), LIFTER_ENERGY_CAP)
 
     def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
         """Every hypothesis of the frame's lifting, most probable first, then those of the

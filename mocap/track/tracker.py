@@ -490,10 +490,8 @@ class Tracker:
         ``lifts``: the frame's lifted hypotheses under the detector's labelling and the swapped
         one; the pose pays the lifter energy and the labelling term of the labelling its keypoint
         distance takes; ``front``: the detector shows the person's front (None: no keypoints)."""
-        keypoint_cost = costs.keypoint
-        swapped = keypoint_cost is not None and keypoint_cost.labelling(pose)
-        return weighted_sum(self._terms(costs.region.evaluate_unchecked(pose), costs.edge(pose),
-                                        math.nan if keypoint_cost is None else keypoint_cost(pose), pose,
+        keypoint, swapped = (math.nan, False) if costs.keypoint is None else costs.keypoint.value_and_labelling(pose)
+        return weighted_sum(self._terms(costs.region.evaluate_unchecked(pose), costs.edge(pose), keypoint, pose,
                                         self.model.joint_positions(pose), lifts[swapped], front, swapped),
                             self.weights)
 

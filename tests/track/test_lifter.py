@@ -140,6 +140,11 @@ def test_log_density_is_the_mixture_of_gaussians():
                         for p, mu in zip(lifted.probabilities, lifted.joints)))
     assert lifter.log_density(lifted, x) == pytest.approx(expect, rel=1e-9)
     assert lifter.log_density(lifted, lifted.joints[0]) > lifter.log_density(lifted, lifted.joints[0] + 0.2)
+    # the density at the top hypothesis, kept with the hypotheses: the same float as computed afresh
+    top = np.log(sum(p * multivariate_normal(mu[keep].ravel(), DENSITY_SIGMA_M ** 2).pdf(lifted.joints[0][keep].ravel())
+                     for p, mu in zip(lifted.probabilities, lifted.joints)))
+    assert lifted.top_log_density == lifter.log_density(lifted, lifted.joints[0])
+    assert lifted.top_log_density == pytest.approx(top, rel=1e-9)
 
 
 def test_lift_gives_poses_inside_the_limits_on_the_body():
