@@ -201,8 +201,10 @@ def table(result: dict) -> str:
                          f"{', '.join(map(str, threads))} | {_median(rows, 'fps'):.1f} | {_median(rows, 'loop_fps'):.1f} | "
                          f"{_median(rows, 'end_to_end_fps'):.1f} | {'' if kp is None else f'{kp:.1f}'} |")
     if max(loads) > result["cpu_count"]:
-        lines += ["", f"The machine was shared (load average above its {result['cpu_count']} cores): a second core "
-                      "was mostly another job's, and every figure is lower than a quiet machine's."]
+        lines += ["", f"The load average reached {max(loads):.1f} on {result['cpu_count']} cores. It counts this "
+                      "command's own earlier runs (a 2-core run with MediaPipe keeps more than two busy), so it "
+                      "does not tell another job's share: read the ratios within a repeat below, not figures "
+                      "of separate calls."]
     alone = result.get("mediapipe_alone")
     if alone is not None:
         lines += ["", f"MediaPipe Pose alone (`MediaPipeKeypoints`, image mode, model complexity 1) on the same "
