@@ -19,6 +19,9 @@ Prints one line per run: the seconds to the first row and the CPU seconds the co
 the wall-clock seconds; the load average (1 min) before each run: compare runs of one call.
 ``--baseline REF`` also times the ``mocap/`` of a git commit (``git archive``), compiled in its
 own copy, its cached runs alternating with the working tree's, so that both see the same load.
+``--keypoints A,B`` times both keypoint modes, their cached runs alternating, and prints the
+first mode's time to the first row over the second's, run by run (:func:`mode_ratios`; issue 50's
+target: ``--keypoints mediapipe,none`` at most 1.3x).
 """
 from __future__ import annotations
 
@@ -126,6 +129,17 @@ def time_run(package_root: Path, clip: Path, out: Path, keypoints: str | None = 
             "saved": len(re.findall(r"\[cache\] data saved to", text))}
 
 
+def mode_ratios(first: list[dict], second: list[dict]) -> tuple[float, float, float, float]:
+    """The first mode's seconds to the first row over the second's: best over best, then the
+    median, lowest and highest of the ratios of the runs made one after the other (the k-th of
+    each)."""
+    if not first or len(first) != len(second):
+        raise ValueError(f"need as many runs of each mode, got {len(first)} and {len(second)}")
+    pairs = sorted(a["first_row_s"] / b["first_row_s"] for a, b in zip(first, second))
+    best = min(r["first_row_s"] for r in first) / min(r["first_row_s"] for r in second)
+    return best, pairs[len(pairs) // 2], pairs[0], pairs[-1]
+
+
 def describe(name: str, run: dict) -> str:
     stages = ", ".join(f"{k} {v:.1f} s" for k, v in sorted(run["seen"].items(), key=lambda kv: kv[1]))
     cpu = "" if run["cpu_s"] is None else f" ({run['cpu_s']:.2f} s of CPU)"
@@ -141,9 +155,10 @@ def main(argv=None) -> int:
     parser.add_argument("--runs", type=int, default=3, help="runs after the compiling one (default 3)")
     parser.add_argument("--baseline", metavar="REF", help="also time the mocap/ of this git commit, its cached runs "
                                                           "alternating with the working tree's")
-    parser.add_argument("--keypoints", metavar="auto|mediapipe|none",
+    parser.add_argument("--keypoints", metavar="auto|mediapipe|none[,...]",
                         help="pass --keypoints to track (default: track's own default, auto: MediaPipe where "
-                             "the optional extra is installed)")
+                             "the optional extra is installed); two, comma-separated: both, alternating, and "
+                             "the first's time over the second's")
     args = parser.parse_args(argv)
     if args.runs < 1:
         parser.error("--runs must be at least 1")
@@ -167,23 +182,36 @@ def main(argv=None) -> int:
             archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.baseline, "mocap"], check=True,
                                      capture_output=True).stdout
             subprocess.run(["tar", "-x", "-C", str(copies[args.baseline])], input=archive, check=True)
-        given = "" if args.keypoints is None else f" --keypoints {args.keypoints}"
+        modes = [None] if args.keypoints is None else args.keypoints.split(",")
+        if len(modes) > 2 or not all(modes):
+            parser.error(f"--keypoints takes one mode or two, comma-separated, got {args.keypoints!r}")
+        given = "" if args.keypoints is None else f" --keypoints {' | '.join(modes)}"
         print(f"clip {clip}; `python -m mocap track CLIP --max-frames 1 --no-overlay{given}` from a fresh copy of mocap/ "
               f"({os.cpu_count()} cores)", flush=True)
-        compiled, cached = {}, {name: [] for name in copies}
-        for name, copy in copies.items():
-            compiled[name] = time_run(copy, clip, args.work / "run", args.keypoints)
-            print(describe(f"{name or 'this tree'}: compiling run", compiled[name]), flush=True)
+
+        def label(name: str, mode: str | None) -> str:
+            return (name or "this tree") + ("" if len(modes) == 1 else f" [{mode}]")
+
+        runs_of = [(name, copy, mode) for name, copy in copies.items() for mode in modes]
+        compiled, cached = {}, {(name, mode): [] for name, _, mode in runs_of}
+        for name, copy, mode in runs_of:
+            compiled[name, mode] = time_run(copy, clip, args.work / "run", mode)
+            print(describe(f"{label(name, mode)}: compiling run", compiled[name, mode]), flush=True)
         for k in range(args.runs):
-            for name, copy in copies.items():
-                cached[name].append(time_run(copy, clip, args.work / "run", args.keypoints))
-                print(describe(f"{name or 'this tree'}: cached run {k + 1}", cached[name][-1]), flush=True)
-        for name in copies:
-            runs = cached[name]
-            print(f"{name or 'this tree'}: first row {min(r['first_row_s'] for r in runs):.2f} s at best from the "
+            for name, copy, mode in runs_of:
+                cached[name, mode].append(time_run(copy, clip, args.work / "run", mode))
+                print(describe(f"{label(name, mode)}: cached run {k + 1}", cached[name, mode][-1]), flush=True)
+        for name, _, mode in runs_of:
+            runs = cached[name, mode]
+            print(f"{label(name, mode)}: first row {min(r['first_row_s'] for r in runs):.2f} s at best from the "
                   f"cache (median {sorted(r['first_row_s'] for r in runs)[len(runs) // 2]:.2f} s), "
-                  f"{compiled[name]['first_row_s']:.2f} s when compiling; cache used from the second run: "
+                  f"{compiled[name, mode]['first_row_s']:.2f} s when compiling; cache used from the second run: "
                   f"{'yes' if all(r['saved'] == 0 and r['loaded'] > 0 for r in runs) else 'NO'}")
+        if len(modes) == 2:
+            for name in copies:
+                best, median, low, high = mode_ratios(cached[name, modes[0]], cached[name, modes[1]])
+                print(f"{name or 'this tree'}: first row with --keypoints {modes[0]} over {modes[1]}: {best:.2f}x best "
+                      f"over best; run by run {median:.2f}x (median; {low:.2f}-{high:.2f})")
     finally:
         if temporary is not None:
             temporary.cleanup()
