@@ -1279,8 +1279,6 @@ class KeypointCost:
         weight = conf[present] * gate
         total = np.sort(weight).sum()                     # the same float whatever the labels' order
         self._weight = weight / total if total > 0 else np.zeros(0)
-        twins = np.array([SWAPPED_JOINTS[j] for j in np.flatnonzero(present)], dtype=np.int64)
-        self._swapped_order = np.argsort(twins, kind="stable").astype(np.int64)
         self._bind_joints(model)
         self._transforms = np.zeros((len(SEGMENT_NAMES), 3, 4))
         self._camera = camera.as_array()
@@ -1297,6 +1295,7 @@ class KeypointCost:
         self._local = np.ascontiguousarray(skeleton.joint_local[joints])
         self._swapped_segment = np.ascontiguousarray(skeleton.joint_segment[twins])
         self._swapped_local = np.ascontiguousarray(skeleton.joint_local[twins])
+        self._swapped_order = np.argsort(twins, kind="stable").astype(np.int64)
 
     def for_model(self, model: BodyModel) -> "KeypointCost":
         """The same keypoints, scales, gates and labellings on another body model (other

@@ -29,7 +29,6 @@ of the arrays, checked at load).
 from __future__ import annotations
 
 import functools
-
 import hashlib
 import io
 import json
