@@ -1333,8 +1333,7 @@ class KeypointCost:
     def labelling(self, pose) -> bool:
         """Whether the cost at ``pose`` is the swapped labelling's (lower than the detector's; a
         tie keeps the detector's; False when ``swap`` is off)."""
-        direct, swapped = self.labellings(pose)
-        return bool(self.swap and swapped < direct)
+        return self.value_and_labelling(pose)[1]
 
     def spare(self) -> "KeypointCost":
         """The same cost with a scratch buffer of its own, for another thread (the keypoints are
