@@ -11,7 +11,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from mocap.body.dimensions import BodyDimensions
+from mocap.body.dimensions import BodyDimensions, PartSize
 from mocap.body.model import BodyModel
 from mocap.body.skeleton import DEFAULT_PART_CLASS, MESH_PART_NAMES
 from mocap.labels import CLASS_MERGES_INTO
@@ -138,14 +138,18 @@ class AutoCalibrationConfig:
 
 
 def _apply_factors(base: BodyDimensions, factors: np.ndarray) -> BodyDimensions:
-    parts = dict(base.parts)
-    for f, (parts_scaled, sizes) in zip(factors, PROPORTION_FACTORS.values()):
+    """``base`` with each of :data:`PROPORTION_FACTORS`' sizes multiplied by its factor (in the
+    table's order; a part the base lacks is skipped)."""
+    sizes = {p: [s.length, s.width, s.depth] for p, s in base.parts.items()}
+    for f, (parts_scaled, axes) in zip(factors, PROPORTION_FACTORS.values()):
+        f = float(f)
         for p in parts_scaled:
-            if p not in parts:
-                continue                                # an optional part the base lacks
-            s = parts[p]
-            parts[p] = type(s)(**{k: getattr(s, k) * (f if k in sizes else 1.0) for k in ("length", "width", "depth")})
-    return BodyDimensions(parts, base.hairline)
+            size = sizes.get(p)
+            if size is not None:                        # None: an optional part the base lacks
+                for i, axis in enumerate(("length", "width", "depth")):
+                    if axis in axes:
+                        size[i] *= f
+    return BodyDimensions({p: PartSize(*size) for p, size in sizes.items()}, base.hairline)
 
 
 def auto_calibrate(frame: np.ndarray, background: np.ndarray, camera: Camera, *, imaging=None,
@@ -300,12 +304,17 @@ def _fit_body(frame: np.ndarray, foreground: np.ndarray, camera: Camera, base: B
         keypoints, BodyModel.build(base, resolution=config.resolution), camera, foreground)
 
     def objective(target, part_class, class_names):
+        # the classes, and the target's class counts, once: each trial body only rebuilds its
+        # mesh and skeleton (with_dimensions, for_model)
+        model = BodyModel.build(base, resolution=config.resolution, part_class=part_class, class_names=class_names)
+        region_cost = RegionCost(target, model, camera)
+
         def cost(x):
             pose, dims = unpack(x)
-            model = BodyModel.build(dims, resolution=config.resolution, part_class=part_class, class_names=class_names)
-            value = RegionCost(target, model, camera)(pose)
+            trial = model.with_dimensions(dims)
+            value = region_cost.for_model(trial)(pose)
             if keypoint_cost is not None:
-                value += CALIBRATION_KEYPOINT_WEIGHT * keypoint_cost.for_model(model)(pose)
+                value += CALIBRATION_KEYPOINT_WEIGHT * keypoint_cost.for_model(trial)(pose)
             return value
         return cost
 

@@ -881,6 +881,25 @@ class RegionCost:
         """As calling, without validating ``pose`` (a float64 (23,) array): for optimiser loops."""
         return region_cost_kernel(pose, self.kernel_args())
 
+    def for_model(self, model: BodyModel) -> "RegionCost":
+        """The same target on another body model with the same colour classes (other
+        proportions, as a calibration's fit tries): the value a new ``RegionCost`` of ``model``
+        would give at every pose, without recounting the target's classes. The copy has
+        scratch buffers of its own.
+
+        Raises
+        ------
+        ValueError
+            If ``model`` has another number of colour classes.
+        """
+        if model.n_classes != self.n_classes:
+            raise ValueError(f"model has {model.n_classes} colour classes, this cost {self.n_classes}")
+        twin = copy.copy(self)
+        twin.model, twin._scene, twin._buffers = model, Scene.of(model, self.camera), Buffers.of(model, self.camera)
+        twin._model_count, twin._overlap_count = np.zeros_like(self._model_count), np.zeros_like(self._overlap_count)
+        twin._gradient_args = None
+        return twin
+
     def spare(self) -> "RegionCost":
         """The same cost with scratch buffers of its own, for another thread (the target and
         the scene are shared, read-only); it gives the same value at every pose."""

@@ -101,11 +101,21 @@ def naive_part_mesh(length, width, depth, *, e_long, e_cross, taper, resolution,
     return vertices, triangles
 
 
+def naive_hair_triangles(vertices, triangles, start, length, depth, hairline, axis_sign):
+    """Twin of :func:`mocap.body.mesh.hair_triangles`, from the whole centroids."""
+    from mocap.body.mesh import HAIR_NAPE_DROP
+
+    centroid = vertices[triangles].mean(axis=1)
+    v = (axis_sign * centroid[:, 1] - (start + 0.5 * length)) / (0.5 * length)
+    behind = centroid[:, 2] > 1e-9 * depth
+    return (v >= hairline) | (behind & (v >= hairline - HAIR_NAPE_DROP))
+
+
 def naive_build_mesh(dims, resolution):
     """Twin of :func:`mocap.body.mesh.build_mesh`: every part tessellated afresh by
     :func:`naive_part_mesh` and concatenated (the library scales templates made once).
     Returns (vertices, vertex_segment, triangles, triangle_part)."""
-    from mocap.body.mesh import PART_SHAPES, hair_cuts, hair_triangles, part_resolution
+    from mocap.body.mesh import PART_SHAPES, hair_cuts, part_resolution
     from mocap.body.skeleton import (MESH_PART_NAMES, PART_SEGMENT, SEGMENT_AXIS_SIGN, SEGMENT_NAMES,
                                      lower_body_span, part_spans)
 
@@ -127,7 +137,8 @@ def naive_build_mesh(dims, resolution):
                                resolution=part_resolution(name, resolution), start=start, axis_sign=sign, cuts=cuts)
         part = np.full(len(t), p, dtype=np.int64)
         if cuts:
-            part[hair_triangles(v, t, start, size.length, size.depth, dims.hairline, sign)] = MESH_PART_NAMES.index("hair")
+            part[naive_hair_triangles(v, t, start, size.length, size.depth, dims.hairline, sign)] = \
+                MESH_PART_NAMES.index("hair")
         verts.append(v)
         vseg.append(np.full(len(v), seg, dtype=np.int64))
         tris.append(t + offset)

@@ -160,3 +160,23 @@ def test_the_calibration_reads_the_detectors_labels_where_it_shows_the_front():
     assert either < own and got == own           # the swapped reading is lower, and not taken
     own, either, got = values[False]
     assert got == either
+
+
+def test_proportion_factors_scale_each_size_in_the_tables_order():
+    """The calibration's trial body (``_apply_factors``) against the factors applied one by one,
+    a new PartSize each time, with and without the optional lower body."""
+    from mocap.body import PartSize
+    from mocap.calibrate import _apply_factors
+
+    rng = np.random.default_rng(8)
+    for base in (BodyDimensions(), BodyDimensions().without_extensions()):
+        for _ in range(20):
+            factors = rng.uniform(0.75, 1.35, len(PROPORTION_FACTORS))
+            parts = dict(base.parts)
+            for f, (names, axes) in zip(factors, PROPORTION_FACTORS.values()):
+                for p in names:
+                    if p in parts:
+                        s = parts[p]
+                        parts[p] = PartSize(*(getattr(s, k) * (f if k in axes else 1.0)
+                                              for k in ("length", "width", "depth")))
+            assert _apply_factors(base, factors) == BodyDimensions(parts, base.hairline)

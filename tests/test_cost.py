@@ -388,6 +388,30 @@ def test_keypoint_cost_for_another_body_is_a_new_cost_of_that_body():
             assert first(pose) == before and first(pose) != fresh(pose)
 
 
+def test_region_cost_for_another_body_is_a_new_cost_of_that_body():
+    """``RegionCost.for_model`` (the calibration's trial bodies) gives, bit for bit, what a
+    RegionCost built on the other body gives, leaves the first one's value alone, and refuses a
+    body with another number of colour classes."""
+    from mocap.body import BodyDimensions
+
+    rng = np.random.default_rng(6)
+    q = neutral_pose()
+    target = render(q, MODEL, CAMERA).labels.copy()
+    target[rng.random(target.shape) < 0.05] = 255                  # some unknown pixels
+    other = MODEL.with_dimensions(BodyDimensions().scaled(1.15, parts=("r_upper_arm", "l_forearm", "torso")))
+    first = RegionCost(target, MODEL, CAMERA)
+    fresh = RegionCost(target, other, CAMERA)
+    moved = first.for_model(other)
+    for pose in (q, *(np.clip(q + rng.normal(0.0, 0.3, 23) * (np.arange(23) >= 6), *JOINT_LIMITS.T)
+                      for _ in range(5))):
+        before = first(pose)
+        assert moved(pose) == fresh(pose)
+        assert first(pose) == before
+    assert first(q) != fresh(q)
+    with pytest.raises(ValueError, match="colour classes"):
+        first.for_model(MODEL.with_class_names(MODEL.class_names[:2]))
+
+
 def test_keypoint_cost_without_keypoints_is_zero_and_joints_behind_the_camera_cost_the_diagonal():
     q = neutral_pose()
     assert KeypointCost(np.full((10, 2), np.nan), np.zeros(10), MODEL, CAMERA)(q) == 0.0

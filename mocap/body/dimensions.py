@@ -57,6 +57,10 @@ class PartSize:
     depth: float
 
     def __post_init__(self) -> None:
+        length, width, depth = self.length, self.width, self.depth
+        if (type(length) is float and type(width) is float and type(depth) is float   # the common case
+                and 0.0 < length < math.inf and 0.0 < width < math.inf and 0.0 < depth < math.inf):
+            return
         for key in ("length", "width", "depth"):
             value = getattr(self, key)
             if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:

@@ -221,9 +221,11 @@ def hair_triangles(vertices: np.ndarray, triangles: np.ndarray, start: float, le
     -------
     ndarray, shape (T,), bool
     """
-    centroid = vertices[triangles].mean(axis=1)
-    v = (axis_sign * centroid[:, 1] - (start + 0.5 * length)) / (0.5 * length)    # -1 chin ... +1 crown
-    behind = centroid[:, 2] > 1e-9 * depth
+    # the centroids' y and z (the same sums, in the same order, as vertices[triangles].mean(axis=1))
+    y, z = vertices[:, 1][triangles], vertices[:, 2][triangles]
+    centroid_y, centroid_z = (y[:, 0] + y[:, 1] + y[:, 2]) / 3.0, (z[:, 0] + z[:, 1] + z[:, 2]) / 3.0
+    v = (axis_sign * centroid_y - (start + 0.5 * length)) / (0.5 * length)    # -1 chin ... +1 crown
+    behind = centroid_z > 1e-9 * depth
     return (v >= hairline) | (behind & (v >= hairline - HAIR_NAPE_DROP))
 
 

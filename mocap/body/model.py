@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Mapping
 
 import numpy as np
@@ -75,20 +76,14 @@ class BodyModel:
     @classmethod
     def _with_classes(cls, dims, skeleton, mesh, class_names: tuple[str, ...],
                       part_class: tuple[str, ...]) -> "BodyModel":
-        if not 1 <= len(class_names) <= MAX_CLASSES or len(set(class_names)) != len(class_names):
-            raise ValueError(f"need 1 to {MAX_CLASSES} distinct colour class names, got {class_names}")
-        present = set(np.unique(mesh.triangle_part).tolist())
-        labels = []
-        for p, (part, name) in enumerate(zip(MESH_PART_NAMES, part_class)):
-            try:
-                labels.append(class_names.index(merged_class(name, class_names)) + 1)
-            except ValueError:
+        labels, unresolved = _part_labels(class_names, part_class)
+        if unresolved:
+            present = set(np.unique(mesh.triangle_part).tolist())
+            for p in unresolved:
                 if p in present:
-                    raise ValueError(f"part {part!r} has class {name!r}, not one of {class_names}") from None
-                labels.append(1)                        # no triangles: never drawn
-        part_label = np.array(labels, dtype=np.uint8)
-        part_label.setflags(write=False)
-        return cls(dims, skeleton, mesh, class_names, part_label, part_class)
+                    raise ValueError(f"part {MESH_PART_NAMES[p]!r} has class {part_class[p]!r}, not one of "
+                                     f"{class_names}")
+        return cls(dims, skeleton, mesh, class_names, labels, part_class)
 
     def with_class_names(self, class_names: tuple[str, ...]) -> "BodyModel":
         """The same model with other colour classes (e.g. those a colour model kept): parts of a
@@ -129,3 +124,29 @@ class BodyModel:
         out = np.empty_like(self.mesh.vertices)
         apply_transforms_into(self.segment_transforms(pose), self.mesh.vertex_segment, self.mesh.vertices, out)
         return out
+
+
+@lru_cache(maxsize=64)
+def _part_labels(class_names: tuple[str, ...], part_class: tuple[str, ...]) -> tuple[np.ndarray, tuple[int, ...]]:
+    """Each part's label (class index + 1 in ``class_names``, after merging; read-only uint8
+    (11,), :data:`~mocap.body.skeleton.MESH_PART_NAMES` order) and the parts whose class
+    merges into none of ``class_names`` (label 1: an error if the mesh has such a part).
+    Depends on the classes alone, so a model rebuilt with other proportions reuses it.
+
+    Raises
+    ------
+    ValueError
+        Not 1 to :data:`~mocap.labels.MAX_CLASSES` distinct class names.
+    """
+    if not 1 <= len(class_names) <= MAX_CLASSES or len(set(class_names)) != len(class_names):
+        raise ValueError(f"need 1 to {MAX_CLASSES} distinct colour class names, got {class_names}")
+    labels, unresolved = [], []
+    for p, name in enumerate(part_class):
+        try:
+            labels.append(class_names.index(merged_class(name, class_names)) + 1)
+        except ValueError:
+            unresolved.append(p)
+            labels.append(1)                        # no triangles: never drawn
+    part_label = np.array(labels, dtype=np.uint8)
+    part_label.setflags(write=False)
+    return part_label, tuple(unresolved)
