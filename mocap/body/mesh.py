@@ -16,13 +16,14 @@ follows rings, so the split is exact and costs no triangle.
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from functools import lru_cache
 from types import MappingProxyType
 
 import numpy as np
 
-from mocap.body.dimensions import BodyDimensions
+from mocap.body.dimensions import DEFAULT_HAIRLINE, BodyDimensions
 from mocap.body.skeleton import (MESH_PART_NAMES, PART_SEGMENT, SEGMENT_AXIS_SIGN, SEGMENT_NAMES, lower_body_span,
                                  part_spans)
 
@@ -322,6 +323,37 @@ def _topology(resolution: int, hairline: float | None, present: tuple[str, ...])
                 int(first_triangle[head + 1]), templates[head].triangles)
     return _Topology(tuple(names), tuple(indices), axis_sign, slot, along, ring_scale, cross_x, cross_z, vseg,
                      tris, tpart, head)
+
+
+#: Hairlines whose topologies stand for every other with as many hair cuts (:func:`hair_cuts`):
+#: two cuts above -0.2, one below.
+_REFERENCE_HAIRLINES = {2: DEFAULT_HAIRLINE, 1: -0.5}
+
+
+def _topology_for(resolution: int, hairline: float | None, present: tuple[str, ...]) -> _Topology:
+    """:func:`_topology`, without building one per hairline: a calibration's colour fit tries a
+    new hairline at every evaluation. Another hairline moves only the head's rings along its axis
+    (the same count, so the same triangles), so the kept topology of a reference hairline with
+    as many cuts (:data:`_REFERENCE_HAIRLINES`) is reused with the head's ``along`` and
+    ``ring_scale`` of this hairline: the same numbers :func:`_topology` would give. Where the
+    count differs (a cut on a ring), :func:`_topology` itself."""
+    if hairline is None or "head" not in present:
+        return _topology(resolution, hairline, present)
+    cuts = hair_cuts(hairline)
+    reference = _topology(resolution, _REFERENCE_HAIRLINES[len(cuts)], present)
+    if reference.head is None or hairline == _REFERENCE_HAIRLINES[len(cuts)]:
+        return _topology(resolution, hairline, present)
+    v0, v1 = reference.head[0], reference.head[1]
+    n_lon = part_resolution("head", resolution)
+    e_long, e_cross, taper = PART_SHAPES["head"]
+    u, scale, _, _ = _unit_part(n_lon, e_long, e_cross, taper, cuts)
+    if len(u) * n_lon + 2 != v1 - v0:
+        return _topology(resolution, hairline, present)
+    along, ring_scale = reference.along.copy(), reference.ring_scale.copy()
+    along[v0:v1 - 2], ring_scale[v0:v1 - 2] = np.repeat(u, n_lon), np.repeat(scale, n_lon)
+    along.setflags(write=False)
+    ring_scale.setflags(write=False)
+    return dataclasses.replace(reference, along=along, ring_scale=ring_scale)
 
 
 def build_mesh(dims: BodyDimensions, resolution: int = 12) -> BodyMesh:

@@ -126,3 +126,30 @@ def test_build_mesh_equals_the_part_by_part_tessellation():
                                      axis_sign=sign, cuts=cuts)
             np.testing.assert_array_equal(v, nv)
             np.testing.assert_array_equal(t, nt)
+
+
+def test_a_new_hairline_reuses_a_kept_topology_with_the_same_numbers():
+    """A calibration's colour fit tries a new hairline at every evaluation: ``build_mesh`` then
+    moves the head's rings of a kept topology (``_topology_for``). Every array is, bit for bit,
+    what the hairline's own topology (``_topology``, built afresh) gives, with one hair cut and
+    with two, with and without the lower body."""
+    import dataclasses
+
+    from mocap.body import mesh as body_mesh
+
+    rng = np.random.default_rng(11)
+    full = BodyDimensions()
+    no_lower = BodyDimensions({k: v for k, v in full.parts.items() if k != "lower_body"})
+    for dims in (full, no_lower):
+        present = tuple(n for n in MESH_PART_NAMES if dims.has(n))
+        for resolution in (4, 8, 12, 24):
+            for hairline in (*rng.uniform(-0.95, 0.95, 12), -0.5, 0.45):
+                moved = body_mesh._topology_for(resolution, float(hairline), present)
+                body_mesh._topology.cache_clear()
+                own = body_mesh._topology(resolution, float(hairline), present)
+                assert own.head is not None and moved.head[:4] == own.head[:4]
+                assert np.array_equal(moved.head[4], own.head[4])
+                for field in dataclasses.fields(own):
+                    if field.name != "head":
+                        got, want = np.asarray(getattr(moved, field.name)), np.asarray(getattr(own, field.name))
+                        assert got.dtype == want.dtype and np.array_equal(got, want), field.name
