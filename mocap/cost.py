@@ -1305,16 +1305,17 @@ class KeypointCost:
 
     def _bind_joints(self, model: BodyModel) -> None:
         """Read the present joints' (and their left/right twins') segments and places off
-        ``model``'s skeleton."""
-        joints = np.flatnonzero(self.present)
-        twins = np.array([SWAPPED_JOINTS[j] for j in joints], dtype=np.int64)
+        ``model``'s skeleton (the joints' indices found once, at the first call)."""
+        if not hasattr(self, "_joints"):
+            self._joints = np.flatnonzero(self.present)
+            self._twins = np.array([SWAPPED_JOINTS[j] for j in self._joints], dtype=np.int64)
+            self._swapped_order = np.argsort(self._twins, kind="stable").astype(np.int64)
         skeleton = model.skeleton
         self.model = model
-        self._segment = np.ascontiguousarray(skeleton.joint_segment[joints])
-        self._local = np.ascontiguousarray(skeleton.joint_local[joints])
-        self._swapped_segment = np.ascontiguousarray(skeleton.joint_segment[twins])
-        self._swapped_local = np.ascontiguousarray(skeleton.joint_local[twins])
-        self._swapped_order = np.argsort(twins, kind="stable").astype(np.int64)
+        self._segment = skeleton.joint_segment[self._joints]
+        self._local = skeleton.joint_local[self._joints]
+        self._swapped_segment = skeleton.joint_segment[self._twins]
+        self._swapped_local = skeleton.joint_local[self._twins]
 
     def for_model(self, model: BodyModel) -> "KeypointCost":
         """The same keypoints, scales, gates and labellings on another body model (other

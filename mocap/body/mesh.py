@@ -382,14 +382,15 @@ def build_mesh(dims: BodyDimensions, resolution: int = 12) -> BodyMesh:
         raise ValueError(f"mesh resolution must be an integer, got {resolution!r}")
     if not MIN_RESOLUTION <= resolution <= MAX_RESOLUTION:
         raise ValueError(f"mesh resolution must be in [{MIN_RESOLUTION}, {MAX_RESOLUTION}], got {resolution}")
-    topology = _topology(int(resolution), dims.hairline, tuple(n for n in MESH_PART_NAMES if dims.has(n)))
+    parts = dims.parts
+    topology = _topology_for(int(resolution), dims.hairline, tuple([n for n in MESH_PART_NAMES if n in parts]))
     spans = part_spans(dims)
-    n = len(topology.part_names)
-    half_width, length, half_depth, start = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    for i, (name, p) in enumerate(zip(topology.part_names, topology.part_index)):
-        size = dims[name]
-        half_width[i], length[i], half_depth[i] = 0.5 * size.width, size.length, 0.5 * size.depth
-        start[i] = lower_body_span(dims)[0] if name == "lower_body" else spans[p, 0]
+    sizes = [parts[name] for name in topology.part_names]
+    half_width = np.array([0.5 * size.width for size in sizes])
+    length = np.array([size.length for size in sizes])
+    half_depth = np.array([0.5 * size.depth for size in sizes])
+    start = np.array([lower_body_span(dims)[0] if name == "lower_body" else spans[p, 0]
+                      for name, p in zip(topology.part_names, topology.part_index)])
     slot = topology.vertex_slot
     vertices = np.empty((len(slot), 3))
     vertices[:, 0] = half_width[slot] * topology.ring_scale * topology.cross_x

@@ -96,14 +96,13 @@ def part_spans(dims: BodyDimensions) -> np.ndarray:
     -------
     ndarray, shape (9, 2), float64
     """
-    spans = np.zeros((len(PART_NAMES), 2))
-    for i, name in enumerate(PART_NAMES):
-        length = dims[name].length
-        start = 0.0
-        if name == "head":
-            start = (1.0 - HEAD_NECK_OVERLAP) * dims["neck"].length
-        spans[i] = start, start + length
-    return spans
+    parts = dims.parts
+    head_start = (1.0 - HEAD_NECK_OVERLAP) * parts["neck"].length
+    rows = []
+    for name in PART_NAMES:
+        start = head_start if name == "head" else 0.0
+        rows.append((start, start + parts[name].length))
+    return np.array(rows)
 
 
 def lower_body_span(dims: BodyDimensions) -> tuple[float, float]:
@@ -132,20 +131,29 @@ def joint_points(dims: BodyDimensions) -> tuple[np.ndarray, np.ndarray]:
     local : ndarray, shape (10, 3), float64
     """
     spans = part_spans(dims)
-    seg = np.zeros(len(JOINT_NAMES), dtype=np.int64)
     local = np.zeros((len(JOINT_NAMES), 3))
+    s = PART_NAMES.index("head")
+    local[JOINT_NAMES.index("head"), 1] = -0.5 * (spans[s, 0] + spans[s, 1])
+    for hand in ("r_hand", "l_hand"):
+        local[JOINT_NAMES.index(hand), 1] = 0.5 * dims[hand].length
+    return _JOINT_SEGMENT.copy(), local
+
+
+def _joint_segments() -> np.ndarray:
+    """The segment of each joint of :data:`JOINT_NAMES` (what :func:`joint_points` gives), int64 (10,)."""
+    seg = np.zeros(len(JOINT_NAMES), dtype=np.int64)
     for j, name in enumerate(JOINT_NAMES):
-        if name == "head":
-            s = PART_NAMES.index("head")
-            seg[j] = SEGMENT_NAMES.index("head")
-            local[j, 1] = -0.5 * (spans[s, 0] + spans[s, 1])
-        elif name == "neck":
+        if name in ("head", "neck"):
             seg[j] = SEGMENT_NAMES.index("head")
         elif name.endswith("_hand"):
             seg[j] = SEGMENT_NAMES.index(name)
-            local[j, 1] = 0.5 * dims[name].length
         else:
             side, joint = name.split("_")
             seg[j] = SEGMENT_NAMES.index({"shoulder": f"{side}_upper_arm", "elbow": f"{side}_forearm",
                                           "wrist": f"{side}_hand"}[joint])
-    return seg, local
+    return seg
+
+
+#: :func:`_joint_segments`, read-only.
+_JOINT_SEGMENT = _joint_segments()
+_JOINT_SEGMENT.setflags(write=False)

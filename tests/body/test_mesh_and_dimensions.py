@@ -153,3 +153,15 @@ def test_a_new_hairline_reuses_a_kept_topology_with_the_same_numbers():
                     if field.name != "head":
                         got, want = np.asarray(getattr(moved, field.name)), np.asarray(getattr(own, field.name))
                         assert got.dtype == want.dtype and np.array_equal(got, want), field.name
+
+
+def test_build_mesh_keeps_no_topology_per_hairline():
+    """``build_mesh`` takes a new hairline's topology from the kept one (``_topology_for``):
+    hundreds of hairlines, as a calibration's colour fit tries, add no topology to the cache."""
+    from mocap.body import mesh as body_mesh
+
+    build_mesh(BodyDimensions().with_hairline(0.3), 8)
+    kept = body_mesh._topology.cache_info().currsize
+    for hairline in np.linspace(0.0, 0.9, 200):
+        build_mesh(BodyDimensions().with_hairline(float(hairline)), 8)
+    assert body_mesh._topology.cache_info().currsize == kept
