@@ -420,7 +420,7 @@ class Tracker:
         if cfg.recovery and leader.failed(cfg):
             stages.append((work.submit(_recover, score, self.last_good, cfg), "recovery"))
         if cfg.jumps:
-            stages.append((work.submit(self._jump, score, leader.pose), "jump"))
+            stages.append((work.submit(self._jump, score, leader.pose, bool(front)), "jump"))
         reaches = self._reaches(prepared, leader.pose, work) if cfg.hand_reacquisition else []
         if cfg.mirrors and keypoint_cost is not None:
             stages.append((work.submit(self._mirror, score, leader.pose), "mirror"))
@@ -520,6 +520,14 @@ class Tracker:
             keep.append(int(i))
             if len(keep) == self.config.beam:
                 break
+        # the front/back ambiguity: the last place goes to the cheapest hypothesis facing the other
+        # way from the leader, when none of the kept does (one side's branches cannot grow the other)
+        facing = [math.cos(h.pose[_HEADING]) > 0.0 for h in hypotheses]
+        if len(keep) > 1 and all(facing[k] == facing[keep[0]] for k in keep):
+            other = next((int(i) for i in order if facing[i] != facing[keep[0]] and hypotheses[i].origin != "mirror"
+                          and not merged(i)), None)
+            if other is not None:
+                keep[-1] = other
         for i in order:
             if hypotheses[i].origin == "mirror" and int(i) not in keep and not merged(i):
                 keep.append(int(i))
@@ -537,14 +545,20 @@ class Tracker:
         return [work.submit(_arm_reaches, pose, joints, uv, side, reach_m, self.model, self.camera)
                 for uv, side, reach_m in reach_jobs(pose, targets, self.model)]
 
-    def _jump(self, costs: "_FrameCosts", score, pose: np.ndarray) -> "_Stage":
+    def _jump(self, costs: "_FrameCosts", score, pose: np.ndarray, front: bool = False) -> "_Stage":
         """The kinematic jumps of the leader's ``pose``, the ``JUMPS_REFINED`` lowest-F ones
-        refined and scored."""
+        refined and scored; and the torso's flip besides them where the frame's detector shows
+        the front (``front``) and the leader reads its keypoints swapped: a body turned round
+        that the image says faces the camera is offered the way back on every such frame."""
         cfg = self.config
         jumps = jump_proposals(pose, self.model)
         values = _region_values(costs, [q for _, q in jumps])
-        return _Stage([_fit(costs, score, jumps[int(i)][1], cfg, cfg.jump_evaluations)
-                       for i in np.argsort(values, kind="stable")[:JUMPS_REFINED]], len(jumps))
+        chosen = [int(i) for i in np.argsort(values, kind="stable")[:JUMPS_REFINED]]
+        flip = next(i for i, (name, _) in enumerate(jumps) if name == "torso_flip")
+        if front and flip not in chosen and costs.keypoint is not None and costs.keypoint.labelling(pose):
+            chosen.append(flip)
+        return _Stage([_fit(costs, score, jumps[i][1], cfg, cfg.jump_evaluations if i != flip or i in chosen[:JUMPS_REFINED]
+                            else cfg.hypothesis_evaluations) for i in chosen], len(jumps))
 
     def _mirror(self, costs: "_FrameCosts", score, pose: np.ndarray) -> "_Stage":
         """The converged leader's depth alternatives (:mod:`mocap.track.branches`), each registered
