@@ -453,7 +453,7 @@ class Tracker:
         self.scored = [ScoredCandidate.from_terms(h.origin, h.pose, h.joints, t, motion[:, j], h.unary)
                        for j, (h, t) in enumerate(zip(hypotheses, terms))]
         self.lifted = lifted
-        keep = self._select(hypotheses, cost)
+        keep = self._select(hypotheses, cost, bool(front))
         timings["beam"] = 1e3 * (time.perf_counter() - t2)
         timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)
         kept_cost = cost[keep]
@@ -503,7 +503,7 @@ class Tracker:
                            reg.region.iterations if reg.region else 0, reg.edge.iterations if reg.edge else 0,
                            bool(swapped))
 
-    def _select(self, hypotheses: list[_Hypothesis], cost: np.ndarray) -> list[int]:
+    def _select(self, hypotheses: list[_Hypothesis], cost: np.ndarray, front: bool = False) -> list[int]:
         """Indices of the survivors: cheapest path first, near-duplicates merged, at most ``beam``;
         then the frame's mirrors not merged into them (the decoder's states of the mirrored
         branches, which the next frame does not register)."""
@@ -520,10 +520,12 @@ class Tracker:
             keep.append(int(i))
             if len(keep) == self.config.beam:
                 break
-        # the front/back ambiguity: the last place goes to the cheapest hypothesis facing the other
-        # way from the leader, when none of the kept does (one side's branches cannot grow the other)
+        # the front/back ambiguity: where the detector shows the front and the leader reads it
+        # swapped, the last place goes to the cheapest hypothesis facing the other way from the
+        # leader, when none of the kept does (one side's branches cannot grow the other)
         facing = [math.cos(h.pose[_HEADING]) > 0.0 for h in hypotheses]
-        if len(keep) > 1 and all(facing[k] == facing[keep[0]] for k in keep):
+        if (front and len(keep) > 1 and hypotheses[keep[0]].swapped
+                and all(facing[k] == facing[keep[0]] for k in keep)):
             other = next((int(i) for i in order if facing[i] != facing[keep[0]] and hypotheses[i].origin != "mirror"
                           and not merged(i)), None)
             if other is not None:
