@@ -399,6 +399,9 @@ class Tracker:
         # every other registration is scored on the thread that ran it, with the detector's
         # labels where it shows the person's front (None: no keypoints)
         front = None if keypoint_cost is None else keypoints.shows_front()
+        # the front evidence in use (the labelling term on): a leader reading it swapped is offered
+        # the way back (the torso's flip refined, a beam place facing the other way)
+        contested = bool(front) and cfg.labelling_weight > 0
         score = functools.partial(self._scored, lifts=lifts, front=front)
         # what needs no leader runs beside it: the proposal stage (whose ranking this thread
         # waits for), the beam's other hypotheses
@@ -420,7 +423,7 @@ class Tracker:
         if cfg.recovery and leader.failed(cfg):
             stages.append((work.submit(_recover, score, self.last_good, cfg), "recovery"))
         if cfg.jumps:
-            stages.append((work.submit(self._jump, score, leader.pose), "jump"))
+            stages.append((work.submit(self._jump, score, leader.pose, contested), "jump"))
         reaches = self._reaches(prepared, leader.pose, work) if cfg.hand_reacquisition else []
         if cfg.mirrors and keypoint_cost is not None:
             stages.append((work.submit(self._mirror, score, leader.pose), "mirror"))
@@ -453,7 +456,7 @@ class Tracker:
         self.scored = [ScoredCandidate.from_terms(h.origin, h.pose, h.joints, t, motion[:, j], h.unary)
                        for j, (h, t) in enumerate(zip(hypotheses, terms))]
         self.lifted = lifted
-        keep = self._select(hypotheses, cost)
+        keep = self._select(hypotheses, cost, contested)
         timings["beam"] = 1e3 * (time.perf_counter() - t2)
         timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)
         kept_cost = cost[keep]
@@ -503,10 +506,12 @@ class Tracker:
                            reg.region.iterations if reg.region else 0, reg.edge.iterations if reg.edge else 0,
                            bool(swapped))
 
-    def _select(self, hypotheses: list[_Hypothesis], cost: np.ndarray) -> list[int]:
-        """Indices of the survivors: cheapest path first, near-duplicates merged, at most ``beam``;
-        then the frame's mirrors not merged into them (the decoder's states of the mirrored
-        branches, which the next frame does not register)."""
+    def _select(self, hypotheses: list[_Hypothesis], cost: np.ndarray, contested: bool = False) -> list[int]:
+        """Indices of the survivors: cheapest path first, near-duplicates merged, at most ``beam``
+        (on a ``contested`` frame whose leader reads the keypoints swapped, the last of them the
+        cheapest facing the other way, when none of the others does); then the frame's mirrors
+        not merged into them (the decoder's states of the mirrored branches, which the next frame
+        does not register)."""
         keep: list[int] = []
 
         def merged(i) -> bool:
@@ -520,6 +525,16 @@ class Tracker:
             keep.append(int(i))
             if len(keep) == self.config.beam:
                 break
+        # the front/back ambiguity: where the detector shows the front and the leader reads it
+        # swapped, the last place goes to the cheapest hypothesis facing the other way from the
+        # leader, when none of the kept does (one side's branches cannot grow the other)
+        facing = [math.cos(h.pose[_HEADING]) > 0.0 for h in hypotheses]
+        if (contested and len(keep) > 1 and hypotheses[keep[0]].swapped
+                and all(facing[k] == facing[keep[0]] for k in keep)):
+            other = next((int(i) for i in order if facing[i] != facing[keep[0]] and hypotheses[i].origin != "mirror"
+                          and not merged(i)), None)
+            if other is not None:
+                keep[-1] = other
         for i in order:
             if hypotheses[i].origin == "mirror" and int(i) not in keep and not merged(i):
                 keep.append(int(i))
@@ -537,14 +552,21 @@ class Tracker:
         return [work.submit(_arm_reaches, pose, joints, uv, side, reach_m, self.model, self.camera)
                 for uv, side, reach_m in reach_jobs(pose, targets, self.model)]
 
-    def _jump(self, costs: "_FrameCosts", score, pose: np.ndarray) -> "_Stage":
+    def _jump(self, costs: "_FrameCosts", score, pose: np.ndarray, contested: bool = False) -> "_Stage":
         """The kinematic jumps of the leader's ``pose``, the ``JUMPS_REFINED`` lowest-F ones
-        refined and scored."""
+        refined and scored; and, on a ``contested`` frame (the detector shows the front, the
+        labelling term on) whose leader reads the keypoints swapped, the torso's flip besides
+        them, refined with ``hypothesis_evaluations``: a body turned round that the detector says
+        faces the camera is offered the way back on every such frame (issue 49)."""
         cfg = self.config
         jumps = jump_proposals(pose, self.model)
         values = _region_values(costs, [q for _, q in jumps])
-        return _Stage([_fit(costs, score, jumps[int(i)][1], cfg, cfg.jump_evaluations)
-                       for i in np.argsort(values, kind="stable")[:JUMPS_REFINED]], len(jumps))
+        chosen = [int(i) for i in np.argsort(values, kind="stable")[:JUMPS_REFINED]]
+        flip = next(i for i, (name, _) in enumerate(jumps) if name == "torso_flip")
+        if contested and flip not in chosen and costs.keypoint is not None and costs.keypoint.labelling(pose):
+            chosen.append(flip)
+        return _Stage([_fit(costs, score, jumps[i][1], cfg, cfg.jump_evaluations if i != flip or i in chosen[:JUMPS_REFINED]
+                            else cfg.hypothesis_evaluations) for i in chosen], len(jumps))
 
     def _mirror(self, costs: "_FrameCosts", score, pose: np.ndarray) -> "_Stage":
         """The converged leader's depth alternatives (:mod:`mocap.track.branches`), each registered

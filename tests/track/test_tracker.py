@@ -244,3 +244,32 @@ def test_after_the_warm_up_no_frame_loads_or_compiles_a_kernel():
     assert result["kernels"] > 20
     assert result["mirrors"][0] == 0 and min(result["mirrors"][1:]) > 0      # the mirrors' frames were tracked
     assert result["grown"] == []
+
+
+def test_a_leader_the_detector_contradicts_keeps_a_hypothesis_facing_the_other_way():
+    """The beam's selection (issue 49): where the frame's detector shows the front and the leader
+    reads its keypoints swapped (``contested``), and every kept hypothesis faces the leader's way,
+    the last place goes to the cheapest hypothesis facing the other way (not a mirror, not a
+    near-duplicate); otherwise the cheapest ``beam`` stay, as before."""
+    from mocap.track.tracker import _Hypothesis
+
+    tracker = Tracker(MODEL, CAMERA, TrackerConfig(beam=3), neutral_pose())
+
+    def hypothesis(heading, swapped, x, origin="tracked"):
+        pose = neutral_pose()
+        pose[P["chest_yaw"]] = heading
+        joints = MODEL.joint_positions(pose) + [x, 0.0, 0.0]         # apart: none merged
+        return _Hypothesis(pose, joints, 0.1, 1.0, 1.0, False, origin, 0.0, 0, 0, swapped)
+
+    away, facing = np.pi - 0.3, 0.3
+    hypotheses = [hypothesis(away, True, 0.0), hypothesis(away, True, 0.3), hypothesis(away, False, 0.6),
+                  hypothesis(facing, False, 0.9, "mirror"), hypothesis(facing, False, 1.2), hypothesis(facing, False, 1.5)]
+    cost = np.array([0.0, 1.0, 2.0, 2.5, 3.0, 4.0])
+    assert tracker._select(hypotheses, cost, contested=False)[:3] == [0, 1, 2]
+    assert tracker._select(hypotheses, cost, contested=True)[:3] == [0, 1, 4]     # the mirror (3) is not taken
+    # a leader that reads the keypoints as given, or a beam that already holds the other way: as before
+    hypotheses[0] = hypothesis(away, False, 0.0)
+    assert tracker._select(hypotheses, cost, contested=True)[:3] == [0, 1, 2]
+    hypotheses[0] = hypothesis(away, True, 0.0)
+    hypotheses[2] = hypothesis(facing, False, 0.6)
+    assert tracker._select(hypotheses, cost, contested=True)[:3] == [0, 1, 2]
