@@ -562,11 +562,12 @@ class Tracker:
         jumps = jump_proposals(pose, self.model)
         values = _region_values(costs, [q for _, q in jumps])
         chosen = [int(i) for i in np.argsort(values, kind="stable")[:JUMPS_REFINED]]
+        budgets = [cfg.jump_evaluations] * len(chosen)
         flip = next(i for i, (name, _) in enumerate(jumps) if name == "torso_flip")
         if contested and flip not in chosen and costs.keypoint is not None and costs.keypoint.labelling(pose):
             chosen.append(flip)
-        return _Stage([_fit(costs, score, jumps[i][1], cfg, cfg.jump_evaluations if i != flip or i in chosen[:JUMPS_REFINED]
-                            else cfg.hypothesis_evaluations) for i in chosen], len(jumps))
+            budgets.append(cfg.hypothesis_evaluations)
+        return _Stage([_fit(costs, score, jumps[i][1], cfg, budget) for i, budget in zip(chosen, budgets)], len(jumps))
 
     def _mirror(self, costs: "_FrameCosts", score, pose: np.ndarray) -> "_Stage":
         """The converged leader's depth alternatives (:mod:`mocap.track.branches`), each registered
