@@ -894,17 +894,17 @@ class RegionCost:
         """
         if model.n_classes != self.n_classes:
             raise ValueError(f"model has {model.n_classes} colour classes, this cost {self.n_classes}")
-        twin = copy.copy(self)
-        twin.model, twin._scene, twin._buffers = model, Scene.of(model, self.camera), Buffers.of(model, self.camera)
-        twin._model_count, twin._overlap_count = np.zeros_like(self._model_count), np.zeros_like(self._overlap_count)
-        twin._gradient_args = None
-        return twin
+        return self._twin(model, Scene.of(model, self.camera))
 
     def spare(self) -> "RegionCost":
         """The same cost with scratch buffers of its own, for another thread (the target and
         the scene are shared, read-only); it gives the same value at every pose."""
+        return self._twin(self.model, self._scene)
+
+    def _twin(self, model: BodyModel, scene: Scene) -> "RegionCost":
+        """This cost's target on ``model`` drawn as ``scene``, with scratch buffers of its own."""
         twin = copy.copy(self)
-        twin._buffers = Buffers.of(self.model, self.camera)
+        twin.model, twin._scene, twin._buffers = model, scene, Buffers.of(model, self.camera)
         twin._model_count, twin._overlap_count = np.zeros_like(self._model_count), np.zeros_like(self._overlap_count)
         twin._gradient_args = None
         return twin
@@ -1298,6 +1298,9 @@ class KeypointCost:
         weight = conf[present] * gate
         total = np.sort(weight).sum()                     # the same float whatever the labels' order
         self._weight = weight / total if total > 0 else np.zeros(0)
+        self._joints = np.flatnonzero(present)
+        self._twins = np.array([SWAPPED_JOINTS[j] for j in self._joints], dtype=np.int64)
+        self._swapped_order = np.argsort(self._twins, kind="stable").astype(np.int64)
         self._bind_joints(model)
         self._transforms = np.zeros((len(SEGMENT_NAMES), 3, 4))
         self._camera = camera.as_array()
@@ -1305,11 +1308,7 @@ class KeypointCost:
 
     def _bind_joints(self, model: BodyModel) -> None:
         """Read the present joints' (and their left/right twins') segments and places off
-        ``model``'s skeleton (the joints' indices found once, at the first call)."""
-        if not hasattr(self, "_joints"):
-            self._joints = np.flatnonzero(self.present)
-            self._twins = np.array([SWAPPED_JOINTS[j] for j in self._joints], dtype=np.int64)
-            self._swapped_order = np.argsort(self._twins, kind="stable").astype(np.int64)
+        ``model``'s skeleton."""
         skeleton = model.skeleton
         self.model = model
         self._segment = skeleton.joint_segment[self._joints]

@@ -528,13 +528,13 @@ class Tracker:
         # the front/back ambiguity: where the detector shows the front and the leader reads it
         # swapped, the last place goes to the cheapest hypothesis facing the other way from the
         # leader, when none of the kept does (one side's branches cannot grow the other)
-        facing = [math.cos(h.pose[_HEADING]) > 0.0 for h in hypotheses]
-        if (contested and len(keep) > 1 and hypotheses[keep[0]].swapped
-                and all(facing[k] == facing[keep[0]] for k in keep)):
-            other = next((int(i) for i in order if facing[i] != facing[keep[0]] and hypotheses[i].origin != "mirror"
-                          and not merged(i)), None)
-            if other is not None:
-                keep[-1] = other
+        if contested and len(keep) > 1 and hypotheses[keep[0]].swapped:
+            facing = [math.cos(h.pose[_HEADING]) > 0.0 for h in hypotheses]
+            if all(facing[k] == facing[keep[0]] for k in keep):
+                other = next((int(i) for i in order if facing[i] != facing[keep[0]]
+                              and hypotheses[i].origin != "mirror" and not merged(i)), None)
+                if other is not None:
+                    keep[-1] = other
         for i in order:
             if hypotheses[i].origin == "mirror" and int(i) not in keep and not merged(i):
                 keep.append(int(i))
