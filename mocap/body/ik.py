@@ -18,7 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mocap._numba import jit
-from mocap.body.kinematics import Skeleton, apply_transforms_into, segment_transforms_into, joint_positions
+from mocap.body.kinematics import (ARM_SIDES, Skeleton, apply_transforms_into, arm_transforms_into, joint_positions,
+                                   segment_transforms_into)
 from mocap.body.pose import JOINT_LIMITS, PARAMETER_INDEX, check_pose
 from mocap.body.skeleton import JOINT_NAMES
 
@@ -43,15 +44,16 @@ REACH_STARTS_DEG = ((45.0, 45.0, 0.0, 90.0), (120.0, 30.0, 0.0, 30.0), (0.0, 90.
 
 
 @jit
-def _points(pose, offsets, segments, local, transforms, points):
-    segment_transforms_into(pose, offsets, transforms)
+def _points(pose, offsets, side, segments, local, transforms, points):
+    arm_transforms_into(pose, offsets, side, transforms)
     apply_transforms_into(transforms, segments, local, points)
 
 
 @jit
-def _reach(pose, offsets, segments, local, active, lower, upper, targets, scale, regularization,
+def _reach(pose, offsets, side, segments, local, active, lower, upper, targets, scale, regularization,
            iterations):
-    """Bounded Levenberg–Marquardt putting the body points ``(segments, local)`` on ``targets``
+    """Bounded Levenberg–Marquardt putting the body points ``(segments, local)`` of arm ``side``
+    (0: right, 1: left; only the chest's and that arm's transforms are computed) on ``targets``
     (shape (k, 3)); returns the new pose (a copy of ``pose``)."""
     n = active.shape[0]
     k = targets.shape[0]
@@ -68,7 +70,7 @@ def _reach(pose, offsets, segments, local, active, lower, upper, targets, scale,
     sqrt_reg = np.sqrt(regularization)
 
     def fill(qv, out):
-        _points(qv, offsets, segments, local, transforms, point)
+        _points(qv, offsets, side, segments, local, transforms, point)
         for p in range(k):
             for r in range(3):
                 out[3 * p + r] = (point[p, r] - targets[p, r]) / scale
@@ -159,8 +161,8 @@ def reach_arm(pose, skeleton: Skeleton, side: str, target, *, regularization: fl
     for start in (q[active], *np.radians(REACH_STARTS_DEG)):
         s = q.copy()
         s[active] = np.clip(start, lower, upper)
-        out = _reach(s, skeleton.offsets, segment, local, active, lower, upper, t[None, :], REACH_SCALE_M,
-                     float(regularization), int(iterations))
+        out = _reach(s, skeleton.offsets, ARM_SIDES.index(side), segment, local, active, lower, upper, t[None, :],
+                     REACH_SCALE_M, float(regularization), int(iterations))
         miss = float(np.linalg.norm(joint_positions(out, skeleton)[hand] - t))
         if miss < best_miss:
             best, best_miss = out, miss
@@ -335,8 +337,8 @@ def place_arm(pose, skeleton: Skeleton, side: str, targets, *, regularization: f
     best_miss = float(np.max(np.linalg.norm(joint_positions(closed, skeleton)[rows] - t, axis=1)))
     if best_miss <= PLACE_TOLERANCE_M or best_miss > polish_within_m:
         return ArmPlacement(pose=best, miss_m=best_miss)
-    out = _reach(closed, skeleton.offsets, segments, local, active, lower, upper, t, REACH_SCALE_M,
-                 float(regularization), int(iterations))
+    out = _reach(closed, skeleton.offsets, ARM_SIDES.index(side), segments, local, active, lower, upper, t,
+                 REACH_SCALE_M, float(regularization), int(iterations))
     miss = float(np.max(np.linalg.norm(joint_positions(out, skeleton)[rows] - t, axis=1)))
     if miss < best_miss:
         best, best_miss = out, miss

@@ -57,27 +57,53 @@ def _store(out, k, r, parent, offset):
                             + out[parent, i, 2] * offset[2] + out[parent, i, 3])
 
 
+#: The arms' sides in the order of :func:`arm_transforms_into`'s ``side`` index (and of the
+#: segment table: right first).
+ARM_SIDES: tuple[str, ...] = ("r", "l")
+
+
+@jit
+def _arm_into(pose, offsets, r_chest, side, out):
+    """Fill ``out``'s three segments of arm ``side`` (0: right, 1: left) below the chest's
+    rotation ``r_chest`` (a 9-tuple; ``out[0]`` holds the chest's transform)."""
+    base = 9 + 7 * side          # first arm parameter of this side
+    seg = 2 + 3 * side           # upper-arm segment index
+    mirror = 1.0 if side == 0 else -1.0
+    r_ua = _mul(_mul(_mul(r_chest, _rot_x(-pose[base])), _rot_z(mirror * pose[base + 1])),
+                _rot_y(mirror * pose[base + 2]))
+    _store(out, seg, r_ua, 0, offsets[seg])
+    r_fa = _mul(_mul(r_ua, _rot_x(-pose[base + 3])), _rot_y(mirror * pose[base + 4]))
+    _store(out, seg + 1, r_fa, seg, offsets[seg + 1])
+    r_h = _mul(_mul(r_fa, _rot_x(-pose[base + 5])), _rot_z(mirror * pose[base + 6]))
+    _store(out, seg + 2, r_h, seg + 1, offsets[seg + 2])
+
+
+@jit
+def _chest_into(pose, out):
+    """Fill ``out[0]`` with the chest's [R | t]; return its rotation as a 9-tuple."""
+    r_chest = _mul(_mul(_rot_y(pose[3]), _rot_x(pose[4])), _rot_z(pose[5]))
+    _store(out, 0, r_chest, -1, pose[0:3])
+    return r_chest
+
+
 @jit
 def segment_transforms_into(pose, offsets, out):
     """Fill ``out`` (8, 3, 4) with [R | t] of every segment in camera coordinates.
 
     The angle layout is docs/design.md section 2; see :mod:`mocap.body.pose` for the signs.
     """
-    r_chest = _mul(_mul(_rot_y(pose[3]), _rot_x(pose[4])), _rot_z(pose[5]))
-    _store(out, 0, r_chest, -1, pose[0:3])
+    r_chest = _chest_into(pose, out)
     r_head = _mul(_mul(_mul(r_chest, _rot_x(pose[6])), _rot_z(pose[7])), _rot_y(pose[8]))
     _store(out, 1, r_head, 0, offsets[1])
     for side in range(2):
-        base = 9 + 7 * side          # first arm parameter of this side
-        seg = 2 + 3 * side           # upper-arm segment index
-        mirror = 1.0 if side == 0 else -1.0
-        r_ua = _mul(_mul(_mul(r_chest, _rot_x(-pose[base])), _rot_z(mirror * pose[base + 1])),
-                    _rot_y(mirror * pose[base + 2]))
-        _store(out, seg, r_ua, 0, offsets[seg])
-        r_fa = _mul(_mul(r_ua, _rot_x(-pose[base + 3])), _rot_y(mirror * pose[base + 4]))
-        _store(out, seg + 1, r_fa, seg, offsets[seg + 1])
-        r_h = _mul(_mul(r_fa, _rot_x(-pose[base + 5])), _rot_z(mirror * pose[base + 6]))
-        _store(out, seg + 2, r_h, seg + 1, offsets[seg + 2])
+        _arm_into(pose, offsets, r_chest, side, out)
+
+
+@jit
+def arm_transforms_into(pose, offsets, side, out):
+    """Fill the chest's and arm ``side``'s (0: right, 1: left) [R | t] in ``out`` (8, 3, 4),
+    exactly as :func:`segment_transforms_into` does; the other segments are left as they were."""
+    _arm_into(pose, offsets, _chest_into(pose, out), side, out)
 
 
 @jit

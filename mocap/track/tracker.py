@@ -424,9 +424,9 @@ class Tracker:
             stages.append((work.submit(_recover, score, self.last_good, cfg), "recovery"))
         if cfg.jumps:
             stages.append((work.submit(self._jump, score, leader.pose, contested), "jump"))
-        reaches = self._reaches(prepared, leader.pose, work) if cfg.hand_reacquisition else []
         if cfg.mirrors and keypoint_cost is not None:
             stages.append((work.submit(self._mirror, score, leader.pose), "mirror"))
+        reaches = self._reaches(prepared, leader.pose, work) if cfg.hand_reacquisition else []
         if cfg.hand_reacquisition:     # its reaches spread over the threads, then one task ranks and refines
             proposals = [q for f in reaches for q in f.result()]      # reach_proposals' order
             stages.append((work.submit(_refine_lowest, score, proposals, cfg, cfg.hypothesis_evaluations)
