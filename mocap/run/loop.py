@@ -22,6 +22,7 @@ import json
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from itertools import chain, pairwise
 from pathlib import Path
 
 import numpy as np
@@ -490,8 +491,10 @@ class RunLoop:
         if self.overlay is not None:
             self.overlay.model = self.person.model
 
-    def step(self, frame: ReadFrame, reader: FrameReader) -> None:
-        """One frame through the tracker, the people's bookkeeping and the checkpoint."""
+    def step(self, frame: ReadFrame, reader: FrameReader, upcoming: ReadFrame | None = None) -> None:
+        """One frame through the tracker, the people's bookkeeping and the checkpoint; the
+        ``upcoming`` frame's leader is started (:meth:`Tracker.begin`) before this one's
+        results are written."""
         index, prepared = frame.index, frame.prepared
         self.dark[index] = frame.dark
         if self.frames_in.live:
@@ -508,7 +511,10 @@ class RunLoop:
                 prepared = reader.prepare(frame.small)
         if frame.detected is not None:
             self.journal.append_keypoints(index, frame.detected)
-        self.emit(self.tracker.push(index, prepared, frame.keypoints))
+        results = self.tracker.push(index, prepared, frame.keypoints)
+        if upcoming is not None and upcoming.segment == self.people.segment:
+            self.tracker.begin(upcoming.index, upcoming.prepared, upcoming.keypoints)
+        self.emit(results)
         self.people.saw(index, prepared.is_empty)
         self.damage.take(wait=False)
         if (index + 1) % journalling.CHECKPOINT_EVERY == 0 or index + 1 == self.span.stop:
@@ -543,8 +549,12 @@ class RunLoop:
         self.started, self.clock = time.perf_counter(), reader.clock
         interrupted, last = False, None
         try:    # (live: one frame waits at most, a newer one is taken instead of a queue of old ones)
-            for frame in prefetch(reader, 1 if frames_in.live else READ_AHEAD, name="mocap-reader"):
-                self.step(frame, reader)
+            frames = prefetch(reader, 1 if frames_in.live else READ_AHEAD, name="mocap-reader")
+            # a file's next frame is read before this one is written (its leader starts meanwhile);
+            # a camera's is not waited for
+            pairs = ((f, None) for f in frames) if frames_in.live else pairwise(chain(frames, [None]))
+            for frame, upcoming in pairs:
+                self.step(frame, reader, upcoming)
                 last = frame.index
             if span.stop is None:
                 self.damage.take(wait=True)         # the end of the frames: damage or a cut file?

@@ -197,7 +197,8 @@ class Tracker:
         no interpreter lock): the leader beside the other hypotheses and the proposal stage,
         then the recovery, re-acquisition, jumps and mirrors beside each other. The decisions
         are the same, bit for bit, for every count; 1 (default) runs everything on the calling
-        thread. :meth:`close` stops the threads.
+        thread. :meth:`begin` starts the next frame's leader while the caller writes the last
+        frame's results. :meth:`close` stops the threads.
     """
 
     def __init__(self, model: BodyModel, camera: Camera, config: TrackerConfig, initial_pose,
@@ -232,6 +233,7 @@ class Tracker:
         #: Threads a frame's registrations run on (the decisions are the same for every count).
         self.threads = int(threads)
         self._pool = ThreadPoolExecutor(self.threads, thread_name_prefix="mocap-tracker") if self.threads > 1 else None
+        self._begun: _Begun | None = None
 
     def warm_up(self, keypoints: bool = True) -> None:
         """Load every compiled kernel this tracker's frames call (on a cold cache: compile them,
@@ -302,6 +304,19 @@ class Tracker:
         while len(self._window) > self.config.lag:
             out += self._decide(1)
         return out
+
+    def begin(self, frame_index: int, prepared, keypoints=None) -> None:
+        """Start the next frame's leader registration on the tracker's threads, so that it runs
+        while the caller writes what :meth:`push` returned: ``push`` of the same frame (the
+        same ``prepared`` and ``keypoints`` objects) then takes it up. The decisions are the
+        same, bit for bit, with and without it; a ``push`` of anything else drops it. Nothing
+        happens with one thread (``threads=1``) or on an empty frame."""
+        self._begun = None
+        if self._pool is None or prepared.is_empty:
+            return
+        work = self._frame_work(prepared, keypoints)
+        leading = work.submit(_timed_fit, self._beam[0].pose, self.config, self.config.evaluations)
+        self._begun = _Begun(int(frame_index), prepared, keypoints, work, leading, time.perf_counter())
 
     def finish(self) -> list[FrameResult]:
         """The frames still undecided at the end of the video, decided by the best path (one
@@ -376,6 +391,7 @@ class Tracker:
     def _track(self, index: int, prepared, keypoints=None) -> _Frame:
         cfg = self.config
         t0 = time.perf_counter()
+        begun, self._begun = self._begun, None
         timings = {f"prepare_{k}": 1e3 * v for k, v in prepared.timings.items()}
         timings["prepare"] = sum(timings.values())
         if prepared.is_empty:
@@ -385,12 +401,14 @@ class Tracker:
             timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)
             self.candidates, self.scored, self.lifted = [], [], None
             return _Frame(index, True, kept, self._cost - self._cost.min(), np.arange(len(kept)), 0, timings)
-        region_cost, edge_cost = self.costs(prepared)
-        # every registration of the frame, with the keypoint distance when keypoints are given
-        keypoint_cost = self.keypoint_cost(keypoints, prepared.labels)
-        work = _FrameWork(_FrameCosts(region_cost, edge_cost, keypoint_cost), self._pool)
-        t1 = time.perf_counter()
-        leading = work.submit(_timed_fit, self._beam[0].pose, cfg, cfg.evaluations)
+        if (begun is not None and begun.index == index and begun.prepared is prepared
+                and begun.keypoints is keypoints):
+            work, leading, t1 = begun.work, begun.leading, begun.started
+        else:
+            work = self._frame_work(prepared, keypoints)
+            t1 = time.perf_counter()
+            leading = work.submit(_timed_fit, self._beam[0].pose, cfg, cfg.evaluations)
+        keypoint_cost = work.costs.keypoint
         # the lifter reads the keypoints under both labellings (a candidate pays its own's energy)
         lifted = self.lifting.lift(keypoints, self.camera, self.model) if self.lifting is not None else None
         lifted_swapped = (self.lifting.lift(keypoints.swapped(), self.camera, self.model)
@@ -458,10 +476,18 @@ class Tracker:
         self.lifted = lifted
         keep = self._select(hypotheses, cost, contested)
         timings["beam"] = 1e3 * (time.perf_counter() - t2)
-        timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - t0)
+        # from the frame's first work: its leader's start when begun early (the writing of the
+        # last frame's results it overlapped counts as this frame's time)
+        timings["total"] = timings["prepare"] + 1e3 * (time.perf_counter() - min(t0, t1))
         kept_cost = cost[keep]
         return _Frame(index, False, [hypotheses[k] for k in keep], kept_cost - kept_cost[0], back[keep], evaluations,
                       timings)
+
+    def _frame_work(self, prepared, keypoints) -> "_FrameWork":
+        """A frame's registrations: its region and edge costs and, when keypoints are given, the
+        keypoint distance every registration adds, on this tracker's threads."""
+        return _FrameWork(_FrameCosts(*self.costs(prepared), self.keypoint_cost(keypoints, prepared.labels)),
+                          self._pool)
 
     def _terms(self, region: float, edge: float, keypoint: float, pose: np.ndarray, joints: np.ndarray,
                lifted: LiftedHypotheses | None, front: bool | None = None, swapped: bool = False) -> np.ndarray:
@@ -600,6 +626,7 @@ class Tracker:
 
     def close(self) -> None:
         """Stop the tracker's threads (none with ``threads=1``); it tracks on one thread after."""
+        self._begun = None
         if self._pool is not None:
             self._pool.shutdown(wait=True)
             self._pool = None
@@ -650,6 +677,7 @@ class Tracker:
         except (KeyError, TypeError, ValueError) as err:
             raise ValueError(f"not a tracker state of this version: {err}") from None
         self._beam, self._cost, self._window, self.last_good = beam, cost, window, last_good
+        self._begun = None
 
 
 @dataclass
@@ -663,6 +691,20 @@ class _FrameCosts:
     def spare(self) -> "_FrameCosts":
         """The same costs with buffers of their own, for another thread."""
         return _FrameCosts(self.region.spare(), self.edge.spare(), None if self.keypoint is None else self.keypoint.spare())
+
+
+@dataclass
+class _Begun:
+    """A frame whose leader registration :meth:`Tracker.begin` started: the frame as given, its
+    work, the leader's future (a registration and its seconds) and when it was started
+    (``time.perf_counter()``)."""
+
+    index: int
+    prepared: PreparedFrame
+    keypoints: Keypoints | None
+    work: "_FrameWork"
+    leading: Future
+    started: float
 
 
 class _Done:

@@ -134,12 +134,17 @@ def test_keypoints_bring_a_single_hypothesis_back_to_the_true_branch():
     assert errors["with"][7:].max() < 0.07                                      # back within a few frames
 
 
-def _tracked(frames, keypoints, threads, config=TrackerConfig(lag=2)):
+def _tracked(frames, keypoints, threads, config=TrackerConfig(lag=2), begin=False):
+    """Every frame pushed (``begin``: each next frame's leader begun before the last's results
+    are read, as the run does); the results, each frame's scored candidates and the tracker."""
     tracker = Tracker(MODEL, CAMERA, config, waving(1)[0], threads=threads)
     out = []
     scored = []
     for i, (frame, k) in enumerate(zip(frames, keypoints)):
-        out += tracker.push(i, frame, k)
+        results = tracker.push(i, frame, k)
+        if begin and i + 1 < len(frames):
+            tracker.begin(i + 1, frames[i + 1], keypoints[i + 1])
+        out += results
         scored.append([(c.origin, c.pose.tobytes(), c.unary) for c in tracker.scored])
     out += tracker.finish()
     tracker.close()
@@ -149,8 +154,10 @@ def _tracked(frames, keypoints, threads, config=TrackerConfig(lag=2)):
 @pytest.mark.parametrize("with_keypoints", [False, True], ids=["no keypoints", "keypoints"])
 def test_threads_decide_the_same_bit_for_bit(with_keypoints):
     """The default beam (recovery, jumps, re-acquisition; with keypoints the mirrors and the
-    lifter's proposals too) on 1, 2 and 3 threads: every candidate of every frame, its score,
-    and every written pose are the same to the bit; so is the resumed run's on 3 threads. With
+    lifter's proposals too) on 1, 2 and 3 threads, each next frame's leader begun early on 3
+    (:meth:`Tracker.begin`): every candidate of every frame, its score, and every written pose
+    are the same to the bit; so is the resumed run's, whose first frame was begun with other
+    keypoints (dropped). With
     keypoints the proposal gate is 12 nats: the lifter's lowest proposals come 9.6-13.8 nats above
     the leader's pose on these frames, so some frames refine them and others do not."""
     from experiments.keypoints import oracle_keypoints
@@ -163,8 +170,8 @@ def test_threads_decide_the_same_bit_for_bit(with_keypoints):
     one, scored_one, _ = _tracked(frames, keypoints, 1, config)
     assert {o for frame in scored_one for o, _, _ in frame} >= ({"tracked", "jump", "mirror", "lifter"}
                                                                  if with_keypoints else {"tracked", "jump"})
-    for threads in (2, 3):
-        many, scored_many, _ = _tracked(frames, keypoints, threads, config)
+    for threads, begin in ((2, False), (3, True)):
+        many, scored_many, _ = _tracked(frames, keypoints, threads, config, begin)
         assert scored_many == scored_one
         assert [r.pose.tobytes() for r in many] == [r.pose.tobytes() for r in one]
         assert [(r.origin, r.hypothesis, r.score, r.evaluations) for r in many] == \
@@ -177,6 +184,7 @@ def test_threads_decide_the_same_bit_for_bit(with_keypoints):
     first.close()
     second = Tracker(MODEL, CAMERA, config, neutral_pose(), threads=2)
     second.restore({k: np.array(v) for k, v in first.state().items()})
+    second.begin(3, frames[3], keypoints[4])        # not what is pushed: dropped
     part += [r for i in range(3, len(frames)) for r in second.push(i, frames[i], keypoints[i])] + second.finish()
     second.close()
     assert [r.pose.tobytes() for r in part] == [r.pose.tobytes() for r in one]
