@@ -113,3 +113,13 @@ def test_a_folder_of_the_earlier_run_json_layout_is_refused_in_one_line(tmp_path
     assert "--overwrite" in line and journal.path.read_text() == "frame\n0\n"      # nothing removed
     assert previous_run(journal, tmp_path / files.RUN_JSON, wanted, overwrite=True) is None
     assert not journal.path.exists()
+
+
+def test_the_session_rate_is_frames_over_the_wall_clock_after_the_first():
+    """run.json's fps (:func:`mocap.run.loop.session_fps`): from the end of the first frame to
+    the end of the last; from the loop's start with fewer than three frames; None without."""
+    from mocap.run.loop import session_fps
+
+    assert session_fps(0.0, [1.0, 2.0, 3.0, 5.0]) == pytest.approx(3 / 4)
+    assert session_fps(1.0, [2.0, 5.0]) == pytest.approx(2 / 4)
+    assert session_fps(0.0, []) is None

@@ -97,7 +97,7 @@ def tracker_config(args: argparse.Namespace):
 def print_summary(summary) -> None:
     """One paragraph about a finished run."""
     print(f"tracked {summary.frames} frames ({summary.failures} failed) at {summary.fps:.1f} frames/s "
-          f"(one core, image processing included); outputs in {summary.out_dir}")
+          f"(wall clock, image processing and writing included); outputs in {summary.out_dir}")
     if summary.damaged_frames:
         from mocap.io.video_check import format_frames
         print(f"warning: the video is damaged: {format_frames(list(summary.damaged_frames))} did not decode "

@@ -368,7 +368,7 @@ class RunLoop:
         self.times: dict[int, float] = {}          # a live source's frame times, until the frames are decided
         self.dark: dict[int, bool] = {}            # dark flags of the frames pushed but not decided yet
         self.pictures: dict[int, np.ndarray] = {}  # overlay-size frames not decided yet
-        self.results_ms: collections.deque[float] = collections.deque(maxlen=25)   # for the frame rate shown
+        self.step_ends: list[float] = []          # when each of this session's frames was done (perf_counter)
         self.latency_ms: list[float] = []          # live: each frame's arrival to its decision
         self.clock: float | None = None            # live: the reader's clock (frame times count from it)
         self.colour_frame: int | None = None
@@ -463,12 +463,13 @@ class RunLoop:
             when = self.times.pop(result.frame) if self.frames_in.live else self.frames_in.time_s(result.frame)
             self.journal.append(frame_row(result, self.camera, self.setup.factor, self.dark.pop(result.frame, None),
                                           when, self.people.segment))
-            self.results_ms.append(result.timings_ms["total"])
             picture = self.pictures.pop(result.frame, None)
             if self.overlay is not None and picture is not None:
                 self.overlay.update(picture, result.pose)
-            shown = {"fps": f"{1e3 / np.mean(self.results_ms):.0f}", "F": f"{result.region_residual:.2f}",
-                     "D": f"{result.edge_residual:.1f}"}
+            shown = {"F": f"{result.region_residual:.2f}", "D": f"{result.edge_residual:.1f}"}
+            if len(self.step_ends) > 1:     # the last 25 frames' rate
+                recent = self.step_ends[-26:]
+                shown = {"fps": f"{(len(recent) - 1) / (recent[-1] - recent[0]):.0f}", **shown}
             if self.frames_in.live and self.clock is not None:
                 self.latency_ms.append(1e3 * (time.perf_counter() - self.clock - when))
                 shown["latency"] = f"{self.latency_ms[-1]:.0f}ms"
@@ -519,6 +520,7 @@ class RunLoop:
         self.damage.take(wait=False)
         if (index + 1) % journalling.CHECKPOINT_EVERY == 0 or index + 1 == self.span.stop:
             self.checkpoint(index + 1)
+        self.step_ends.append(time.perf_counter())
         self.advance(1)
 
     def advance(self, frames: int) -> None:
@@ -600,7 +602,8 @@ class RunLoop:
             self.out_dir, table, self.settings, self.setup.calibration, self.camera, self.params.fps,
             self.span.start, time.perf_counter() - self.started, self.damage.damaged, self.colour_frame,
             self.people.segments, self.truth, float(np.median(detector_ms)) if detector_ms else None,
-            self.live_record(table), threads=self.params.choices.threads))
+            self.live_record(table), threads=self.params.choices.threads,
+            loop_fps=session_fps(self.started, self.step_ends)))
 
     def live_record(self, table: PoseTable) -> dict | None:
         """``run.json`` ``live`` of a live run: frames dropped (the gaps between the tracked ones:
@@ -614,6 +617,18 @@ class RunLoop:
             record["latency_ms"] = {"median": float(np.median(self.latency_ms)),
                                     "p90": float(np.percentile(self.latency_ms, 90))}
         return record
+
+
+def session_fps(started: float, step_ends: list[float]) -> float | None:
+    """Frames a second of a session's loop by the wall clock (``time.perf_counter`` seconds):
+    from the end of its first frame (which also waits for the reader's and the detector's start)
+    to the end of its last, or from the loop's ``started`` with fewer than three frames; None
+    without any. Everything the run does per frame counts: the image side, the tracker on its
+    threads, the detector's wait, the writing."""
+    if not step_ends:
+        return None
+    first, count = (step_ends[0], len(step_ends) - 1) if len(step_ends) > 2 else (started, len(step_ends))
+    return count / (step_ends[-1] - first) if step_ends[-1] > first else None
 
 
 @one_writer("out_dir")

@@ -54,7 +54,7 @@ class RunSummary:
     resumed_from : int
         The frame this session started from.
     fps : float, frames per second
-        The tracker's rate (one core, image processing included; the first frame left out).
+        The session's rate by the wall clock (``run.json`` ``fps``: :func:`mocap.run.loop.session_fps`).
     metrics : dict or None
         Accuracy against the ground truth (``run.json`` ``metrics``).
     failures : int
@@ -234,6 +234,9 @@ class FinishedRun:
         A live run's ``run.json`` ``live`` (frames dropped, latency: :meth:`mocap.run.loop.RunLoop.live_record`).
     threads : int
         The tracker's threads this session (``run.json`` ``threads``; the poses do not depend on it).
+    loop_fps : float or None, frames per second
+        This session's rate by the wall clock (:func:`mocap.run.loop.session_fps`); None: none
+        measured (``run.json`` ``fps`` is then 1000 over the rows' mean ``ms_total``).
     """
 
     out_dir: Path
@@ -251,9 +254,10 @@ class FinishedRun:
     keypoints_ms: float | None = None
     live: dict | None = None
     threads: int = 1
+    loop_fps: float | None = None
 
 
-def _metrics(run: FinishedRun, ms_total: np.ndarray) -> dict | None:
+def _metrics(run: FinishedRun, fps: float) -> dict | None:
     """Accuracy against the ground truth (:func:`mocap.metrics.summary`) and the rate."""
     if run.ground_truth is None:
         return None
@@ -265,7 +269,7 @@ def _metrics(run: FinishedRun, ms_total: np.ndarray) -> dict | None:
     if len(rows) != len(table):
         raise ValueError("ground truth lacks some tracked frames")
     metrics = mx.summary(table.poses, truth.poses[rows], table.joints, truth.joints[rows], run.camera)
-    metrics["fps"] = float(1e3 / np.mean(ms_total))
+    metrics["fps"] = fps
     return metrics
 
 
@@ -275,15 +279,17 @@ def finish_run(run: FinishedRun) -> RunSummary:
     from mocap.io.bvh import write_bvh
 
     table, extra = run.table, run.table.extra
-    # frames per second: the first frame of a session also loads the compiled kernels, leave it out
+    # frames per second: this session's by the wall clock; else from the rows' timings, the first
+    # frame of a session left out (it also loads the compiled kernels)
     ms_total = extra["ms_total"][1:] if len(table) > 1 else extra["ms_total"]
+    fps = run.loop_fps if run.loop_fps is not None else float(1e3 / np.mean(ms_total))
     timings = {k[3:]: {"mean": float(np.mean(extra[k])), "std": float(np.std(extra[k])),
                        "median": float(np.median(extra[k]))} for k in extra if k.startswith("ms_")}
-    metrics = _metrics(run, ms_total)
+    metrics = _metrics(run, fps)
     failures = int(extra["failed"].sum())
     record = {"status": "finished", "settings": run.settings, "versions": versions(), "frames": len(table),
               "resumed_from_frame": run.start, "wall_seconds_this_session": run.wall_s,
-              "fps": float(1e3 / np.mean(ms_total)), "threads": run.threads, "timings_ms": timings,
+              "fps": fps, "threads": run.threads, "timings_ms": timings,
               "failures": failures, "empty_frames": int(extra["empty"].sum()),
               "units": {"positions": "metres", "angles_in_csv": "degrees", "residual_edge": "pixels",
                         "time_s": "seconds from the first frame (the frame's own timestamp)"}}
