@@ -409,42 +409,44 @@ class Tracker:
             t1 = time.perf_counter()
             leading = work.submit(_timed_fit, self._beam[0].pose, cfg, cfg.evaluations)
         keypoint_cost = work.costs.keypoint
-        # the lifter reads the keypoints under both labellings (a candidate pays its own's energy)
-        lifted = self.lifting.lift(keypoints, self.camera, self.model) if self.lifting is not None else None
-        lifted_swapped = (self.lifting.lift(keypoints.swapped(), self.camera, self.model)
-                          if lifted is not None and keypoint_cost is not None else None)
-        lifts = (lifted, lifted_swapped)
         # every other registration is scored on the thread that ran it, with the detector's
-        # labels where it shows the person's front (None: no keypoints)
+        # labels where it shows the person's front (None: no keypoints) and the lifter's reading
+        # of the keypoints under both labellings (a candidate pays its own's energy), which this
+        # thread sets below
         front = None if keypoint_cost is None else keypoints.shows_front()
         # the front evidence in use (the labelling term on): a leader reading it swapped is offered
         # the way back (the torso's flip refined, a beam place facing the other way)
         contested = bool(front) and cfg.labelling_weight > 0
-        score = functools.partial(self._scored, lifts=lifts, front=front)
-        # what needs no leader runs beside it: the proposal stage (whose ranking this thread
-        # waits for), the beam's other hypotheses
+        lifting: Future = Future()
+        score = functools.partial(self._scored, lifts=lifting, front=front)
+        leader = None
+        if work.pool is not None and leading.done():
+            # the leader begun early is done: what starts from it runs while this thread lifts
+            leader, leader_s = leading.result()
+            tracked = [work.submit(score, leader), *self._other_hypotheses(score, work)]
+            stages, reaches = self._from_leader(work, score, leader, prepared, contested)
+        try:
+            lifted = self.lifting.lift(keypoints, self.camera, self.model) if self.lifting is not None else None
+            lifted_swapped = (self.lifting.lift(keypoints.swapped(), self.camera, self.model)
+                              if lifted is not None and keypoint_cost is not None else None)
+        except BaseException as err:    # the scorers waiting for it raise it too; this thread at once
+            lifting.set_exception(err)
+            raise
+        lifting.set_result((lifted, lifted_swapped))
+        # the proposal stage (ranked on this thread)
         proposed = []
         if self.sources and cfg.proposals_refined > 0:
             context = ProposalContext(lifted=lifted, lifted_swapped=lifted_swapped)
-            rough = functools.partial(self._rough_unary, lifts=lifts, front=front)
+            rough = functools.partial(self._rough_unary, lifts=(lifted, lifted_swapped), front=front)
             proposed = [self._propose(source, prepared, context, rough, score, work) for source in self.sources]
-        tracked = [work.submit(_fit, score, h.pose, cfg, cfg.hypothesis_evaluations)
-                   for h in self._beam[1:cfg.beam] if cfg.hypothesis_evaluations > 0]   # past the beam: mirrors
-        leader, leader_s = leading.result()
-        tracked.insert(0, work.submit(score, leader))
+        if leader is None:      # the beam's other hypotheses beside the leader, then what starts from it
+            tracked = self._other_hypotheses(score, work)
+            leader, leader_s = leading.result()
+            tracked.insert(0, work.submit(score, leader))
+            stages, reaches = self._from_leader(work, score, leader, prepared, contested)
         share = (leader.region.evaluations if leader.region else 0) / max(leader.evaluations, 1)
         timings["region"] = 1e3 * leader_s * share
         timings["edge"] = 1e3 * leader_s - timings["region"]
-        # what starts from the leader: each stage a task of its own, proposing and refining on
-        # its thread (the heaviest first)
-        stages: list[tuple[Future | _Done, str]] = []
-        if cfg.recovery and leader.failed(cfg):
-            stages.append((work.submit(_recover, score, self.last_good, cfg), "recovery"))
-        if cfg.jumps:
-            stages.append((work.submit(self._jump, score, leader.pose, contested), "jump"))
-        if cfg.mirrors and keypoint_cost is not None:
-            stages.append((work.submit(self._mirror, score, leader.pose), "mirror"))
-        reaches = self._reaches(prepared, leader.pose, work) if cfg.hand_reacquisition else []
         if cfg.hand_reacquisition:     # its reaches spread over the threads, then one task ranks and refines
             proposals = [q for f in reaches for q in f.result()]      # reach_proposals' order
             stages.append((work.submit(_refine_lowest, score, proposals, cfg, cfg.hypothesis_evaluations)
@@ -503,14 +505,14 @@ class Tracker:
                   "labelling": labelling}
         return np.array([values[t.name] for t in UNARY_TERMS], dtype=np.float64)
 
-    def _scored(self, costs: "_FrameCosts", reg: Registration, *,
-                lifts: tuple[LiftedHypotheses | None, LiftedHypotheses | None], front: bool | None) -> "_Scored":
+    def _scored(self, costs: "_FrameCosts", reg: Registration, *, lifts: Future, front: bool | None) -> "_Scored":
         """A registration's joints, the labelling its keypoint distance takes, and its unary
-        terms (``lifts``, ``front``: as :meth:`_rough_unary`'s)."""
+        terms (``front``: as :meth:`_rough_unary`'s; ``lifts``: a future of its ``lifts``, waited
+        for here: a registration may start before the frame's lifter reading is ready)."""
         joints = self.model.joint_positions(reg.pose)
         swapped = costs.keypoint is not None and costs.keypoint.labelling(reg.pose)
         terms = self._terms(reg.region_residual, reg.edge_residual, reg.keypoint_residual, reg.pose, joints,
-                            lifts[swapped], front, swapped)
+                            lifts.result()[swapped], front, swapped)
         return _Scored(reg, joints, bool(swapped), terms)
 
     def _rough_unary(self, costs: "_FrameCosts", pose: np.ndarray, *,
@@ -566,6 +568,31 @@ class Tracker:
                 keep.append(int(i))
         return keep
 
+    def _other_hypotheses(self, score, work: "_FrameWork") -> list[Future | _Done]:
+        """The beam's hypotheses after its leader (not the mirrors past ``beam``: they are not
+        registered) refined with ``hypothesis_evaluations`` and scored, each a task."""
+        cfg = self.config
+        if cfg.hypothesis_evaluations <= 0:
+            return []
+        return [work.submit(_fit, score, h.pose, cfg, cfg.hypothesis_evaluations) for h in self._beam[1:cfg.beam]]
+
+    def _from_leader(self, work: "_FrameWork", score, leader: Registration, prepared,
+                     contested: bool) -> tuple[list[tuple[Future | _Done, str]], list[Future | _Done]]:
+        """What starts from the ``leader``'s registration, each stage a task of its own that
+        proposes, refines and scores on its thread (the heaviest first): the recovery, the jumps,
+        the mirrors, as (task, origin) pairs; and hand re-acquisition's reaches (tasks whose
+        poses the caller ranks and refines)."""
+        cfg = self.config
+        stages: list[tuple[Future | _Done, str]] = []
+        if cfg.recovery and leader.failed(cfg):
+            stages.append((work.submit(_recover, score, self.last_good, cfg), "recovery"))
+        if cfg.jumps:
+            stages.append((work.submit(self._jump, score, leader.pose, contested), "jump"))
+        if cfg.mirrors and work.costs.keypoint is not None:
+            stages.append((work.submit(self._mirror, score, leader.pose), "mirror"))
+        reaches = self._reaches(prepared, leader.pose, work) if cfg.hand_reacquisition else []
+        return stages, reaches
+
     def _reaches(self, prepared, pose: np.ndarray, work: "_FrameWork") -> list[Future | _Done]:
         """Hand re-acquisition from the leader's ``pose`` (see :class:`TrackerConfig`): each
         unexplained skin region's reaches (:func:`~mocap.track.proposals.arm_reach_proposals`),
@@ -615,7 +642,7 @@ class Tracker:
         poses = [p.pose for p in proposals]
         if cfg.proposal_gate is not None:
             poses.append(self._beam[0].pose)
-        values = work.submit(_rough_values, rough, poses).result()
+        values = work.run_here(_rough_values, rough, poses)
         work.evaluations += 2 * len(poses)
         order = np.argsort(values[: len(proposals)], kind="stable")[: cfg.proposals_refined]
         if cfg.proposal_gate is not None:
@@ -722,7 +749,8 @@ class _FrameWork:
 
     :meth:`submit` runs ``task(costs, *args)`` at once on the calling thread when the tracker has
     no pool (``threads=1``), else on the pool; each task borrows a set of the frame's costs that
-    no other task uses meanwhile (a spare is made when none is free: at most one per thread).
+    no other task uses meanwhile (a spare is made when none is free: at most one per thread, the
+    calling one included: :meth:`run_here`).
     Every task is a pure function of its arguments and the frame, so the results are the same,
     bit for bit, whatever thread ran them and in whatever order: the tracker reads them in the
     order it asked for them. ``evaluations`` counts the unrefined evaluations the tracker adds
@@ -738,6 +766,11 @@ class _FrameWork:
         if self.pool is None:
             return _Done(task(self.costs, *args))
         return self.pool.submit(self._run, task, args)
+
+    def run_here(self, task, *args):
+        """``task(costs, *args)`` on the calling thread (beside what runs on the threads), with a
+        set of the frame's costs that no task uses meanwhile."""
+        return task(self.costs, *args) if self.pool is None else self._run(task, args)
 
     def _run(self, task, args):
         try:

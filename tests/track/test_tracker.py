@@ -144,6 +144,7 @@ def _tracked(frames, keypoints, threads, config=TrackerConfig(lag=2), begin=Fals
         results = tracker.push(i, frame, k)
         if begin and i + 1 < len(frames):
             tracker.begin(i + 1, frames[i + 1], keypoints[i + 1])
+            tracker._begun.leading.result()     # done before the push: what starts from it goes first
         out += results
         scored.append([(c.origin, c.pose.tobytes(), c.unary) for c in tracker.scored])
     out += tracker.finish()
