@@ -36,6 +36,24 @@ def test_matches_naive_scipy_kinematics_on_random_poses():
             np.testing.assert_allclose(got[k, :, 3], ref[name][1], atol=1e-12)
 
 
+def test_one_arms_transforms_are_the_whole_bodys_to_the_bit():
+    """``arm_transforms_into`` (what reach_arm's solver computes) fills the chest's and that arm's
+    rows exactly as ``segment_transforms_into`` does, and leaves the others as they were."""
+    from mocap.body.kinematics import ARM_SIDES, arm_transforms_into, segment_transforms_into
+
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        q = random_pose(rng)
+        whole = np.empty((len(SEGMENT_NAMES), 3, 4))
+        segment_transforms_into(q, MODEL.skeleton.offsets, whole)
+        for side_index, side in enumerate(ARM_SIDES):
+            arm = np.full_like(whole, np.nan)
+            arm_transforms_into(q, MODEL.skeleton.offsets, side_index, arm)
+            rows = [SEGMENT_NAMES.index(n) for n in ("chest", f"{side}_upper_arm", f"{side}_forearm", f"{side}_hand")]
+            assert arm[rows].tobytes() == whole[rows].tobytes()
+            assert np.isnan(np.delete(arm, rows, axis=0)).all()
+
+
 @settings(max_examples=60, deadline=None)
 @given(st.integers(0, 2**32 - 1))
 def test_bone_lengths_preserved_under_any_pose(seed):
