@@ -315,8 +315,9 @@ class Tracker:
         if self._pool is None or prepared.is_empty:
             return
         work = self._frame_work(prepared, keypoints)
+        started = time.perf_counter()
         leading = work.submit(_timed_fit, self._beam[0].pose, self.config, self.config.evaluations)
-        self._begun = _Begun(int(frame_index), prepared, keypoints, work, leading, time.perf_counter())
+        self._begun = _Begun(int(frame_index), prepared, keypoints, work, leading, started)
 
     def finish(self) -> list[FrameResult]:
         """The frames still undecided at the end of the video, decided by the best path (one
