@@ -328,10 +328,8 @@ def append_keypoints(path: str | Path, frame: int, keypoints: Keypoints) -> None
     keypoints : Keypoints
         Input pixels (written as :func:`write_keypoints` writes them: they read back exactly).
     """
-    path = Path(path)
-    new = not path.exists() or path.stat().st_size == 0
-    with path.open("a", newline="") as fh:
-        fh.write(_text({frame: keypoints}, header=new))
+    with Path(path).open("a", newline="") as fh:
+        fh.write(_text({frame: keypoints}, header=fh.tell() == 0))
         fh.flush()
 
 

@@ -95,12 +95,9 @@ class PoseTable:
         """
         import os
 
-        path = Path(path)
         text = self.to_csv_text()
-        if path.exists() and path.stat().st_size > 0:
-            text = text.split("\n", 1)[1]
-        with path.open("a", newline="") as fh:
-            fh.write(text)
+        with Path(path).open("a", newline="") as fh:
+            fh.write(text if fh.tell() == 0 else text.split("\n", 1)[1])      # the header once
             fh.flush()
             if sync:
                 os.fsync(fh.fileno())

@@ -473,8 +473,8 @@ class RunLoop:
             if self.frames_in.live and self.clock is not None:
                 self.latency_ms.append(1e3 * (time.perf_counter() - self.clock - when))
                 shown["latency"] = f"{self.latency_ms[-1]:.0f}ms"
-            if self.bar is not None:
-                self.bar.set_postfix(**shown)
+            if self.bar is not None:      # shown at the bar's next refresh (tqdm's mininterval), not now
+                self.bar.set_postfix(refresh=False, **shown)
 
     def checkpoint(self, next_index: int) -> None:
         self.journal.checkpoint(self.tracker.state(), self.dark, self.people, next_index)
