@@ -310,11 +310,15 @@ class Tracker:
         while the caller writes what :meth:`push` returned: ``push`` of the same frame (the
         same ``prepared`` and ``keypoints`` objects) then takes it up. The decisions are the
         same, bit for bit, with and without it; a ``push`` of anything else drops it. Nothing
-        happens with one thread (``threads=1``) or on an empty frame."""
+        happens with one thread (``threads=1``), on an empty frame, or on one that cannot be
+        tracked (its ``push`` raises the error)."""
         self._begun = None
         if self._pool is None or prepared.is_empty:
             return
-        work = self._frame_work(prepared, keypoints)
+        try:
+            work = self._frame_work(prepared, keypoints)
+        except ValueError:      # a frame that cannot be tracked: its push says why, not this
+            return
         started = time.perf_counter()
         leading = work.submit(_timed_fit, self._beam[0].pose, self.config, self.config.evaluations)
         self._begun = _Begun(int(frame_index), prepared, keypoints, work, leading, started)

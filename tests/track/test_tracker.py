@@ -190,6 +190,25 @@ def test_threads_decide_the_same_bit_for_bit(with_keypoints):
     assert [r.pose.tobytes() for r in part] == [r.pose.tobytes() for r in one]
 
 
+def test_a_begun_frame_that_cannot_be_tracked_is_reported_by_its_push():
+    """``begin`` of a frame of another size raises nothing (the last frame's results are still
+    written); the ``push`` of that frame raises the cost's error."""
+    import dataclasses
+
+    frames = clean_frames(waving(2))
+    tracker = Tracker(MODEL, CAMERA, TrackerConfig(lag=0), waving(1)[0], threads=2)
+    try:
+        tracker.push(0, frames[0])
+        wrong = dataclasses.replace(frames[1], labels=frames[1].labels[:60, :80],
+                                    foreground=frames[1].foreground[:60, :80], edges=frames[1].edges[:60, :80],
+                                    distance=frames[1].distance[:60, :80])
+        tracker.begin(1, wrong)
+        with pytest.raises(ValueError, match="shape|size"):
+            tracker.push(1, wrong)
+    finally:
+        tracker.close()
+
+
 def test_threads_must_be_a_positive_count():
     for bad in (0, -1, 1.5, True):
         with pytest.raises(ValueError, match="threads"):
