@@ -320,8 +320,12 @@ class Tracker:
         except ValueError:      # a frame that cannot be tracked: its push says why, not this
             return
         started = time.perf_counter()
-        leading = work.submit(_timed_fit, self._beam[0].pose, self.config, self.config.evaluations)
-        self._begun = _Begun(int(frame_index), prepared, keypoints, work, leading, started)
+        cfg = self.config
+        leading = work.submit(_timed_fit, self._beam[0].pose, cfg, cfg.evaluations)
+        # the beam's other hypotheses registered too (their scores need the frame's lifter reading: in push)
+        others = ([work.submit(_register, h.pose, cfg, cfg.hypothesis_evaluations) for h in self._beam[1:cfg.beam]]
+                  if cfg.hypothesis_evaluations > 0 else [])
+        self._begun = _Begun(int(frame_index), prepared, keypoints, work, leading, started, others)
 
     def finish(self) -> list[FrameResult]:
         """The frames still undecided at the end of the video, decided by the best path (one
@@ -408,8 +412,9 @@ class Tracker:
             return _Frame(index, True, kept, self._cost - self._cost.min(), np.arange(len(kept)), 0, timings)
         if (begun is not None and begun.index == index and begun.prepared is prepared
                 and begun.keypoints is keypoints):
-            work, leading, t1 = begun.work, begun.leading, begun.started
+            work, leading, t1, others = begun.work, begun.leading, begun.started, begun.others
         else:
+            others = None
             work = self._frame_work(prepared, keypoints)
             t1 = time.perf_counter()
             leading = work.submit(_timed_fit, self._beam[0].pose, cfg, cfg.evaluations)
@@ -433,8 +438,11 @@ class Tracker:
             context = ProposalContext(lifted=lifted, lifted_swapped=lifted_swapped)
             rough = functools.partial(self._rough_unary, lifts=lifts, front=front)
             proposed = [self._propose(source, prepared, context, rough, score, work) for source in self.sources]
-        tracked = [work.submit(_fit, score, h.pose, cfg, cfg.hypothesis_evaluations)
-                   for h in self._beam[1:cfg.beam] if cfg.hypothesis_evaluations > 0]   # past the beam: mirrors
+        if others is None:
+            tracked = [work.submit(_fit, score, h.pose, cfg, cfg.hypothesis_evaluations)
+                       for h in self._beam[1:cfg.beam] if cfg.hypothesis_evaluations > 0]   # past the beam: mirrors
+        else:       # registered since begin: scored now
+            tracked = [work.submit(_score_registered, score, f) for f in others]
         leader, leader_s = leading.result()
         tracked.insert(0, work.submit(score, leader))
         share = (leader.region.evaluations if leader.region else 0) / max(leader.evaluations, 1)
@@ -710,6 +718,7 @@ class _Begun:
     work: "_FrameWork"
     leading: Future
     started: float
+    others: list[Future]
 
 
 class _Done:
@@ -795,6 +804,11 @@ def _fit(costs: _FrameCosts, score, start: np.ndarray, config: TrackerConfig, ev
          step_scale: float = 1.0) -> _Scored:
     """:func:`_register`, scored by ``score(costs, registration)`` (:meth:`Tracker._scored`)."""
     return score(costs, _register(costs, start, config, evaluations, step_scale))
+
+
+def _score_registered(costs: _FrameCosts, score, registration: Future) -> _Scored:
+    """A registration begun earlier (its future), scored by ``score(costs, registration)``."""
+    return score(costs, registration.result())
 
 
 def _timed_fit(costs: _FrameCosts, start: np.ndarray, config: TrackerConfig,
