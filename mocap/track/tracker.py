@@ -90,6 +90,16 @@ WARM_UP_ARMS_DEG = {"r_shoulder_flex": 30.0, "r_shoulder_abd": 20.0, "r_elbow_fl
                     "l_shoulder_flex": 30.0, "l_shoulder_abd": 20.0, "l_elbow_flex": 90.0}
 #: Index of the chest's heading in the pose vector.
 _HEADING = PARAMETER_INDEX[HEADING]
+#: A leader whose chest heading is within 45 degrees of the profile (|cos| below this) may be
+#: turning: a hypothesis facing the other way is sought (the torso's flip refined) and carried.
+PROFILE_COS = math.cos(math.radians(45.0))
+#: A carried hypothesis facing the other way stays while its path cost is within this of the
+#: leader's (score units; a half turn's turn term is 8).
+CARRY_MARGIN = 12.0
+
+
+def _near_profile(pose: np.ndarray) -> bool:
+    return abs(math.cos(pose[_HEADING])) < PROFILE_COS
 
 
 @dataclass(kw_only=True)
@@ -433,8 +443,10 @@ class Tracker:
             context = ProposalContext(lifted=lifted, lifted_swapped=lifted_swapped)
             rough = functools.partial(self._rough_unary, lifts=lifts, front=front)
             proposed = [self._propose(source, prepared, context, rough, score, work) for source in self.sources]
+        # past the beam: the other side's carried hypothesis (registered), then mirrors (not)
+        registered = self._beam[1:cfg.beam] + [h for h in self._beam[cfg.beam:cfg.beam + 1] if h.origin != "mirror"]
         tracked = [work.submit(_fit, score, h.pose, cfg, cfg.hypothesis_evaluations)
-                   for h in self._beam[1:cfg.beam] if cfg.hypothesis_evaluations > 0]   # past the beam: mirrors
+                   for h in registered if cfg.hypothesis_evaluations > 0]
         leader, leader_s = leading.result()
         tracked.insert(0, work.submit(score, leader))
         share = (leader.region.evaluations if leader.region else 0) / max(leader.evaluations, 1)
@@ -446,7 +458,11 @@ class Tracker:
         if cfg.recovery and leader.failed(cfg):
             stages.append((work.submit(_recover, score, self.last_good, cfg), "recovery"))
         if cfg.jumps:
-            stages.append((work.submit(self._jump, score, leader.pose, contested), "jump"))
+            leader_facing = math.cos(self._beam[0].pose[_HEADING]) > 0.0
+            lonely = all((math.cos(h.pose[_HEADING]) > 0.0) == leader_facing
+                         for h in self._beam if h.origin != "mirror")
+            stages.append((work.submit(self._jump, score, leader.pose, contested,
+                                       lonely and _near_profile(self._beam[0].pose)), "jump"))
         if cfg.mirrors and keypoint_cost is not None:
             stages.append((work.submit(self._mirror, score, leader.pose), "mirror"))
         reaches = self._reaches(prepared, leader.pose, work) if cfg.hand_reacquisition else []
@@ -566,6 +582,15 @@ class Tracker:
                               and hypotheses[i].origin != "mirror" and not merged(i)), None)
                 if other is not None:
                     keep[-1] = other
+        # one hypothesis facing the other way from the leader is carried past the beam (and
+        # registered on the next frame) when none of the kept does: the turn's evidence adds up
+        facing = [math.cos(h.pose[_HEADING]) > 0.0 for h in hypotheses]
+        if keep and all(facing[k] == facing[keep[0]] for k in keep):
+            other = next((int(i) for i in order if facing[i] != facing[keep[0]]
+                          and hypotheses[i].origin != "mirror" and not merged(i)), None)
+            if other is not None and (_near_profile(hypotheses[keep[0]].pose)
+                                      or cost[other] - cost[keep[0]] <= CARRY_MARGIN):
+                keep.append(other)
         for i in order:
             if hypotheses[i].origin == "mirror" and int(i) not in keep and not merged(i):
                 keep.append(int(i))
@@ -583,7 +608,8 @@ class Tracker:
         return [work.submit(_arm_reaches, pose, joints, uv, side, reach_m, self.model, self.camera)
                 for uv, side, reach_m in reach_jobs(pose, targets, self.model)]
 
-    def _jump(self, costs: "_FrameCosts", score, pose: np.ndarray, contested: bool = False) -> "_Stage":
+    def _jump(self, costs: "_FrameCosts", score, pose: np.ndarray, contested: bool = False,
+              lonely: bool = False) -> "_Stage":
         """The kinematic jumps of the leader's ``pose``, the ``JUMPS_REFINED`` lowest-F ones
         refined and scored; and, on a ``contested`` frame (the detector shows the front, the
         labelling term on) whose leader reads the keypoints swapped, the torso's flip besides
@@ -595,7 +621,8 @@ class Tracker:
         chosen = [int(i) for i in np.argsort(values, kind="stable")[:JUMPS_REFINED]]
         budgets = [cfg.jump_evaluations] * len(chosen)
         flip = next(i for i, (name, _) in enumerate(jumps) if name == "torso_flip")
-        if contested and flip not in chosen and costs.keypoint is not None and costs.keypoint.labelling(pose):
+        if flip not in chosen and (lonely or (contested and costs.keypoint is not None
+                                              and costs.keypoint.labelling(pose))):
             chosen.append(flip)
             budgets.append(cfg.hypothesis_evaluations)
         return _Stage([_fit(costs, score, jumps[i][1], cfg, budget) for i, budget in zip(chosen, budgets)], len(jumps))
