@@ -1,0 +1,140 @@
+"""``python -m experiments.tracking_diff BASE NEW``: which units of two tracking runs differ.
+
+A change to the tracker is judged by running :mod:`experiments.tracking` in both trees, each
+with its own ``--out`` (a unit's file name holds its configuration, sequence and seed, not the
+code, so two trees' units of one configuration would overwrite each other in one folder). Link
+the new folder's ``data`` to the base folder's, so that both runs read the very same generated
+sequences and the detector's cached keypoints, and nothing is generated twice::
+
+    mkdir -p NEW && ln -s "$(realpath BASE)/data" NEW/data
+    python -m experiments.tracking --configs mediapipe-keypoints --seeds 0,1,2,3,4 --unseen-seeds 97,101 --out NEW
+    python -m experiments.tracking_diff BASE NEW --unseen-seeds 97,101
+
+Units are matched by file name under ``units/``; the new folder's units that the base one lacks
+are counted, not compared. Printed (Markdown): every matched unit whose MPJPE, heading error or evaluations
+differ, base → new (MPJPE and the median error about the neck in mm, the share of frames
+turned round, lost, evaluations a frame); then, per configuration and seed set (the seeds tuned
+on, and ``--unseen-seeds`` apart), how many units are the same to the bit of these figures, how
+many changed, the turned-round and lost counts (:func:`experiments.tracking.failure_marks`)
+and the mean evaluations a frame, base → new. Nothing is recomputed: the units hold it all.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from experiments.tracking import failure_marks
+
+
+@dataclass(frozen=True)
+class Unit:
+    """One measured (configuration, sequence, seed) of :mod:`experiments.tracking`."""
+
+    name: str                   # the configuration's name in experiments.tracking.CONFIGS
+    sequence: str
+    seed: int
+    mpjpe_mm: float             # mean over frames, camera coordinates
+    about_neck_mm: float        # median over frames of the root-relative error
+    turned_round_rate: float    # share of frames whose chest heading is over 90 degrees off
+    turned_round: bool
+    lost: bool
+    evaluations_per_frame: float
+    heading_error_deg: tuple[float, ...]
+
+    def same_as(self, other: "Unit") -> bool:
+        """The same figures to the bit (MPJPE, heading errors, evaluations)."""
+        return (self.mpjpe_mm == other.mpjpe_mm and self.heading_error_deg == other.heading_error_deg
+                and self.evaluations_per_frame == other.evaluations_per_frame)
+
+
+def read_units(folder: str | Path) -> dict[str, Unit]:
+    """The units of an :mod:`experiments.tracking` results folder, by file name.
+
+    Raises
+    ------
+    ValueError
+        When ``folder`` holds no ``units`` folder.
+    """
+    units_dir = Path(folder) / "units"
+    if not units_dir.is_dir():
+        raise ValueError(f"{folder} is not an experiments.tracking results folder (no units/ in it)")
+    out = {}
+    for path in sorted(units_dir.glob("*.json")):
+        record = json.loads(path.read_text())
+        row = record["result"]
+        marks = failure_marks(row)
+        out[path.name] = Unit(record["name"], row["sequence"], int(record["seed"]), float(row["mpjpe_mm"]),
+                              float(row.get("median_frame_root_relative_mm", np.nan)),
+                              float(marks["turned_round_rate"]) if marks["turned_round_rate"] is not None else np.nan,
+                              bool(marks["turned_round"]), bool(marks["lost"]),
+                              float(row.get("evaluations_per_frame", np.nan)),
+                              tuple(float(h) for h in row.get("frame_heading_error_deg", ())))
+    return out
+
+
+def diff_table(base: dict[str, Unit], new: dict[str, Unit], unseen: set[int]) -> str:
+    """The Markdown of the changed units and the per-configuration summary (see the module)."""
+    matched = sorted(set(base) & set(new), key=lambda k: (new[k].name, new[k].seed in unseen, new[k].seed,
+                                                          new[k].sequence))
+    lines = ["| configuration | sequence | seed | MPJPE mm | about the neck mm | turned round | lost | evaluations a frame |",
+             "|---|---|---|---|---|---|---|---|"]
+    for key in matched:
+        a, b = base[key], new[key]
+        if not a.same_as(b):
+            lines.append(f"| {b.name} | {b.sequence} | {b.seed} | {a.mpjpe_mm:.1f} → {b.mpjpe_mm:.1f} | "
+                         f"{a.about_neck_mm:.1f} → {b.about_neck_mm:.1f} | "
+                         f"{100 * a.turned_round_rate:.1f} → {100 * b.turned_round_rate:.1f} % | "
+                         f"{_yes(a.lost)} → {_yes(b.lost)} | {a.evaluations_per_frame:.0f} → {b.evaluations_per_frame:.0f} |")
+    if len(lines) == 2:
+        lines = ["Every matched unit is the same."]
+    lines += ["", "| configuration | seeds | units same / changed | turned round | lost | evaluations a frame |",
+              "|---|---|---|---|---|---|"]
+    for name in sorted({new[k].name for k in matched}):
+        for label, pick in (("tuned on", lambda u: u.seed not in unseen), ("never used", lambda u: u.seed in unseen)):
+            keys = [k for k in matched if new[k].name == name and pick(new[k])]
+            if not keys:
+                continue
+            same = sum(base[k].same_as(new[k]) for k in keys)
+            count = lambda units, field: sum(getattr(units[k], field) for k in keys)
+            evaluations = lambda units: np.mean([units[k].evaluations_per_frame for k in keys])
+            lines.append(f"| {name} | {label} | {same} / {len(keys) - same} | "
+                         f"{count(base, 'turned_round')} → {count(new, 'turned_round')} of {len(keys)} | "
+                         f"{count(base, 'lost')} → {count(new, 'lost')} | "
+                         f"{evaluations(base):.0f} → {evaluations(new):.0f} ({evaluations(new) / evaluations(base):.3f}x) |")
+    only = len(set(new) - set(base))
+    if only:
+        lines += ["", f"{only} unit(s) of the new folder not in the base one, not compared."]
+    return "\n".join(lines)
+
+
+def _yes(flag: bool) -> str:
+    return "yes" if flag else "no"
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m experiments.tracking_diff", description=__doc__.split("\n\n")[0])
+    p.add_argument("base", type=Path, help="the results folder compared against (its units/)")
+    p.add_argument("new", type=Path, help="the results folder of the change")
+    p.add_argument("--unseen-seeds", default="", help="comma-separated seeds never used for tuning: summed apart")
+    args = p.parse_args(argv)
+    try:
+        unseen = {int(s) for s in args.unseen_seeds.split(",") if s.strip()}
+        base, new = read_units(args.base), read_units(args.new)
+    except ValueError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    if not set(base) & set(new):
+        print(f"error: no unit of {args.new} is in {args.base} (same configurations, sequences and seeds?)",
+              file=sys.stderr)
+        return 2
+    print(diff_table(base, new, unseen))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

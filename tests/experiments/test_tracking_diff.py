@@ -1,0 +1,47 @@
+"""``python -m experiments.tracking_diff``: units matched by file name, the changed ones listed,
+counted per configuration and seed set (made-up units with hand-counted answers)."""
+import json
+
+import pytest
+
+from experiments import tracking_diff
+
+
+def _unit(folder, name, sequence, seed, mpjpe, heading, about_neck=50.0, evaluations=1000.0, key="k"):
+    row = {"sequence": sequence, "mpjpe_mm": mpjpe, "median_frame_root_relative_mm": about_neck,
+           "frame_heading_error_deg": list(heading), "evaluations_per_frame": evaluations}
+    path = folder / "units" / f"{sequence}-s{seed}-{key}.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps({"config": {}, "name": name, "seed": seed, "code": "c", "result": row}))
+
+
+def test_changed_units_are_listed_and_counted(tmp_path, capsys):
+    base, new = tmp_path / "base", tmp_path / "new"
+    facing, turned = [10.0] * 10, [170.0] * 3 + [10.0] * 7            # 30 % of frames over 90 degrees
+    for folder in (base, new):
+        _unit(folder, "mediapipe-keypoints", "gestures-1", 0, 80.0, facing)      # the same in both
+    _unit(base, "mediapipe-keypoints", "turning", 0, 120.0, turned)
+    _unit(new, "mediapipe-keypoints", "turning", 0, 90.0, facing, evaluations=1100.0)
+    _unit(base, "mediapipe-keypoints", "turning", 97, 70.0, facing)
+    _unit(new, "mediapipe-keypoints", "turning", 97, 75.0, facing, about_neck=400.0)   # lost
+    _unit(new, "mediapipe-keypoints", "gestures-2", 0, 60.0, facing)                  # new only
+    assert tracking_diff.main([str(base), str(new), "--unseen-seeds", "97"]) == 0
+    out = capsys.readouterr().out
+    assert "| mediapipe-keypoints | turning | 0 | 120.0 → 90.0 | 50.0 → 50.0 | 30.0 → 0.0 % | no → no | 1000 → 1100 |" in out
+    assert "| mediapipe-keypoints | turning | 97 | 70.0 → 75.0 | 50.0 → 400.0 | 0.0 → 0.0 % | no → yes | 1000 → 1000 |" in out
+    assert "gestures-1 | 0" not in out                                 # unchanged units are not listed
+    assert "| mediapipe-keypoints | tuned on | 1 / 1 | 1 → 0 of 2 | 0 → 0 | 1000 → 1050 (1.050x) |" in out
+    assert "| mediapipe-keypoints | never used | 0 / 1 | 0 → 0 of 1 | 0 → 1 | 1000 → 1000 (1.000x) |" in out
+    assert "1 unit(s) of the new folder not in the base one" in out
+
+
+def test_a_folder_without_units_is_refused(tmp_path, capsys):
+    (tmp_path / "new" / "units").mkdir(parents=True)
+    assert tracking_diff.main([str(tmp_path / "nothing"), str(tmp_path / "new")]) == 2
+    assert "not an experiments.tracking results folder" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="no units/"):
+        tracking_diff.read_units(tmp_path / "nothing")
+    (tmp_path / "base" / "units").mkdir(parents=True)          # folders with nothing in common
+    _unit(tmp_path / "base", "default", "turning", 0, 90.0, [0.0])
+    assert tracking_diff.main([str(tmp_path / "base"), str(tmp_path / "new")]) == 2
+    assert "no unit of" in capsys.readouterr().err
