@@ -118,8 +118,18 @@ def test_a_folder_of_the_earlier_run_json_layout_is_refused_in_one_line(tmp_path
 def test_the_session_rate_is_frames_over_the_wall_clock_after_the_first():
     """run.json's fps (:func:`mocap.run.loop.session_fps`): from the end of the first frame to
     the end of the last; from the loop's start with fewer than three frames; None without."""
-    from mocap.run.loop import session_fps
+    from mocap.run.loop import SHOWN_RATE_FRAMES, StepClock, session_fps
 
-    assert session_fps(0.0, [1.0, 2.0, 3.0, 5.0]) == pytest.approx(3 / 4)
-    assert session_fps(1.0, [2.0, 5.0]) == pytest.approx(2 / 4)
-    assert session_fps(0.0, []) is None
+    assert session_fps(0.0, 1.0, 5.0, 4) == pytest.approx(3 / 4)
+    assert session_fps(1.0, 2.0, 5.0, 2) == pytest.approx(2 / 4)
+    assert session_fps(0.0, None, None, 0) is None
+    # the loop's clock: the same rate from what it keeps, and the bar's rate over the last frames,
+    # in constant memory however many frames
+    clock = StepClock()
+    assert clock.session_fps(0.0) is None and clock.recent_fps() is None
+    ends = [1.0, 2.0, 3.0, 5.0] + [5.0 + 0.5 * k for k in range(1, 100)]
+    for end in ends:
+        clock.tick(end)
+    assert clock.session_fps(0.0) == pytest.approx((len(ends) - 1) / (ends[-1] - ends[0]))
+    assert clock.recent_fps() == pytest.approx(2.0)
+    assert len(clock.recent) == SHOWN_RATE_FRAMES + 1

@@ -368,7 +368,7 @@ class RunLoop:
         self.times: dict[int, float] = {}          # a live source's frame times, until the frames are decided
         self.dark: dict[int, bool] = {}            # dark flags of the frames pushed but not decided yet
         self.pictures: dict[int, np.ndarray] = {}  # overlay-size frames not decided yet
-        self.step_ends: list[float] = []          # when each of this session's frames was done (perf_counter)
+        self.step_clock = StepClock()              # when this session's frames were done
         self.latency_ms: list[float] = []          # live: each frame's arrival to its decision
         self.clock: float | None = None            # live: the reader's clock (frame times count from it)
         self.colour_frame: int | None = None
@@ -467,9 +467,9 @@ class RunLoop:
             if self.overlay is not None and picture is not None:
                 self.overlay.update(picture, result.pose)
             shown = {"F": f"{result.region_residual:.2f}", "D": f"{result.edge_residual:.1f}"}
-            if len(self.step_ends) > 1:     # the last 25 frames' rate
-                recent = self.step_ends[-26:]
-                shown = {"fps": f"{(len(recent) - 1) / (recent[-1] - recent[0]):.0f}", **shown}
+            recent_fps = self.step_clock.recent_fps()
+            if recent_fps is not None:
+                shown = {"fps": f"{recent_fps:.0f}", **shown}
             if self.frames_in.live and self.clock is not None:
                 self.latency_ms.append(1e3 * (time.perf_counter() - self.clock - when))
                 shown["latency"] = f"{self.latency_ms[-1]:.0f}ms"
@@ -520,7 +520,7 @@ class RunLoop:
         self.damage.take(wait=False)
         if (index + 1) % journalling.CHECKPOINT_EVERY == 0 or index + 1 == self.span.stop:
             self.checkpoint(index + 1)
-        self.step_ends.append(time.perf_counter())
+        self.step_clock.tick(time.perf_counter())
         self.advance(1)
 
     def advance(self, frames: int) -> None:
@@ -603,7 +603,7 @@ class RunLoop:
             self.span.start, time.perf_counter() - self.started, self.damage.damaged, self.colour_frame,
             self.people.segments, self.truth, float(np.median(detector_ms)) if detector_ms else None,
             self.live_record(table), threads=self.params.choices.threads,
-            loop_fps=session_fps(self.started, self.step_ends)))
+            loop_fps=self.step_clock.session_fps(self.started)))
 
     def live_record(self, table: PoseTable) -> dict | None:
         """``run.json`` ``live`` of a live run: frames dropped (the gaps between the tracked ones:
@@ -619,16 +619,47 @@ class RunLoop:
         return record
 
 
-def session_fps(started: float, step_ends: list[float]) -> float | None:
+def session_fps(started: float, first_end: float | None, last_end: float | None, frames: int) -> float | None:
     """Frames a second of a session's loop by the wall clock (``time.perf_counter`` seconds):
     from the end of its first frame (which also waits for the reader's and the detector's start)
-    to the end of its last, or from the loop's ``started`` with fewer than three frames; None
-    without any. Everything the run does per frame counts: the image side, the tracker on its
-    threads, the detector's wait, the writing."""
-    if not step_ends:
+    to the end of its last (``frames`` frames in all), or from the loop's ``started`` with fewer
+    than three frames; None without any. Everything the run does per frame counts: the image
+    side, the tracker on its threads, the detector's wait, the writing."""
+    if frames == 0 or first_end is None or last_end is None:
         return None
-    first, count = (step_ends[0], len(step_ends) - 1) if len(step_ends) > 2 else (started, len(step_ends))
-    return count / (step_ends[-1] - first) if step_ends[-1] > first else None
+    first, count = (first_end, frames - 1) if frames > 2 else (started, frames)
+    return count / (last_end - first) if last_end > first else None
+
+
+#: Frames over which the progress bar's rate is taken.
+SHOWN_RATE_FRAMES = 25
+
+
+@dataclass
+class StepClock:
+    """When a session's frames were done (``time.perf_counter`` seconds), in the same memory
+    however long the run: the first end, the count, and the last :data:`SHOWN_RATE_FRAMES` + 1."""
+
+    first: float | None = None
+    count: int = 0
+    recent: collections.deque = field(default_factory=lambda: collections.deque(maxlen=SHOWN_RATE_FRAMES + 1))
+
+    def tick(self, now: float) -> None:
+        """A frame done at ``now``."""
+        if self.first is None:
+            self.first = now
+        self.count += 1
+        self.recent.append(now)
+
+    def recent_fps(self) -> float | None:
+        """Frames a second over the last :data:`SHOWN_RATE_FRAMES` (None before two frames)."""
+        if len(self.recent) < 2 or self.recent[-1] <= self.recent[0]:
+            return None
+        return (len(self.recent) - 1) / (self.recent[-1] - self.recent[0])
+
+    def session_fps(self, started: float) -> float | None:
+        """The session's rate (:func:`session_fps`) for a loop started at ``started``."""
+        return session_fps(started, self.first, self.recent[-1] if self.recent else None, self.count)
 
 
 @one_writer("out_dir")
