@@ -45,3 +45,22 @@ def test_a_folder_without_units_is_refused(tmp_path, capsys):
     _unit(tmp_path / "base", "default", "turning", 0, 90.0, [0.0])
     assert tracking_diff.main([str(tmp_path / "base"), str(tmp_path / "new")]) == 2
     assert "no unit of" in capsys.readouterr().err
+
+
+def test_the_paired_comparison_counts_units_and_tests_their_differences(tmp_path, capsys):
+    """Six units all 10 mm better: the exact two-sided signed-rank p is 2 / 2**6 (only the
+    all-negative and all-positive sign patterns are as extreme); one unit in six worse, with the
+    smallest difference: the rank sum of the positive side is 1, p = 2 * 2 / 2**6."""
+    base, new = tmp_path / "base", tmp_path / "new"
+    facing = [10.0] * 10
+    for i, sequence in enumerate(("gestures-1", "gestures-2", "gestures-3", "arms-crossing", "not-facing", "turning")):
+        _unit(base, "mediapipe-keypoints", sequence, 0, 100.0 + i, facing, about_neck=80.0 + i)
+        _unit(new, "mediapipe-keypoints", sequence, 0, 90.0 + i - i / 10, facing, about_neck=80.0 + i)
+        _unit(base, "mediapipe-keypoints", sequence, 97, 100.0 + 10 * i, facing)
+        _unit(new, "mediapipe-keypoints", sequence, 97, 100.0 + 10 * i + (1.0 if i == 0 else -2.0 - i), facing)
+    assert tracking_diff.main([str(base), str(new), "--unseen-seeds", "97"]) == 0
+    out = capsys.readouterr().out
+    # tuned on: medians 102.5 -> 92.25 (differences -10 .. -10.5), none worse; about the neck unchanged
+    assert f"| mediapipe-keypoints | tuned on | 6 | 102.5 → 92.2 | 82.5 → 82.5 | 6 / 0 | {2 / 2 ** 6:.3f}, – |" in out
+    # never used: differences +1, -3, -4, -5, -6, -7 mm: two better by more than 5 mm, none worse
+    assert f"| mediapipe-keypoints | never used | 6 | 125.0 → 120.5 | 50.0 → 50.0 | 2 / 0 | {4 / 2 ** 6:.3f}, – |" in out
