@@ -133,6 +133,11 @@ class TrackerConfig(JsonConfig):
         and right swapped on a frame whose detector shows the person's front pays
         :data:`~mocap.track.score.FRONT_SWAP_NATS` (a body turned round with swapped labels
         projects as the right one does); 0: off.
+    detector_3d_weight : float
+        With keypoints that carry the detector's own 3D (``Keypoints.world``: MediaPipe's world
+        landmarks) on a frame whose detector shows the front, the score per unit of the
+        detector-3D term (:func:`mocap.track.score.detector_3d_term`: the arms' bone directions
+        against the detector's, a truncated quadratic); 0: off.
     lifter_file : str or None
         The lifter's file (:meth:`mocap.track.lifter.Lifter.load`); None: the shipped one. An
         experiment's lifter trained without a subject is measured on that subject this way
@@ -205,6 +210,7 @@ class TrackerConfig(JsonConfig):
     lifter_weight: float = 0.5
     lifter_file: str | None = None
     labelling_weight: float = 1.0
+    detector_3d_weight: float = 1.0
     prior_weight: float = 0.05
     edge_weight: float = 2.0
     motion_weight: float = 1.0

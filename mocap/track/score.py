@@ -24,6 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mocap.body.skeleton import JOINT_INDEX
+
 #: Score of a candidate per unit of F (the region residual): the score's unit.
 REGION_WEIGHT = 50.0
 #: Motion term between hypotheses of consecutive frames: half the mean squared joint
@@ -83,6 +85,7 @@ TERMS: tuple[Term, ...] = (
     Term("prior", "prior_weight", "nats", beyond_paper=True),             # the pose prior's energy
     Term("lifter", "lifter_weight", "nats", beyond_paper=True),           # the lifter's energy at the joints
     Term("labelling", "labelling_weight", "nats", beyond_paper=True),     # the detector's front against the swap
+    Term("detector_3d", "detector_3d_weight", "truncated quadratic", beyond_paper=True),  # its arms' 3D directions
     Term("motion", "motion_weight", "truncated quadratic", pairwise=True),
 )
 #: The terms' names, :data:`TERMS` order.
@@ -149,6 +152,50 @@ def weighted_sum(values, w):
     for j in range(x.shape[-1]):
         total = total + np.where(np.isnan(x[..., j]), 0.0, w[j] * x[..., j])
     return total
+
+
+#: The detector-3D term: half the squared angle between a candidate's arm bone and the
+#: detector's (its world landmarks) over ``DETECTOR_3D_SIGMA_DEG**2``...
+DETECTOR_3D_SIGMA_DEG = 30.0
+#: ...at most this much a bone (a truncated quadratic: a bone the detector gets wrong costs a
+#: fixed price), averaged over the arms' four bones, each weighted by its joints' confidence.
+DETECTOR_3D_CAP = 4.0
+#: The arm bones the detector-3D term compares, by their joints' names.
+DETECTOR_3D_BONES: tuple[tuple[str, str], ...] = (("r_shoulder", "r_elbow"), ("r_elbow", "r_wrist"),
+                                                   ("l_shoulder", "l_elbow"), ("l_elbow", "l_wrist"))
+_BONE_ROWS = np.array([[JOINT_INDEX[a], JOINT_INDEX[b]] for a, b in DETECTOR_3D_BONES])
+
+
+def detector_3d_term(joints, world, confidence) -> float:
+    """The detector-3D term of a candidate before its weight: over the arms' bones
+    (:data:`DETECTOR_3D_BONES`), the confidence-weighted mean of half the squared angle between the
+    candidate's bone and the detector's over ``DETECTOR_3D_SIGMA_DEG**2``, each at most
+    :data:`DETECTOR_3D_CAP`; NaN where no bone of the detector's is present.
+
+    Parameters
+    ----------
+    joints : array_like, shape (10, 3), metres
+        The candidate's joints (camera coordinates).
+    world : array_like, shape (10, 3), metres
+        The detector's 3D joints under the candidate's labelling (its own origin, camera axes; NaN
+        where absent).
+    confidence : array_like, shape (10,)
+        The detector's confidence of each joint under that labelling, in [0, 1].
+    """
+    j = np.asarray(joints, dtype=np.float64)
+    w = np.asarray(world, dtype=np.float64)
+    c = np.asarray(confidence, dtype=np.float64)
+    ours = j[_BONE_ROWS[:, 1]] - j[_BONE_ROWS[:, 0]]
+    theirs = w[_BONE_ROWS[:, 1]] - w[_BONE_ROWS[:, 0]]
+    weight = np.minimum(c[_BONE_ROWS[:, 0]], c[_BONE_ROWS[:, 1]])
+    present = np.isfinite(theirs).all(axis=1) & (weight > 0) & (np.linalg.norm(theirs, axis=1) > 0)
+    if not present.any():
+        return math.nan
+    a, b = ours[present], theirs[present]
+    cosine = np.sum(a * b, axis=1) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
+    angle = np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0)))
+    cost = np.minimum(0.5 * (angle / DETECTOR_3D_SIGMA_DEG) ** 2, DETECTOR_3D_CAP)
+    return float(np.sum(weight[present] * cost) / np.sum(weight[present]))
 
 
 def labelling_term(shows_front: bool | None, swapped: bool) -> float:
@@ -253,6 +300,9 @@ class ScoredCandidate:
         The lifter term (:meth:`~mocap.track.proposals.LifterSource.energy`); NaN on frames not lifted.
     labelling : float, nats
         :func:`labelling_term`; NaN on frames without keypoints.
+    detector_3d : float
+        :func:`detector_3d_term` on frames whose detector shows the front and gave its 3D; NaN
+        elsewhere.
     motion : ndarray, shape (K_prev,), float64
         The motion term (:func:`motion_term`) from each hypothesis of the previous frame's beam.
     unary : float
@@ -268,6 +318,7 @@ class ScoredCandidate:
     prior: float
     lifter: float
     labelling: float
+    detector_3d: float
     motion: np.ndarray
     unary: float
 

@@ -80,8 +80,8 @@ from mocap.track.lifter import LiftedHypotheses, Lifter
 from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, arm_reach_proposals, jump_proposals,
                                    reach_jobs, unexplained_hands)
 from mocap.track.registration import Registration, failed_residuals, register
-from mocap.track.score import (MOTION, UNARY_TERMS, ScoredCandidate, labelling_term, transition_term, weighted_sum,
-                               weights)
+from mocap.track.score import (MOTION, UNARY_TERMS, ScoredCandidate, detector_3d_term, labelling_term, transition_term,
+                               weighted_sum, weights)
 from mocap.track.smooth import Smoother
 
 #: Arm angles (degrees) of :meth:`Tracker.warm_up`'s pose: both forearms raised in front, where
@@ -420,18 +420,19 @@ class Tracker:
                           if lifted is not None and keypoint_cost is not None else None)
         lifts = (lifted, lifted_swapped)
         # every other registration is scored on the thread that ran it, with the detector's
-        # labels where it shows the person's front (None: no keypoints)
-        front = None if keypoint_cost is None else keypoints.shows_front()
+        # labels where it shows the person's front, and its 3D there (None: no keypoints)
+        cues = _Cues.of(keypoints if keypoint_cost is not None else None)
+        front = None if cues is None else cues.front
         # the front evidence in use (the labelling term on): a leader reading it swapped is offered
         # the way back (the torso's flip refined, a beam place facing the other way)
         contested = bool(front) and cfg.labelling_weight > 0
-        score = functools.partial(self._scored, lifts=lifts, front=front)
+        score = functools.partial(self._scored, lifts=lifts, cues=cues)
         # what needs no leader runs beside it: the proposal stage (whose ranking this thread
         # waits for), the beam's other hypotheses
         proposed = []
         if self.sources and cfg.proposals_refined > 0:
             context = ProposalContext(lifted=lifted, lifted_swapped=lifted_swapped)
-            rough = functools.partial(self._rough_unary, lifts=lifts, front=front)
+            rough = functools.partial(self._rough_unary, lifts=lifts, cues=cues)
             proposed = [self._propose(source, prepared, context, rough, score, work) for source in self.sources]
         tracked = [work.submit(_fit, score, h.pose, cfg, cfg.hypothesis_evaluations)
                    for h in self._beam[1:cfg.beam] if cfg.hypothesis_evaluations > 0]   # past the beam: mirrors
@@ -495,38 +496,42 @@ class Tracker:
                           self._pool)
 
     def _terms(self, region: float, edge: float, keypoint: float, pose: np.ndarray, joints: np.ndarray,
-               lifted: LiftedHypotheses | None, front: bool | None = None, swapped: bool = False) -> np.ndarray:
+               lifted: LiftedHypotheses | None, cues: "_Cues | None" = None, swapped: bool = False) -> np.ndarray:
         """The values of a candidate's unary terms before their weights, shape (len(UNARY_TERMS),),
         :data:`~mocap.track.score.TERMS` order (see :class:`ScoredCandidate`; NaN: does not apply);
-        ``front``: the frame's detector shows the person's front (None: no keypoints), ``swapped``:
-        the candidate reads them swapped."""
+        ``cues``: the frame's detector's front and 3D (None: no keypoints), ``swapped``: the
+        candidate reads its keypoints swapped."""
         cfg = self.config
         prior = self.prior.energy(pose) if self.prior is not None and cfg.prior_weight > 0 else math.nan
         lifter = self.lifting.energy(lifted, joints) if lifted is not None and cfg.lifter_weight > 0 else math.nan
+        front = None if cues is None else cues.front
         labelling = labelling_term(front, swapped) if cfg.labelling_weight > 0 else math.nan
+        detector_3d = math.nan
+        if cues is not None and cues.world is not None and cfg.detector_3d_weight > 0:
+            detector_3d = detector_3d_term(joints, cues.world[swapped], cues.confidence[swapped])
         values = {"region": region, "edge": edge, "keypoint": keypoint, "prior": prior, "lifter": lifter,
-                  "labelling": labelling}
+                  "labelling": labelling, "detector_3d": detector_3d}
         return np.array([values[t.name] for t in UNARY_TERMS], dtype=np.float64)
 
     def _scored(self, costs: "_FrameCosts", reg: Registration, *,
-                lifts: tuple[LiftedHypotheses | None, LiftedHypotheses | None], front: bool | None) -> "_Scored":
+                lifts: tuple[LiftedHypotheses | None, LiftedHypotheses | None], cues: "_Cues | None") -> "_Scored":
         """A registration's joints, the labelling its keypoint distance takes, and its unary
-        terms (``lifts``, ``front``: as :meth:`_rough_unary`'s)."""
+        terms (``lifts``, ``cues``: as :meth:`_rough_unary`'s)."""
         joints = self.model.joint_positions(reg.pose)
         swapped = costs.keypoint is not None and costs.keypoint.labelling(reg.pose)
         terms = self._terms(reg.region_residual, reg.edge_residual, reg.keypoint_residual, reg.pose, joints,
-                            lifts[swapped], front, swapped)
+                            lifts[swapped], cues, swapped)
         return _Scored(reg, joints, bool(swapped), terms)
 
     def _rough_unary(self, costs: "_FrameCosts", pose: np.ndarray, *,
-                     lifts: tuple[LiftedHypotheses | None, LiftedHypotheses | None], front: bool | None) -> float:
+                     lifts: tuple[LiftedHypotheses | None, LiftedHypotheses | None], cues: "_Cues | None") -> float:
         """The unary score of an unrefined pose (one evaluation of each cost): what ranks proposals.
         ``lifts``: the frame's lifted hypotheses under the detector's labelling and the swapped
         one; the pose pays the lifter energy and the labelling term of the labelling its keypoint
-        distance takes; ``front``: the detector shows the person's front (None: no keypoints)."""
+        distance takes; ``cues``: the detector's front and 3D (:class:`_Cues`; None: no keypoints)."""
         keypoint, swapped = (math.nan, False) if costs.keypoint is None else costs.keypoint.value_and_labelling(pose)
         return weighted_sum(self._terms(costs.region.evaluate_unchecked(pose), costs.edge(pose), keypoint, pose,
-                                        self.model.joint_positions(pose), lifts[swapped], front, swapped),
+                                        self.model.joint_positions(pose), lifts[swapped], cues, swapped),
                             self.weights)
 
     def _hypothesis(self, reg: Registration, origin: str, joints: np.ndarray, terms: np.ndarray,
@@ -753,6 +758,29 @@ class _FrameWork:
             return task(costs, *args)
         finally:
             self._free.put(costs)
+
+
+@dataclass(frozen=True)
+class _Cues:
+    """What a frame's keypoints say beyond their 2D: whether the detector shows the person's front
+    (:meth:`~mocap.io.keypoints.Keypoints.shows_front`), and there its 3D joints and confidences
+    under the detector's labelling and the swapped one (index 0 and 1; None: no 3D, or no front)."""
+
+    front: bool
+    world: tuple[np.ndarray, np.ndarray] | None
+    confidence: tuple[np.ndarray, np.ndarray] | None
+
+    @classmethod
+    def of(cls, keypoints) -> "_Cues | None":
+        """The cues of a frame's :class:`~mocap.io.keypoints.Keypoints` (None without keypoints)."""
+        if keypoints is None:
+            return None
+        front = keypoints.shows_front()
+        world = keypoints.world
+        if not front or world is None or not np.isfinite(world).any():
+            return cls(front, None, None)
+        rows = list(SWAPPED_JOINTS)
+        return cls(front, (world, world[rows]), (keypoints.confidence, keypoints.confidence[rows]))
 
 
 @dataclass
