@@ -210,7 +210,7 @@ class TrackerConfig(JsonConfig):
     lifter_weight: float = 0.5
     lifter_file: str | None = None
     labelling_weight: float = 1.0
-    detector_3d_weight: float = 1.0
+    detector_3d_weight: float = 0.3
     prior_weight: float = 0.05
     edge_weight: float = 2.0
     motion_weight: float = 1.0

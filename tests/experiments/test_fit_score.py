@@ -9,14 +9,14 @@ from mocap.track import TrackerConfig
 from mocap.track.score import REGION_WEIGHT
 
 #: Weights that make the synthetic candidates' best by construction (one per term).
-TRUE_WEIGHTS = np.array([50.0, 2.0, 1.5, 0.05, 0.8, 0.6, 1.2])
+TRUE_WEIGHTS = np.array([50.0, 2.0, 1.5, 0.05, 0.8, 0.6, 0.9, 1.2])
 
 
 def synthetic(frames=300, per_frame=6, seed=0, noise=0.0):
     """Frames whose candidates' error about the neck rises with their score under ``TRUE_WEIGHTS``
     (so the best candidate of every frame is the lowest-scored one), each term on its own scale."""
     rng = np.random.default_rng(seed)
-    scales = np.array([0.05, 1.0, 2.0, 20.0, 3.0, 3.0, 2.0])
+    scales = np.array([0.05, 1.0, 2.0, 20.0, 3.0, 3.0, 2.0, 2.0])
     x = rng.normal(size=(frames * per_frame, len(TERMS))) * scales + 3 * scales
     score = x @ TRUE_WEIGHTS + noise * rng.normal(size=len(x))
     frame = np.repeat(np.arange(frames), per_frame)
@@ -67,7 +67,7 @@ def test_choose_equals_a_loop_and_reads_missing_terms_as_zero():
     features[::7, 2] = np.nan                      # a term that does not apply adds nothing
     data = Candidates(frame=data.frame, features=features, error_mm=data.error_mm + 60.0,
                       camera_error_mm=data.camera_error_mm, origin=data.origin)
-    for w in (TRUE_WEIGHTS, default_weights(), np.array([1.0, 0, 0, 0, 0, 0, 0])):
+    for w in (TRUE_WEIGHTS, default_weights(), np.array([1.0, 0, 0, 0, 0, 0, 0, 0])):
         c = choose(data, w)
         mean, failing, missed = naive_choose(data, w)
         assert c.mean_error_mm == pytest.approx(mean)
@@ -75,17 +75,17 @@ def test_choose_equals_a_loop_and_reads_missing_terms_as_zero():
 
 
 def test_weights_in_tracker_units_make_a_config():
-    w = np.array([25.0, 1.0, 1.0, 0.1, 0.25, 0.5, 0.5])
+    w = np.array([25.0, 1.0, 1.0, 0.1, 0.25, 0.5, 0.5, 0.5])
     config = tracker_config(w)
     assert config == TrackerConfig(edge_weight=2.0, keypoint_weight=2.0, prior_weight=0.2, lifter_weight=0.5,
-                                   labelling_weight=1.0, motion_weight=1.0)
-    np.testing.assert_allclose(default_weights(), [REGION_WEIGHT, 2.0, 2.0, 0.05, 0.5, 1.0, 1.0])
+                                   labelling_weight=1.0, detector_3d_weight=1.0, motion_weight=1.0)
+    np.testing.assert_allclose(default_weights(), [REGION_WEIGHT, 2.0, 2.0, 0.05, 0.5, 1.0, 1.0, 1.0])
     base = TrackerConfig(beam=5)                       # the other settings of a base config are kept
     assert tracker_config(w, base=base) == TrackerConfig(beam=5, edge_weight=2.0, keypoint_weight=2.0,
                                                          prior_weight=0.2, lifter_weight=0.5, labelling_weight=1.0,
-                                                         motion_weight=1.0)
+                                                         detector_3d_weight=1.0, motion_weight=1.0)
     with pytest.raises(ValueError):
-        in_tracker_units(np.zeros(7))
+        in_tracker_units(np.zeros(8))
 
 
 def test_decompose_splits_the_failing_frames_into_their_four_causes():
@@ -122,7 +122,7 @@ def test_offline_decoding_equals_the_best_of_every_path():
     joints = rng.normal(0, 0.05, size=(n, 10, 3))
     c = Candidates(frame=frame, features=features, error_mm=np.zeros(n), camera_error_mm=np.zeros(n),
                    origin=np.array(["tracked"] * n))
-    w = np.array([50.0, 2.0, 2.0, 0.05, 0.5, 1.0, 1.5])
+    w = np.array([50.0, 2.0, 2.0, 0.05, 0.5, 1.0, 1.0, 1.5])
     rows = np.split(np.arange(n), np.cumsum(sizes)[:-1])
 
     def cost(path):
@@ -155,9 +155,9 @@ def test_a_term_that_never_applied_keeps_its_default_weight():
     from experiments.fit_score import keep_unseen
 
     features = np.ones((4, len(TERMS)))
-    features[:, [2, 4, 5]] = np.nan                  # no keypoints: no keypoint, lifter or labelling term
-    w = keep_unseen(np.array([25.0, 1.0, 0.0, 0.1, 0.0, 0.0, 0.5]), features)
-    np.testing.assert_allclose(in_tracker_units(w), [50.0, 2.0, 2.0, 0.2, 0.5, 1.0, 1.0])
+    features[:, [2, 4, 5, 6]] = np.nan               # no keypoints: no keypoint, lifter, labelling or 3D term
+    w = keep_unseen(np.array([25.0, 1.0, 0.0, 0.1, 0.0, 0.0, 0.0, 0.5]), features)
+    np.testing.assert_allclose(in_tracker_units(w), [50.0, 2.0, 2.0, 0.2, 0.5, 1.0, 1.0, 1.0])
 
 
 def write_record(path, frames=12, per_frame=3, seed=0):

@@ -31,20 +31,21 @@ def test_every_term_is_an_attribute_of_a_scored_candidate_and_its_weight_a_valid
 
 def test_the_weights_of_a_config_in_the_tables_order_and_back():
     config = TrackerConfig(edge_weight=3.0, keypoint_weight=1.5, prior_weight=0.1, lifter_weight=0.7,
-                           labelling_weight=0.4, motion_weight=0.25)
+                           labelling_weight=0.4, detector_3d_weight=0.3, motion_weight=0.25)
     w = weights(config)
-    np.testing.assert_array_equal(w, [REGION_WEIGHT, 3.0, 1.5, 0.1, 0.7, 0.4, 0.25])
+    np.testing.assert_array_equal(w, [REGION_WEIGHT, 3.0, 1.5, 0.1, 0.7, 0.4, 0.3, 0.25])
     assert with_weights(TrackerConfig(beam=4), w) == dataclasses.replace(config, beam=4)
     with pytest.raises(ValueError):
         with_weights(config, w[:5])
 
 
 def test_a_scored_candidates_values_follow_the_table():
-    c = ScoredCandidate.from_terms("tracked", np.zeros(23), np.zeros((10, 3)), [0.1, 2.0, math.nan, 3.0, 4.0, 0.5],
+    c = ScoredCandidate.from_terms("tracked", np.zeros(23), np.zeros((10, 3)), [0.1, 2.0, math.nan, 3.0, 4.0, 0.5, 0.6],
                                    np.array([5.0, 6.0]), 7.0)
-    assert (c.region, c.edge, c.prior, c.lifter, c.labelling, c.unary) == (0.1, 2.0, 3.0, 4.0, 0.5, 7.0)
+    assert (c.region, c.edge, c.prior, c.lifter, c.labelling, c.detector_3d, c.unary) == (0.1, 2.0, 3.0, 4.0, 0.5, 0.6,
+                                                                                           7.0)
     assert math.isnan(c.keypoint)
-    np.testing.assert_array_equal(c.values(), [0.1, 2.0, math.nan, 3.0, 4.0, 0.5, 5.0])
+    np.testing.assert_array_equal(c.values(), [0.1, 2.0, math.nan, 3.0, 4.0, 0.5, 0.6, 5.0])
     np.testing.assert_array_equal(c.values(previous=1)[MOTION], 6.0)
     assert math.isnan(c.values(previous=2)[MOTION])
     with pytest.raises(ValueError):
@@ -56,7 +57,7 @@ def test_the_weighted_sum_leaves_out_what_does_not_apply_and_is_the_same_float_a
     values = rng.uniform(0, 10, size=(40, len(UNARY_TERMS)))
     values[::3, 2] = np.nan                                   # no keypoints
     values[::4, 3:5] = np.nan                                 # no prior, not lifted
-    w = np.array([50.0, 2.0, 1.5, 0.05, 0.5, 1.0, 1.0])
+    w = np.array([50.0, 2.0, 1.5, 0.05, 0.5, 1.0, 1.0, 1.0])
     together = weighted_sum(values, w)
     for row, total in zip(values, together):
         expected = 0.0
@@ -66,7 +67,7 @@ def test_the_weighted_sum_leaves_out_what_does_not_apply_and_is_the_same_float_a
         assert weighted_sum(row, w) == expected == total      # bit for bit
     assert isinstance(weighted_sum(values[0], w), float)
     with pytest.raises(ValueError):
-        weighted_sum(np.ones(8), w)
+        weighted_sum(np.ones(9), w)
 
 
 def test_the_motion_term_is_half_the_mean_squared_displacement_truncated():
@@ -113,11 +114,13 @@ def test_the_decoders_motion_term_adds_the_joints_and_the_heading():
 
 def test_the_papers_method_switches_off_the_terms_beyond_the_paper():
     paper = TrackerConfig.paper()
-    assert (paper.keypoint_weight, paper.prior_weight, paper.lifter_weight, paper.labelling_weight) == (0.0,) * 4
+    assert (paper.keypoint_weight, paper.prior_weight, paper.lifter_weight, paper.labelling_weight,
+            paper.detector_3d_weight) == (0.0,) * 5
     assert (paper.edge_weight, paper.motion_weight) == (TrackerConfig().edge_weight, TrackerConfig().motion_weight)
     assert paper == TrackerConfig(recovery=False, hand_reacquisition=False, beam=1, jumps=False, lag=0,
                                   gradient_step=False, mirrors=False, prior_weight=0.0, keypoint_weight=0.0,
-                                  lifter_weight=0.0, labelling_weight=0.0, smoothing=SmootherConfig(on=False))
+                                  lifter_weight=0.0, labelling_weight=0.0, detector_3d_weight=0.0,
+                                  smoothing=SmootherConfig(on=False))
 
 
 def test_the_labelling_term_prices_a_swapped_reading_only_where_the_detector_shows_the_front():
@@ -144,3 +147,34 @@ def test_keypoints_show_the_front_when_the_left_shoulder_is_on_the_images_right(
     confidence[JOINT_INDEX["r_shoulder"]] = 0.0
     assert not Keypoints(uv, confidence).shows_front()                   # it cannot tell
     assert not Keypoints.empty().shows_front()
+
+
+def test_the_detector_3d_term_is_the_arms_bone_angles_truncated_and_weighted_by_confidence():
+    """Against a NumPy loop by hand: the arms' four bones, half the squared angle over sigma², each
+    at most the cap, the mean weighted by the bones' least confidence; the same bones give 0 (any
+    scale or offset of the detector's 3D), a joint absent drops its bones, none present is NaN."""
+    from mocap.body.skeleton import JOINT_INDEX
+    from mocap.track.score import (DETECTOR_3D_BONES, DETECTOR_3D_CAP, DETECTOR_3D_SIGMA_DEG,
+                                   detector_3d_term)
+
+    rng = np.random.default_rng(3)
+    joints = rng.normal(size=(10, 3))
+    assert detector_3d_term(joints, 2.0 * joints + 5.0, np.ones(10)) == pytest.approx(0.0, abs=1e-12)
+    world = rng.normal(size=(10, 3))
+    confidence = rng.uniform(0.2, 1.0, size=10)
+    total = weight_sum = 0.0
+    for a, b in DETECTOR_3D_BONES:
+        ours = joints[JOINT_INDEX[b]] - joints[JOINT_INDEX[a]]
+        theirs = world[JOINT_INDEX[b]] - world[JOINT_INDEX[a]]
+        angle = math.degrees(math.acos(np.dot(ours, theirs) / np.linalg.norm(ours) / np.linalg.norm(theirs)))
+        w = min(confidence[JOINT_INDEX[a]], confidence[JOINT_INDEX[b]])
+        total += w * min(0.5 * (angle / DETECTOR_3D_SIGMA_DEG) ** 2, DETECTOR_3D_CAP)
+        weight_sum += w
+    assert detector_3d_term(joints, world, confidence) == pytest.approx(total / weight_sum, rel=1e-12)
+    flipped = joints.copy()
+    flipped[[JOINT_INDEX["r_elbow"], JOINT_INDEX["r_wrist"]]] *= -1.0       # far from every bone's direction
+    assert detector_3d_term(flipped, joints, np.ones(10)) <= DETECTOR_3D_CAP
+    absent = world.copy()
+    absent[JOINT_INDEX["l_elbow"]] = np.nan
+    assert np.isfinite(detector_3d_term(joints, absent, confidence))
+    assert math.isnan(detector_3d_term(joints, np.full((10, 3), np.nan), confidence))
