@@ -25,12 +25,13 @@ from typing import Protocol
 
 import numpy as np
 
-from mocap.body.ik import reach_arm
+from mocap.body.ik import place_arm, reach_arm
 from mocap.body.jumps import SIDES, arm_jumps, ray_sphere_depths, torso_flip
 from mocap.body.model import BodyModel
 from mocap.body.pose import PARAMETER_NAMES, clamp_to_limits
 from mocap.body.skeleton import JOINT_INDEX
 from mocap.imaging.blobs import label_blobs
+from mocap.io.keypoints import Keypoints
 from mocap.labels import class_label
 from mocap.render.camera import Camera
 from mocap.track.config import MAX_REACH_TARGETS, MIN_SKIN_BLOB_PIXELS, TrackerConfig
@@ -79,10 +80,17 @@ class ProposalContext:
         (:meth:`mocap.io.keypoints.Keypoints.swapped`): the body the keypoints show if the
         detector named the person's left arm the right one; None where ``lifted`` is, or where
         the labellings are not both scored (``keypoint_weight`` 0).
+    keypoints : Keypoints or None
+        The frame's 2D keypoints (with the detector's 3D in ``world`` where it gave one).
+    pose : ndarray, shape (23,), or None
+        The beam leader's pose as the frame starts (the last frame's): where proposals that keep
+        the torso take it from.
     """
 
     lifted: LiftedHypotheses | None = None
     lifted_swapped: LiftedHypotheses | None = None
+    keypoints: Keypoints | None = None
+    pose: np.ndarray | None = None
 
 
 class ProposalSource(Protocol):
@@ -312,3 +320,65 @@ class LifterSource:
         swapped labelling's (:attr:`ProposalContext.lifted_swapped`), if any."""
         return [Proposal(np.array(q, dtype=np.float64), self.origin)
                 for lifted in (context.lifted, context.lifted_swapped) if lifted is not None for q in lifted.poses]
+
+
+#: The arm's joints a detector's 3D places, shoulder first (:func:`detector_arm_targets`).
+_ARM_CHAIN = ("shoulder", "elbow", "wrist", "hand")
+
+
+def detector_arm_targets(joints: np.ndarray, world: np.ndarray, side: str) -> np.ndarray | None:
+    """Where one arm's elbow, wrist and hand go along the detector's 3D bones, from our shoulder.
+
+    Each of our bones (shoulder-elbow, elbow-wrist, wrist-hand) keeps its length and takes the
+    direction of the detector's; a missing hand takes the forearm's direction.
+
+    Parameters
+    ----------
+    joints : ndarray, shape (10, 3), metres
+        Our pose's joints (camera coordinates).
+    world : ndarray, shape (10, 3), metres
+        The detector's 3D joints (camera axes, its own origin; NaN where absent).
+    side : {"r", "l"}
+
+    Returns
+    -------
+    ndarray, shape (3, 3), metres, or None
+        Camera coordinates of the elbow, wrist and hand; None where the detector lacks the
+        shoulder, elbow or wrist, or gives a bone of no length.
+    """
+    chain = [JOINT_INDEX[f"{side}_{j}"] for j in _ARM_CHAIN]
+    w = np.array(world[chain], dtype=np.float64)
+    if not np.isfinite(w[:3]).all():
+        return None
+    if not np.isfinite(w[3]).all():
+        w[3] = w[2] + (w[2] - w[1])
+    bones = np.diff(w, axis=0)
+    norms = np.linalg.norm(bones, axis=1)
+    if not (norms > 1e-9).all():
+        return None
+    lengths = np.linalg.norm(np.diff(joints[chain], axis=0), axis=1)
+    return joints[chain[0]] + np.cumsum(bones / norms[:, None] * lengths[:, None], axis=0)
+
+
+@dataclass(frozen=True)
+class DetectorArmsSource:
+    """Proposals from the keypoint detector's own 3D arms (:attr:`mocap.io.keypoints.Keypoints.world`):
+    on a frame whose detector shows the person's front (where its labels are right, issue 49),
+    the beam leader's pose with each arm placed along the detector's bones
+    (:func:`detector_arm_targets`, :func:`~mocap.body.ik.place_arm`). Nothing elsewhere, and
+    nothing without the detector's 3D."""
+
+    model: BodyModel
+    origin: str = "detector3d"
+
+    def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
+        keypoints, pose = context.keypoints, context.pose
+        if keypoints is None or pose is None or keypoints.world is None or not keypoints.shows_front():
+            return []
+        joints = self.model.joint_positions(pose)
+        q, placed = np.array(pose, dtype=np.float64), False
+        for side in SIDES:
+            targets = detector_arm_targets(joints, keypoints.world, side)
+            if targets is not None:
+                q, placed = place_arm(q, self.model.skeleton, side, targets).pose, True
+        return [Proposal(q, self.origin)] if placed else []

@@ -77,8 +77,8 @@ from mocap.track.branches import depth_alternatives
 from mocap.track.config import JUMPS_REFINED, MERGE_DISTANCE_M, RECOVERY_STEP_SCALE, TrackerConfig, split_budget
 from mocap.track.decode import backtrack, viterbi_step
 from mocap.track.lifter import LiftedHypotheses, Lifter
-from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, arm_reach_proposals, jump_proposals,
-                                   reach_jobs, unexplained_hands)
+from mocap.track.proposals import (DetectorArmsSource, LifterSource, ProposalContext, ProposalSource,
+                                   arm_reach_proposals, jump_proposals, reach_jobs, unexplained_hands)
 from mocap.track.registration import Registration, failed_residuals, register
 from mocap.track.score import (MOTION, UNARY_TERMS, ScoredCandidate, labelling_term, transition_term, weighted_sum,
                                weights)
@@ -214,7 +214,7 @@ class Tracker:
         self.weights: np.ndarray = weights(config)
         #: The lifting (None when ``config`` does not use the lifter); also the default keypoint source.
         self.lifting: LifterSource | None = LifterSource(lifter, config.lifter_file) if config.uses_lifter else None
-        self.sources: tuple[ProposalSource, ...] = tuple(proposal_sources(config, self.lifting) if sources is None
+        self.sources: tuple[ProposalSource, ...] = tuple(proposal_sources(config, self.lifting, model) if sources is None
                                                          else sources)
         self.candidates: list[tuple[str, np.ndarray]] = []
         #: The last frame's candidates with their score's terms (empty after an empty frame).
@@ -430,7 +430,8 @@ class Tracker:
         # waits for), the beam's other hypotheses
         proposed = []
         if self.sources and cfg.proposals_refined > 0:
-            context = ProposalContext(lifted=lifted, lifted_swapped=lifted_swapped)
+            context = ProposalContext(lifted=lifted, lifted_swapped=lifted_swapped, keypoints=keypoints,
+                                      pose=self._beam[0].pose)
             rough = functools.partial(self._rough_unary, lifts=lifts, front=front)
             proposed = [self._propose(source, prepared, context, rough, score, work) for source in self.sources]
         tracked = [work.submit(_fit, score, h.pose, cfg, cfg.hypothesis_evaluations)
@@ -874,15 +875,19 @@ def _result(frame: _Frame, k: int) -> FrameResult:
                        decoded_pose=h.pose.copy(), labels_swapped=h.swapped)
 
 
-def proposal_sources(config: TrackerConfig, lifting: LifterSource | None = None) -> list[ProposalSource]:
+def proposal_sources(config: TrackerConfig, lifting: LifterSource | None = None,
+                     model: BodyModel | None = None) -> list[ProposalSource]:
     """The proposal stage's sources that ``config`` switches on: with ``lifter_weight`` > 0 the
     learned lifter's hypotheses of the frame's keypoints (``lifting``, or a new
     :class:`LifterSource` with the shipped lifter; it proposes nothing on frames without
     keypoints). It replaced the arms' one-at-a-time inverse kinematics on the keypoints (issue 29:
     docs/research-log.md)."""
-    if not config.uses_lifter:
-        return []
-    return [lifting if lifting is not None else LifterSource(path=config.lifter_file)]
+    sources: list[ProposalSource] = []
+    if config.uses_lifter:
+        sources.append(lifting if lifting is not None else LifterSource(path=config.lifter_file))
+    if model is not None:
+        sources.append(DetectorArmsSource(model))
+    return sources
 
 
 def track_prepared(prepared_frames, tracker: Tracker, *, first_index: int = 0, progress: bool = False,
