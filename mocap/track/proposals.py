@@ -28,7 +28,7 @@ import numpy as np
 from mocap.body.ik import place_arm, reach_arm
 from mocap.body.jumps import SIDES, arm_jumps, ray_sphere_depths, torso_flip
 from mocap.body.model import BodyModel
-from mocap.body.pose import PARAMETER_NAMES, clamp_to_limits
+from mocap.body.pose import HEADING, PARAMETER_INDEX, PARAMETER_NAMES, clamp_to_limits
 from mocap.body.skeleton import JOINT_INDEX
 from mocap.imaging.blobs import label_blobs
 from mocap.io.keypoints import Keypoints
@@ -365,8 +365,9 @@ class DetectorArmsSource:
     """Proposals from the keypoint detector's own 3D arms (:attr:`mocap.io.keypoints.Keypoints.world`):
     on a frame whose detector shows the person's front (where its labels are right, issue 49),
     the beam leader's pose with each arm placed along the detector's bones
-    (:func:`detector_arm_targets`, :func:`~mocap.body.ik.place_arm`). Nothing elsewhere, and
-    nothing without the detector's 3D."""
+    (:func:`detector_arm_targets`, :func:`~mocap.body.ik.place_arm`), where the leader too faces
+    the camera (its chest heading within 90 degrees of it): the detector's 3D of a front is not
+    put on a torso facing away. Nothing elsewhere, and nothing without the detector's 3D."""
 
     model: BodyModel
     origin: str = "detector3d"
@@ -374,6 +375,8 @@ class DetectorArmsSource:
     def propose(self, prepared, context: ProposalContext) -> list[Proposal]:
         keypoints, pose = context.keypoints, context.pose
         if keypoints is None or pose is None or keypoints.world is None or not keypoints.shows_front():
+            return []
+        if np.cos(pose[PARAMETER_INDEX[HEADING]]) <= 0.0:
             return []
         joints = self.model.joint_positions(pose)
         q, placed = np.array(pose, dtype=np.float64), False
