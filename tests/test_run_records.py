@@ -133,3 +133,31 @@ def test_the_session_rate_is_frames_over_the_wall_clock_after_the_first():
     assert clock.session_fps(0.0) == pytest.approx((len(ends) - 1) / (ends[-1] - ends[0]))
     assert clock.recent_fps() == pytest.approx(2.0)
     assert len(clock.recent) == SHOWN_RATE_FRAMES + 1
+
+
+def test_the_live_latency_quantiles_hold_to_half_a_percent_in_constant_memory():
+    """run.json's ``live.latency_ms`` (:class:`mocap.run.loop.LatencyRecord`) against NumPy's exact
+    inverted-CDF quantiles of the same latencies: within (r - 1) / (r + 1) relative; the bins do
+    not grow with the number of frames once their range is covered."""
+    from mocap.run.loop import LATENCY_BIN_RATIO, MIN_LATENCY_MS, LatencyRecord
+
+    rng = np.random.default_rng(7)
+    latencies = np.concatenate([rng.lognormal(np.log(120.0), 0.6, 20_000), [0.0, -3.0, 40.0, 40.0, 5e4]])
+    record = LatencyRecord()
+    with pytest.raises(ValueError, match="no latency"):
+        record.quantile(0.5)
+    for ms in latencies:
+        record.add(ms)
+    tolerance = (LATENCY_BIN_RATIO - 1) / (LATENCY_BIN_RATIO + 1)
+    exact = np.maximum(latencies, MIN_LATENCY_MS)          # the record counts below its floor as the floor
+    for q in (0.001, 0.1, 0.5, 0.9, 0.99, 1.0):
+        expected = np.quantile(exact, q, method="inverted_cdf")
+        assert abs(record.quantile(q) - expected) <= tolerance * expected * (1 + 1e-9), q
+    assert record.count == len(latencies) and record.last_ms == 5e4
+    bins = len(record.counts)
+    for ms in rng.lognormal(np.log(120.0), 0.3, 20_000):         # the same range again: no new bin
+        record.add(float(np.clip(ms, latencies.min(), 5e4)))
+    assert len(record.counts) <= bins
+    assert bins < 1.1 * np.log(5e4 / MIN_LATENCY_MS) / np.log(LATENCY_BIN_RATIO)
+    with pytest.raises(ValueError, match="q must be"):
+        record.quantile(0.0)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import collections
 import json
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -369,7 +370,7 @@ class RunLoop:
         self.dark: dict[int, bool] = {}            # dark flags of the frames pushed but not decided yet
         self.pictures: dict[int, np.ndarray] = {}  # overlay-size frames not decided yet
         self.step_clock = StepClock()              # when this session's frames were done
-        self.latency_ms: list[float] = []          # live: each frame's arrival to its decision
+        self.latency = LatencyRecord()             # live: each frame's arrival to its decision
         self.clock: float | None = None            # live: the reader's clock (frame times count from it)
         self.colour_frame: int | None = None
         self.overlay: OverlayWriter | None = None
@@ -471,8 +472,8 @@ class RunLoop:
             if recent_fps is not None:
                 shown = {"fps": f"{recent_fps:.0f}", **shown}
             if self.frames_in.live and self.clock is not None:
-                self.latency_ms.append(1e3 * (time.perf_counter() - self.clock - when))
-                shown["latency"] = f"{self.latency_ms[-1]:.0f}ms"
+                self.latency.add(1e3 * (time.perf_counter() - self.clock - when))
+                shown["latency"] = f"{self.latency.last_ms:.0f}ms"
             if self.bar is not None:      # shown at the bar's next refresh (tqdm's mininterval), not now
                 self.bar.set_postfix(refresh=False, **shown)
 
@@ -608,14 +609,14 @@ class RunLoop:
     def live_record(self, table: PoseTable) -> dict | None:
         """``run.json`` ``live`` of a live run: frames dropped (the gaps between the tracked ones:
         the run was slower than the camera) and the latency from a frame's arrival to its pose
-        (median and 90th percentile, milliseconds; the decoding's ``lag`` included); None for a file."""
+        (median and 90th percentile, milliseconds, within :data:`LATENCY_BIN_RATIO`'s half-width:
+        :class:`LatencyRecord`; the decoding's ``lag`` included); None for a file."""
         if not self.frames_in.live:
             return None
         frames = np.asarray(table.frames, dtype=np.int64)
         record = {"dropped_frames": int(frames[-1] - frames[0] + 1 - len(frames)) if len(frames) else 0}
-        if self.latency_ms:
-            record["latency_ms"] = {"median": float(np.median(self.latency_ms)),
-                                    "p90": float(np.percentile(self.latency_ms, 90))}
+        if self.latency.count:
+            record["latency_ms"] = {"median": self.latency.quantile(0.5), "p90": self.latency.quantile(0.9)}
         return record
 
 
@@ -660,6 +661,51 @@ class StepClock:
     def session_fps(self, started: float) -> float | None:
         """The session's rate (:func:`session_fps`) for a loop started at ``started``."""
         return session_fps(started, self.first, self.recent[-1] if self.recent else None, self.count)
+
+
+#: Each of :class:`LatencyRecord`'s bins is this many times wider than the one below it.
+LATENCY_BIN_RATIO = 1.01
+#: Latencies below this (milliseconds) are counted in the lowest bin.
+MIN_LATENCY_MS = 0.01
+
+
+@dataclass
+class LatencyRecord:
+    """A live session's latencies (milliseconds, a frame's arrival to its decided pose) in the same
+    memory however long the run: counts in logarithmic bins, bin ``k`` holding
+    (``r**(k-1)``, ``r**k``] for ``r`` = :data:`LATENCY_BIN_RATIO` (at most about 2,100 bins from
+    :data:`MIN_LATENCY_MS` to three hours), and the last latency. A quantile is its bin's centre
+    ``2 r**k / (r + 1)`` (DDSketch's estimate), within ``(r - 1) / (r + 1)`` (0.5 %) of the exact
+    inverted-CDF quantile of the latencies added."""
+
+    counts: collections.Counter = field(default_factory=collections.Counter)
+    count: int = 0
+    last_ms: float | None = None
+
+    def add(self, latency_ms: float) -> None:
+        """One frame's latency (milliseconds; below :data:`MIN_LATENCY_MS` counted as that)."""
+        self.last_ms = float(latency_ms)
+        self.count += 1
+        self.counts[math.ceil(math.log(max(latency_ms, MIN_LATENCY_MS)) / math.log(LATENCY_BIN_RATIO))] += 1
+
+    def quantile(self, q: float) -> float:
+        """The ``q`` quantile (0 < q <= 1) of the latencies added (milliseconds): the smallest
+        latency with at least ``q`` of them at or below it, as its bin's centre.
+
+        Raises
+        ------
+        ValueError
+            Before any latency, or ``q`` outside (0, 1].
+        """
+        if not self.count:
+            raise ValueError("no latency recorded")
+        if not 0.0 < q <= 1.0:
+            raise ValueError(f"q must be in (0, 1], got {q!r}")
+        bins = sorted(self.counts)
+        reached = np.cumsum([self.counts[k] for k in bins])
+        k = bins[int(np.searchsorted(reached, math.ceil(q * self.count)))]
+        r = LATENCY_BIN_RATIO
+        return float(2.0 * r ** k / (r + 1.0))
 
 
 @one_writer("out_dir")
