@@ -97,18 +97,14 @@ def diff_table(base: dict[str, Unit], new: dict[str, Unit], unseen: set[int]) ->
         lines = ["Every matched unit is the same."]
     lines += ["", "| configuration | seeds | units same / changed | turned round | lost | evaluations a frame |",
               "|---|---|---|---|---|---|"]
-    for name in sorted({new[k].name for k in matched}):
-        for label, pick in (("tuned on", lambda u: u.seed not in unseen), ("never used", lambda u: u.seed in unseen)):
-            keys = [k for k in matched if new[k].name == name and pick(new[k])]
-            if not keys:
-                continue
-            same = sum(base[k].same_as(new[k]) for k in keys)
-            count = lambda units, field: sum(getattr(units[k], field) for k in keys)
-            evaluations = lambda units: np.mean([units[k].evaluations_per_frame for k in keys])
-            lines.append(f"| {name} | {label} | {same} / {len(keys) - same} | "
-                         f"{count(base, 'turned_round')} → {count(new, 'turned_round')} of {len(keys)} | "
-                         f"{count(base, 'lost')} → {count(new, 'lost')} | "
-                         f"{evaluations(base):.0f} → {evaluations(new):.0f} ({evaluations(new) / evaluations(base):.3f}x) |")
+    for name, label, keys in _groups(new, matched, unseen):
+        same = sum(base[k].same_as(new[k]) for k in keys)
+        count = lambda units, field: sum(getattr(units[k], field) for k in keys)
+        evaluations = lambda units: np.mean([units[k].evaluations_per_frame for k in keys])
+        lines.append(f"| {name} | {label} | {same} / {len(keys) - same} | "
+                     f"{count(base, 'turned_round')} → {count(new, 'turned_round')} of {len(keys)} | "
+                     f"{count(base, 'lost')} → {count(new, 'lost')} | "
+                     f"{evaluations(base):.0f} → {evaluations(new):.0f} ({evaluations(new) / evaluations(base):.3f}x) |")
     lines += ["", paired_table(base, new, matched, unseen)]
     only = len(set(new) - set(base))
     if only:
@@ -136,21 +132,27 @@ def paired_table(base: dict[str, Unit], new: dict[str, Unit], keys: list[str], u
     lines = ["| configuration | seeds | units | median MPJPE mm | median about the neck mm | "
              f"better / worse by > {PAIRED_MARGIN_MM:g} mm | Wilcoxon p: MPJPE, about the neck |",
              "|---|---|---|---|---|---|---|"]
-    for name in sorted({new[k].name for k in keys}):
-        for label, pick in (("tuned on", lambda u: u.seed not in unseen), ("never used", lambda u: u.seed in unseen)):
-            picked = [k for k in keys if new[k].name == name and pick(new[k])]
-            if not picked:
-                continue
-            field = lambda units, f: np.array([getattr(units[k], f) for k in picked], dtype=np.float64)
-            mpjpe = field(new, "mpjpe_mm") - field(base, "mpjpe_mm")
-            neck = field(new, "about_neck_mm") - field(base, "about_neck_mm")
-            lines.append(f"| {name} | {label} | {len(picked)} | "
-                         f"{np.median(field(base, 'mpjpe_mm')):.1f} → {np.median(field(new, 'mpjpe_mm')):.1f} | "
-                         f"{np.nanmedian(field(base, 'about_neck_mm')):.1f} → "
-                         f"{np.nanmedian(field(new, 'about_neck_mm')):.1f} | "
-                         f"{int(np.sum(mpjpe < -PAIRED_MARGIN_MM))} / {int(np.sum(mpjpe > PAIRED_MARGIN_MM))} | "
-                         f"{p_value(mpjpe)}, {p_value(neck)} |")
+    for name, label, picked in _groups(new, keys, unseen):
+        field = lambda units, f: np.array([getattr(units[k], f) for k in picked], dtype=np.float64)
+        mpjpe = field(new, "mpjpe_mm") - field(base, "mpjpe_mm")
+        neck = field(new, "about_neck_mm") - field(base, "about_neck_mm")
+        lines.append(f"| {name} | {label} | {len(picked)} | "
+                     f"{np.median(field(base, 'mpjpe_mm')):.1f} → {np.median(field(new, 'mpjpe_mm')):.1f} | "
+                     f"{np.nanmedian(field(base, 'about_neck_mm')):.1f} → "
+                     f"{np.nanmedian(field(new, 'about_neck_mm')):.1f} | "
+                     f"{int(np.sum(mpjpe < -PAIRED_MARGIN_MM))} / {int(np.sum(mpjpe > PAIRED_MARGIN_MM))} | "
+                     f"{p_value(mpjpe)}, {p_value(neck)} |")
     return "\n".join(lines)
+
+
+def _groups(units: dict[str, Unit], keys: list[str], unseen: set[int]):
+    """``(configuration, seed set, keys)`` for each configuration of ``keys`` and each of its seed
+    sets ("tuned on": seeds not in ``unseen``; "never used") that holds units."""
+    for name in sorted({units[k].name for k in keys}):
+        for label, pick in (("tuned on", lambda u: u.seed not in unseen), ("never used", lambda u: u.seed in unseen)):
+            picked = [k for k in keys if units[k].name == name and pick(units[k])]
+            if picked:
+                yield name, label, picked
 
 
 def _yes(flag: bool) -> str:
