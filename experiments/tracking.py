@@ -367,35 +367,49 @@ def main(argv=None) -> int:
             return 2
     from tqdm import tqdm
 
+    from experiments.units import UnpreparableSequence
+
     units = [(n, s, q) for n in names for s in seeds + unseen for q in sequences]
-    rows: dict[str, list[dict]] = {n: [] for n in names}
-    unseen_rows: dict[str, list[dict]] = {n: [] for n in names}
-    units_of: dict[str, list[tuple[int, str]]] = {n: [] for n in names}      # seeds, then unseen seeds
-    for name, seed, sequence in units:
-        units_of[name].append((seed, sequence))
-    units_of = {n: sorted(u, key=lambda su: su[0] not in seeds) for n, u in units_of.items()}
+    measured: dict[tuple[str, int, str], dict] = {}
+    left_out: dict[tuple[int, str], str] = {}      # (seed, sequence) -> why it cannot be prepared
     for name, seed, sequence in tqdm(units, desc="ablation", unit="sequence"):
-        (rows if seed in seeds else unseen_rows)[name].append(run_unit(args.out, name, sequence, seed))
+        if (seed, sequence) in left_out:
+            continue
+        try:
+            measured[name, seed, sequence] = run_unit(args.out, name, sequence, seed)
+        except UnpreparableSequence as error:
+            left_out[seed, sequence] = str(error)
+            print(f"left out, cannot be prepared: {sequence} seed {seed}: {error}", file=sys.stderr)
+    # a unit one configuration could not prepare is left out of every configuration's summaries
+    kept = [(s, q) for s in seeds + unseen for q in sequences if (s, q) not in left_out]
+    order = [(s, q) for s, q in kept if s in seeds] + [(s, q) for s, q in kept if s not in seeds]
+    rows = {n: [measured[n, s, q] for s, q in order if s in seeds] for n in names}
+    unseen_rows = {n: [measured[n, s, q] for s, q in order if s not in seeds] for n in names}
+    if not all(rows.values()):
+        print("error: no unit of the seeds could be prepared", file=sys.stderr)
+        return 1
     summaries = {n: summarise(r) for n, r in rows.items()}
-    write_json(args.out / "summary.json", {"seeds": seeds, "sequences": sequences, "summaries": summaries,
-                                           "per_sequence": {n: {f"{r['sequence']}-s{s}": r["mpjpe_mm"]
-                                                                for r, (s, _) in zip(rows[n], [(s, q) for s in seeds
-                                                                                               for q in sequences])}
-                                                            for n in names}})
+    write_json(args.out / "summary.json", {
+        "seeds": seeds, "sequences": sequences, "summaries": summaries,
+        "per_sequence": {n: {f"{q}-s{s}": measured[n, s, q]["mpjpe_mm"] for s, q in order if s in seeds}
+                         for n in names},
+        "left_out": [{"sequence": q, "seed": s, "reason": why} for (s, q), why in left_out.items()]})
     heading = f"seeds {', '.join(map(str, seeds))}; {len(sequences)} sequences, full length, 160x120, true calibration"
+    if left_out:
+        heading += "; left out, cannot be prepared: " + ", ".join(f"{q} s{s}" for s, q in left_out)
     print(heading + "\n")
     print(table(summaries))
     apart = None
-    if unseen:
+    if unseen and all(unseen_rows.values()):
         apart = (unseen, {n: summarise(r) for n, r in unseen_rows.items()})
         print(f"\n{_unseen_heading(unseen)}\n")
         print(table(apart[1]))
     print("\nwritten / decoded / naive (mm/frame² and mm):\n")
-    print(jitter_table({n: [{**r, "seed": s} for r, (s, _) in zip(rows[n] + unseen_rows[n], units_of[n])]
+    print(jitter_table({n: [{**r, "seed": s} for r, (s, _) in zip(rows[n] + unseen_rows[n], order)]
                         for n in names}))
     if DETECTOR_KEYPOINTS & set(names):
         print("\nbeside MediaPipe's own 3D:\n")
-        print(detector_table({n: [{**r, "seed": s} for r, (s, _) in zip(rows[n] + unseen_rows[n], units_of[n])]
+        print(detector_table({n: [{**r, "seed": s} for r, (s, _) in zip(rows[n] + unseen_rows[n], order)]
                               for n in names if n in DETECTOR_KEYPOINTS}))
     if args.report:
         write_report_section(rows, summaries, heading, apart)

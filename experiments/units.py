@@ -42,6 +42,13 @@ PREPARED_FILE_PAPER = "prepared-paper.npz"
 EXTENSIONS: tuple[str, ...] = ("hair", "lower_body")
 
 
+class UnpreparableSequence(ValueError):
+    """A generated sequence whose frames cannot be prepared: the colour classes cannot be learnt
+    from its first frame (:func:`mocap.calibrate.colour_model_from_pose` refuses it, e.g. a face
+    against a background of its own colour). The generated folder is kept; its prepared frames
+    are not written."""
+
+
 def prepared_file(without: tuple[str, ...] = ()) -> str:
     """Name of the prepared-frames file for a model without the extensions ``without``."""
     left_out = [e for e in EXTENSIONS if e in without]
@@ -192,6 +199,11 @@ def prepare_data(spec: DataSpec, root: str, without: tuple[str, ...] = ()) -> st
     -------
     str
         The sequence folder.
+
+    Raises
+    ------
+    UnpreparableSequence
+        When the first frame does not give the colour classes (the folder is kept, unprepared).
     """
     from mocap.synth import generate_sequence
 
@@ -204,7 +216,10 @@ def prepare_data(spec: DataSpec, root: str, without: tuple[str, ...] = ()) -> st
             old.unlink()
     name = prepared_file(without)
     if not (folder / name).is_file():
-        sequence = load_sequence(folder, spec.frames, without=without)
+        try:
+            sequence = load_sequence(folder, spec.frames, without=without)
+        except ValueError as error:
+            raise UnpreparableSequence(f"{folder.name}: {error}") from error
         prepared = [sequence.prepare(f) for f in sequence.frames]
         keys = tuple(prepared[0].timings)
         buf = io.BytesIO()

@@ -270,3 +270,50 @@ def test_the_detector_configuration_needs_the_keypoints_extra(monkeypatch, capsy
     monkeypatch.setattr("mocap.io.mediapipe_keypoints.available", lambda: False)
     assert main(["--configs", "mediapipe-keypoints", "--seeds", "0", "--out", str(tmp_path)]) == 2
     assert "mediapipe-keypoints" in capsys.readouterr().err and not (tmp_path / "units").exists()
+
+
+def test_a_sequence_that_cannot_be_prepared_is_left_out_of_every_configuration(tmp_path, monkeypatch, capsys):
+    import json
+
+    from experiments.tracking import main
+    from experiments.units import UnpreparableSequence
+
+    calls = []
+
+    def run_unit(out, name, sequence, seed):
+        calls.append((name, sequence, seed))
+        if (sequence, seed) == ("gestures-2", 1):
+            raise UnpreparableSequence("gestures-2-s1: the calibrated model covers only 7 foreground pixels")
+        return row(sequence, [10.0 * (seed + 1) + (50.0 if name == "paper" else 0.0)] * 4)
+
+    monkeypatch.setattr("experiments.tracking.run_unit", run_unit)
+    argv = ["--configs", "default,paper", "--seeds", "0,1", "--sequences", "turning,gestures-2", "--out", str(tmp_path)]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "left out, cannot be prepared: gestures-2 seed 1" in err
+    assert ("paper", "gestures-2", 1) not in calls                 # not tried again for the next configuration
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["left_out"] == [{"sequence": "gestures-2", "seed": 1,
+                                    "reason": "gestures-2-s1: the calibrated model covers only 7 foreground pixels"}]
+    assert summary["per_sequence"] == {"default": {"turning-s0": 10.0, "gestures-2-s0": 10.0, "turning-s1": 20.0},
+                                       "paper": {"turning-s0": 60.0, "gestures-2-s0": 60.0, "turning-s1": 70.0}}
+    assert summary["summaries"]["default"]["units"] == summary["summaries"]["paper"]["units"] == 3
+    assert summary["summaries"]["default"]["median_mpjpe_mm"] == 10.0
+
+
+def test_a_first_frame_without_the_person_cannot_be_prepared_and_says_which(tmp_path):
+    import shutil
+
+    from experiments.units import DataSpec, UnpreparableSequence, data_folder, prepare_data
+    from mocap.io.sequence import find_sequence
+
+    spec = DataSpec("turning", None, 3, 0, 160, 120)
+    folder = data_folder(spec, tmp_path)
+    prepare_data(spec, str(tmp_path))                               # the generated sequence prepares
+    (folder / "prepared.npz").unlink()
+    paths = find_sequence(folder)
+    first = sorted(paths.frames.iterdir())[0]
+    shutil.copyfile(paths.background, first)                        # the person gone from the first frame
+    with pytest.raises(UnpreparableSequence, match=f"{folder.name}: the calibrated model covers only 0"):
+        prepare_data(spec, str(tmp_path))
+    assert not (folder / "prepared.npz").exists()
