@@ -10,8 +10,11 @@ sequences and the detector's cached keypoints, and nothing is generated twice::
     python -m experiments.tracking --configs mediapipe-keypoints --seeds 0,1,2,3,4 --unseen-seeds 97,101 --out NEW
     python -m experiments.tracking_diff BASE NEW --unseen-seeds 97,101
 
-Units are matched by file name under ``units/``; the new folder's units that the base one lacks
-are counted, not compared. Printed (Markdown): every matched unit whose MPJPE, heading error or evaluations
+Units are matched by configuration name, sequence and seed, not by file name: a file's name holds
+the configuration's key, which a change adding a :class:`~mocap.track.TrackerConfig` field
+changes. Where a folder holds several units of one (configuration, sequence, seed), written under
+other settings of that configuration, the newest file is taken and the others are counted. The new
+folder's units that the base one lacks are counted, not compared. Printed (Markdown): every matched unit whose MPJPE, heading error or evaluations
 differ, base → new (MPJPE and the median error about the neck in mm, the share of frames
 turned round, lost, evaluations a frame); then, per configuration and seed set (the seeds tuned
 on, and ``--unseen-seeds`` apart), how many units are the same to the bit of these figures, how
@@ -55,8 +58,13 @@ class Unit:
                 and self.evaluations_per_frame == other.evaluations_per_frame)
 
 
-def read_units(folder: str | Path) -> dict[str, Unit]:
-    """The units of an :mod:`experiments.tracking` results folder, by file name.
+#: A unit's key in :func:`read_units`: (configuration name, sequence, seed).
+UnitKey = tuple[str, str, int]
+
+
+def read_units(folder: str | Path) -> tuple[dict[UnitKey, Unit], int]:
+    """The units of an :mod:`experiments.tracking` results folder, by (configuration name,
+    sequence, seed); the newest file of each, and how many older files were passed over.
 
     Raises
     ------
@@ -66,21 +74,23 @@ def read_units(folder: str | Path) -> dict[str, Unit]:
     units_dir = Path(folder) / "units"
     if not units_dir.is_dir():
         raise ValueError(f"{folder} is not an experiments.tracking results folder (no units/ in it)")
-    out = {}
-    for path in sorted(units_dir.glob("*.json")):
+    out, passed_over = {}, 0
+    for path in sorted(units_dir.glob("*.json"), key=lambda p: (p.stat().st_mtime_ns, p.name)):
         record = json.loads(path.read_text())
         row = record["result"]
         marks = failure_marks(row)
-        out[path.name] = Unit(record["name"], row["sequence"], int(record["seed"]), float(row["mpjpe_mm"]),
-                              float(row.get("median_frame_root_relative_mm", np.nan)),
-                              float(marks["turned_round_rate"]) if marks["turned_round_rate"] is not None else np.nan,
-                              bool(marks["turned_round"]), bool(marks["lost"]),
-                              float(row.get("evaluations_per_frame", np.nan)),
-                              tuple(float(h) for h in row.get("frame_heading_error_deg", ())))
-    return out
+        key = (record["name"], row["sequence"], int(record["seed"]))
+        passed_over += key in out
+        out[key] = Unit(record["name"], row["sequence"], int(record["seed"]), float(row["mpjpe_mm"]),
+                        float(row.get("median_frame_root_relative_mm", np.nan)),
+                        float(marks["turned_round_rate"]) if marks["turned_round_rate"] is not None else np.nan,
+                        bool(marks["turned_round"]), bool(marks["lost"]),
+                        float(row.get("evaluations_per_frame", np.nan)),
+                        tuple(float(h) for h in row.get("frame_heading_error_deg", ())))
+    return out, passed_over
 
 
-def diff_table(base: dict[str, Unit], new: dict[str, Unit], unseen: set[int]) -> str:
+def diff_table(base: dict[UnitKey, Unit], new: dict[UnitKey, Unit], unseen: set[int]) -> str:
     """The Markdown of the changed units and the per-configuration summary (see the module)."""
     matched = sorted(set(base) & set(new), key=lambda k: (new[k].name, new[k].seed in unseen, new[k].seed,
                                                           new[k].sequence))
@@ -116,7 +126,8 @@ def diff_table(base: dict[str, Unit], new: dict[str, Unit], unseen: set[int]) ->
 PAIRED_MARGIN_MM = 5.0
 
 
-def paired_table(base: dict[str, Unit], new: dict[str, Unit], keys: list[str], unseen: set[int]) -> str:
+def paired_table(base: dict[UnitKey, Unit], new: dict[UnitKey, Unit], keys: list[UnitKey],
+                 unseen: set[int]) -> str:
     """The Markdown of the paired comparison of the units ``keys`` (in both folders), per
     configuration and seed set: the median over units of the MPJPE and of the median error about
     the neck (mm), base → new; how many units' MPJPE fell or rose by more than
@@ -145,7 +156,7 @@ def paired_table(base: dict[str, Unit], new: dict[str, Unit], keys: list[str], u
     return "\n".join(lines)
 
 
-def _groups(units: dict[str, Unit], keys: list[str], unseen: set[int]):
+def _groups(units: dict[UnitKey, Unit], keys: list[UnitKey], unseen: set[int]):
     """``(configuration, seed set, keys)`` for each configuration of ``keys`` and each of its seed
     sets ("tuned on": seeds not in ``unseen``; "never used") that holds units."""
     for name in sorted({units[k].name for k in keys}):
@@ -167,10 +178,14 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     try:
         unseen = {int(s) for s in args.unseen_seeds.split(",") if s.strip()}
-        base, new = read_units(args.base), read_units(args.new)
+        (base, base_older), (new, new_older) = read_units(args.base), read_units(args.new)
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    for folder, older in ((args.base, base_older), (args.new, new_older)):
+        if older:
+            print(f"{folder}: {older} older unit file(s) of the same configuration, sequence and seed passed over "
+                  "(the newest taken)", file=sys.stderr)
     if not set(base) & set(new):
         print(f"error: no unit of {args.new} is in {args.base} (same configurations, sequences and seeds?)",
               file=sys.stderr)

@@ -1,4 +1,4 @@
-"""``python -m experiments.tracking_diff``: units matched by file name, the changed ones listed,
+"""``python -m experiments.tracking_diff``: units matched by configuration, sequence and seed, the changed ones listed,
 counted per configuration and seed set (made-up units with hand-counted answers)."""
 import json
 
@@ -13,6 +13,7 @@ def _unit(folder, name, sequence, seed, mpjpe, heading, about_neck=50.0, evaluat
     path = folder / "units" / f"{sequence}-s{seed}-{key}.json"
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps({"config": {}, "name": name, "seed": seed, "code": "c", "result": row}))
+    return path
 
 
 def test_changed_units_are_listed_and_counted(tmp_path, capsys):
@@ -64,3 +65,22 @@ def test_the_paired_comparison_counts_units_and_tests_their_differences(tmp_path
     assert f"| mediapipe-keypoints | tuned on | 6 | 102.5 → 92.2 | 82.5 → 82.5 | 6 / 0 | {2 / 2 ** 6:.3f}, – |" in out
     # never used: differences +1, -3, -4, -5, -6, -7 mm: two better by more than 5 mm, none worse
     assert f"| mediapipe-keypoints | never used | 6 | 125.0 → 120.5 | 50.0 → 50.0 | 2 / 0 | {4 / 2 ** 6:.3f}, – |" in out
+
+
+def test_units_are_matched_across_configuration_keys_and_the_newest_of_a_folder_is_taken(tmp_path, capsys):
+    """A change that adds a TrackerConfig field writes its units under another key (file name):
+    they are still compared; of two files of one unit in a folder, the newer is taken."""
+    import os
+
+    base, new = tmp_path / "base", tmp_path / "new"
+    facing = [10.0] * 10
+    old = _unit(base, "mediapipe-keypoints", "turning", 0, 500.0, facing, key="oldkey")
+    newest = _unit(base, "mediapipe-keypoints", "turning", 0, 120.0, facing, key="basekey")
+    os.utime(old, ns=(1_000_000_000, 1_000_000_000))
+    os.utime(newest, ns=(2_000_000_000, 2_000_000_000))
+    _unit(new, "mediapipe-keypoints", "turning", 0, 90.0, facing, key="variantkey")
+    assert tracking_diff.main([str(base), str(new)]) == 0
+    captured = capsys.readouterr()
+    assert "| mediapipe-keypoints | turning | 0 | 120.0 → 90.0 |" in captured.out
+    assert "1 older unit file(s) of the same configuration, sequence and seed passed over" in captured.err
+    assert "not in the base one" not in captured.out
