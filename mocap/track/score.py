@@ -41,11 +41,25 @@ TURN_SIGMA_DEG = 45.0
 #: 2026-11-29).
 TURN_CAP = 40.0
 #: The labelling term's price of reading the keypoints swapped on a frame whose detector shows the
-#: front (:meth:`mocap.io.keypoints.Keypoints.shows_front`): ``ln(0.97 / 0.03)`` nats, the odds
-#: that MediaPipe's labels are right when it says so (96-100 % in the front/back audit,
-#: docs/research-log.md, 2026-11-29). A body turned round with the labels read swapped projects
-#: as the right one does: this is what tells them apart.
-FRONT_SWAP_NATS = math.log(0.97 / 0.03)
+#: front (:meth:`mocap.io.keypoints.Keypoints.shows_front`), by how square-on the shoulders are
+#: seen: the claim's shoulder distance over the body's own seen square-on at its depth
+#: (:func:`front_price`). Lower edges of the bins and the ln odds (add-one) that MediaPipe's
+#: front claim is right in each, counted on the benchmark's seeds 0-4 against the true chest
+#: heading (5,584 claims, 116 wrong; docs/research-log.md, 2026-11-30): near profile a claim is
+#: worth a nat, squarely seen six. A body turned round with the labels read swapped projects as
+#: the right one does: this is what tells them apart.
+FRONT_SWAP_NATS_BY_WIDTH: tuple[tuple[float, float], ...] = (
+    (0.0, 1.18), (0.4, 1.39), (0.55, 2.61), (0.7, 3.17), (0.8, 3.69), (0.9, 6.11), (1.0, 6.30))
+
+
+def front_price(width_ratio: float) -> float:
+    """The price (nats) of reading swapped a front claim whose shoulders are seen ``width_ratio``
+    of their square-on width (:data:`FRONT_SWAP_NATS_BY_WIDTH`; NaN or negative: the lowest)."""
+    price = FRONT_SWAP_NATS_BY_WIDTH[0][1]
+    for edge, nats in FRONT_SWAP_NATS_BY_WIDTH:
+        if width_ratio >= edge:
+            price = nats
+    return price
 
 
 @dataclass(frozen=True)
@@ -151,13 +165,13 @@ def weighted_sum(values, w):
     return total
 
 
-def labelling_term(shows_front: bool | None, swapped: bool) -> float:
-    """A candidate's labelling term before its weight (nats): :data:`FRONT_SWAP_NATS` when it
-    reads the keypoints swapped on a frame whose detector shows the front, else 0; NaN on a frame
-    without keypoints (``shows_front`` None)."""
-    if shows_front is None:
+def labelling_term(front: float | None, swapped: bool) -> float:
+    """A candidate's labelling term before its weight (nats): the frame's front price ``front``
+    (:func:`front_price`; 0 where the detector does not show the front) when it reads the
+    keypoints swapped, else 0; NaN on a frame without keypoints (``front`` None)."""
+    if front is None:
         return math.nan
-    return FRONT_SWAP_NATS if shows_front and swapped else 0.0
+    return front if swapped else 0.0
 
 
 def turn_term(previous, current) -> np.ndarray:

@@ -80,8 +80,8 @@ from mocap.track.lifter import LiftedHypotheses, Lifter
 from mocap.track.proposals import (LifterSource, ProposalContext, ProposalSource, arm_reach_proposals, jump_proposals,
                                    reach_jobs, unexplained_hands)
 from mocap.track.registration import Registration, failed_residuals, register
-from mocap.track.score import (MOTION, UNARY_TERMS, ScoredCandidate, labelling_term, transition_term, weighted_sum,
-                               weights)
+from mocap.track.score import (MOTION, UNARY_TERMS, ScoredCandidate, front_price, labelling_term, transition_term,
+                               weighted_sum, weights)
 from mocap.track.smooth import Smoother
 
 #: Arm angles (degrees) of :meth:`Tracker.warm_up`'s pose: both forearms raised in front, where
@@ -90,6 +90,8 @@ WARM_UP_ARMS_DEG = {"r_shoulder_flex": 30.0, "r_shoulder_abd": 20.0, "r_elbow_fl
                     "l_shoulder_flex": 30.0, "l_shoulder_abd": 20.0, "l_elbow_flex": 90.0}
 #: Index of the chest's heading in the pose vector.
 _HEADING = PARAMETER_INDEX[HEADING]
+#: Rows of the shoulders in the joints (:data:`~mocap.body.skeleton.JOINT_NAMES`).
+_R_SHOULDER, _L_SHOULDER = JOINT_INDEX["r_shoulder"], JOINT_INDEX["l_shoulder"]
 
 
 @dataclass(kw_only=True)
@@ -421,10 +423,10 @@ class Tracker:
         lifts = (lifted, lifted_swapped)
         # every other registration is scored on the thread that ran it, with the detector's
         # labels where it shows the person's front (None: no keypoints)
-        front = None if keypoint_cost is None else keypoints.shows_front()
+        front = None if keypoint_cost is None else self._front_price(keypoints)
         # the front evidence in use (the labelling term on): a leader reading it swapped is offered
         # the way back (the torso's flip refined, a beam place facing the other way)
-        contested = bool(front) and cfg.labelling_weight > 0
+        contested = bool(front) and cfg.labelling_weight > 0       # a front claim, priced
         score = functools.partial(self._scored, lifts=lifts, front=front)
         # what needs no leader runs beside it: the proposal stage (whose ranking this thread
         # waits for), the beam's other hypotheses
@@ -494,11 +496,24 @@ class Tracker:
         return _FrameWork(_FrameCosts(*self.costs(prepared), self.keypoint_cost(keypoints, prepared.labels)),
                           self._pool)
 
+    def _front_price(self, keypoints: Keypoints) -> float:
+        """The frame's front price (nats, :func:`~mocap.track.score.front_price`): 0 where the
+        keypoints do not show the front; else priced by their shoulder distance (pixels) over the
+        leader's shoulders seen square-on at their depth (``fx`` times their distance over their
+        mean depth)."""
+        if not keypoints.shows_front():
+            return 0.0
+        joints = self.model.joint_positions(self._beam[0].pose)
+        right, left = joints[_R_SHOULDER], joints[_L_SHOULDER]
+        square_on = self.camera.fx * float(np.linalg.norm(right - left)) / (0.5 * (right[2] + left[2]))
+        seen = float(np.linalg.norm(keypoints.uv[_L_SHOULDER] - keypoints.uv[_R_SHOULDER]))
+        return front_price(seen / square_on if square_on > 0 else math.nan)
+
     def _terms(self, region: float, edge: float, keypoint: float, pose: np.ndarray, joints: np.ndarray,
-               lifted: LiftedHypotheses | None, front: bool | None = None, swapped: bool = False) -> np.ndarray:
+               lifted: LiftedHypotheses | None, front: float | None = None, swapped: bool = False) -> np.ndarray:
         """The values of a candidate's unary terms before their weights, shape (len(UNARY_TERMS),),
         :data:`~mocap.track.score.TERMS` order (see :class:`ScoredCandidate`; NaN: does not apply);
-        ``front``: the frame's detector shows the person's front (None: no keypoints), ``swapped``:
+        ``front``: the frame's front price (:meth:`_front_price`; None: no keypoints), ``swapped``:
         the candidate reads them swapped."""
         cfg = self.config
         prior = self.prior.energy(pose) if self.prior is not None and cfg.prior_weight > 0 else math.nan
@@ -509,7 +524,7 @@ class Tracker:
         return np.array([values[t.name] for t in UNARY_TERMS], dtype=np.float64)
 
     def _scored(self, costs: "_FrameCosts", reg: Registration, *,
-                lifts: tuple[LiftedHypotheses | None, LiftedHypotheses | None], front: bool | None) -> "_Scored":
+                lifts: tuple[LiftedHypotheses | None, LiftedHypotheses | None], front: float | None) -> "_Scored":
         """A registration's joints, the labelling its keypoint distance takes, and its unary
         terms (``lifts``, ``front``: as :meth:`_rough_unary`'s)."""
         joints = self.model.joint_positions(reg.pose)
@@ -519,11 +534,11 @@ class Tracker:
         return _Scored(reg, joints, bool(swapped), terms)
 
     def _rough_unary(self, costs: "_FrameCosts", pose: np.ndarray, *,
-                     lifts: tuple[LiftedHypotheses | None, LiftedHypotheses | None], front: bool | None) -> float:
+                     lifts: tuple[LiftedHypotheses | None, LiftedHypotheses | None], front: float | None) -> float:
         """The unary score of an unrefined pose (one evaluation of each cost): what ranks proposals.
         ``lifts``: the frame's lifted hypotheses under the detector's labelling and the swapped
         one; the pose pays the lifter energy and the labelling term of the labelling its keypoint
-        distance takes; ``front``: the detector shows the person's front (None: no keypoints)."""
+        distance takes; ``front``: the frame's front price (None: no keypoints)."""
         keypoint, swapped = (math.nan, False) if costs.keypoint is None else costs.keypoint.value_and_labelling(pose)
         return weighted_sum(self._terms(costs.region.evaluate_unchecked(pose), costs.edge(pose), keypoint, pose,
                                         self.model.joint_positions(pose), lifts[swapped], front, swapped),

@@ -121,15 +121,48 @@ def test_the_papers_method_switches_off_the_terms_beyond_the_paper():
 
 
 def test_the_labelling_term_prices_a_swapped_reading_only_where_the_detector_shows_the_front():
-    """ln(0.97 / 0.03) nats (the audit's odds that MediaPipe's labels are right where it shows the
-    front) for a swapped reading there; nothing for the detector's own reading, or where it shows
-    no front; NaN without keypoints."""
-    from mocap.track.score import FRONT_SWAP_NATS, labelling_term
+    """The frame's front price for a swapped reading; nothing for the detector's own reading, or
+    where it shows no front (price 0); NaN without keypoints."""
+    from mocap.track.score import labelling_term
 
-    assert FRONT_SWAP_NATS == pytest.approx(math.log(97 / 3))
-    assert labelling_term(True, True) == FRONT_SWAP_NATS
-    assert labelling_term(True, False) == labelling_term(False, True) == labelling_term(False, False) == 0.0
+    assert labelling_term(3.5, True) == 3.5
+    assert labelling_term(3.5, False) == labelling_term(0.0, True) == labelling_term(0.0, False) == 0.0
     assert math.isnan(labelling_term(None, True)) and math.isnan(labelling_term(None, False))
+
+
+@pytest.mark.parametrize("ratio, nats", [(0.0, 1.18), (0.39, 1.18), (0.4, 1.39), (0.6, 2.61), (0.75, 3.17),
+                                         (0.85, 3.69), (0.95, 6.11), (1.0, 6.30), (1.4, 6.30), (math.nan, 1.18),
+                                         (-1.0, 1.18)])
+def test_the_front_price_grows_as_the_shoulders_are_seen_square_on(ratio, nats):
+    """The table's bins (lower edges inclusive), by hand; a ratio that cannot be read pays the least."""
+    from mocap.track.score import front_price
+
+    assert front_price(ratio) == nats
+
+
+def test_the_tracker_prices_a_front_claim_by_its_shoulders_over_the_leaders_seen_square_on():
+    """The leader's shoulders (metres) projected square-on at their mean depth, by hand, against
+    the keypoints' shoulder distance (pixels)."""
+    from mocap.body import BodyModel
+    from mocap.body.pose import neutral_pose
+    from mocap.body.skeleton import JOINT_INDEX
+    from mocap.io.keypoints import Keypoints
+    from mocap.render.camera import Camera
+    from mocap.track import Tracker
+    from mocap.track.score import front_price
+
+    model, camera = BodyModel.build(), Camera(160, 120, 140.0, 140.0, 80.0, 60.0)
+    pose = neutral_pose()
+    tracker = Tracker(model, camera, TrackerConfig(), pose)
+    joints = model.joint_positions(pose)
+    r, l = joints[JOINT_INDEX["r_shoulder"]], joints[JOINT_INDEX["l_shoulder"]]
+    square_on = 140.0 * np.linalg.norm(r - l) / ((r[2] + l[2]) / 2)
+    for share in (0.5, 0.85, 0.95, 1.2):                              # inside the bins
+        uv = np.full((10, 2), 60.0)
+        uv[JOINT_INDEX["r_shoulder"], 0], uv[JOINT_INDEX["l_shoulder"], 0] = 60.0, 60.0 + share * square_on
+        keypoints = Keypoints(uv, np.ones(10))
+        assert tracker._front_price(keypoints) == front_price(share)
+        assert tracker._front_price(keypoints.swapped()) == 0.0            # no front shown: no price
 
 
 def test_keypoints_show_the_front_when_the_left_shoulder_is_on_the_images_right():
