@@ -216,7 +216,7 @@ def lower_region_cost(forward: list, backward: list) -> list:
 
 def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two_way: bool = False,
             without: tuple[str, ...] = (), oracle_sigma_px: float | None = None,
-            swap_share: float | None = None, detector: bool = False) -> dict:
+            swap_share: float | None = None, detector: bool = False, null_offset_px: float = 0.0) -> dict:
     """Track one benchmark sequence with ``config`` and measure its errors (see the module);
     ``without``: model extensions left out (:func:`experiments.units.load_sequence`; both: the
     paper's two-class model); ``oracle_sigma_px``: give the tracker the oracle keypoints of
@@ -224,7 +224,9 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     ``swap_share``: their left and right swapped on runs of frames covering that share
     (:func:`experiments.keypoints.swap_runs`), as a detector that does not see the face does;
     ``detector``: give it MediaPipe's keypoints on the rendered frames instead
-    (:func:`experiments.keypoints.detector_keypoints`, kept in the sequence's folder).
+    (:func:`experiments.keypoints.detector_keypoints`, kept in the sequence's folder);
+    ``null_offset_px``: the keypoints moved that far to the right
+    (:func:`experiments.keypoints.offset_keypoints`; 0: as they are).
     The result has ``labels_right_rate`` (the share of frames whose written arms are nearer the
     truth's than the truth's with left and right swapped, about the neck), ``arms_centred_mm``
     (the arms' eight joints' mean error about their own centre, no rotation: a body turned around
@@ -232,7 +234,8 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     ``detector_swapped_rate`` (frames the keypoints were swapped on), and
     ``frame_heading_error_deg`` (each frame's written chest heading less the truth's, degrees on
     the circle: :func:`heading_error_deg`)."""
-    from experiments.keypoints import DETECTOR_FILE, detector_keypoints, oracle_keypoints, swap_labels, swap_runs
+    from experiments.keypoints import (DETECTOR_FILE, detector_keypoints, offset_keypoints, oracle_keypoints,
+                                       swap_labels, swap_runs)
 
     if detector and oracle_sigma_px is not None:
         raise ValueError("give the tracker the oracle's keypoints or the detector's, not both")
@@ -259,6 +262,8 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
         detected = np.array([np.where(k.present[arms, None], k.uv[arms], np.nan) for k in keypoints])
         truth_uv = camera.project(truth_joints[: len(prepared), arms].reshape(-1, 3)).reshape(len(prepared), len(arms), 2)
         detector_swapped = label_swapped(detected, truth_uv)
+    if null_offset_px:
+        keypoints = offset_keypoints(keypoints, null_offset_px)
     results, beam_best, proposal_best, other_best, lifter_best, seconds = [], [], [], [], [], 0.0
     proposal_origins = {source.origin for source in tracker.sources}
     error = lambda q, i: mpjpe(loaded.model.joint_positions(q)[None], truth_joints[i:i + 1])
@@ -283,6 +288,7 @@ def measure(sequence: str, config: TrackerConfig, root: Path, seed: int = 0, two
     if calls is not None:
         keypoints_tag = ("-mediapipe" if detector else "") + ("" if oracle_sigma_px is None
                                                                else f"-oracle{oracle_sigma_px:g}px")
+        keypoints_tag += f"-null{null_offset_px:g}px" if null_offset_px else ""
         calls.save(root / "smoother_calls" / f"{sequence}-s{seed}-{config_key(config)}{keypoints_tag}.npz")
     joints = np.array([r.joints for r in results])
     truth = loaded.ground_truth.joints[: len(joints)]

@@ -89,6 +89,14 @@ def swap_labels(keypoints: list[Keypoints], swapped: np.ndarray) -> list[Keypoin
             for k, s in zip(keypoints, swapped)]
 
 
+def offset_keypoints(keypoints: list[Keypoints | None], offset_px: float) -> list[Keypoints | None]:
+    """``keypoints`` moved ``offset_px`` to the right (pixels, every present joint of every frame;
+    confidences and 3D kept; None frames kept): a null perturbation, far below any detector's
+    noise, that shows how far a track moves from nothing (``experiments.tracking --null-offset-px``)."""
+    return [None if k is None else Keypoints(k.uv + np.array([offset_px, 0.0]), k.confidence, k.world)
+            for k in keypoints]
+
+
 def detector_keypoints(frames: list[np.ndarray], cache: Path) -> list[Keypoints]:
     """MediaPipe Pose, as the run uses it (:class:`mocap.io.mediapipe_keypoints.MediaPipeKeypoints`,
     image mode), on every frame; read back from ``cache`` (a keypoint file with MediaPipe's world

@@ -147,12 +147,13 @@ def config_of(name: str) -> TrackerConfig:
     return TrackerConfig.paper() if changes is None else TrackerConfig.from_dict(changes)
 
 
-def unit_path(out: Path, name: str, sequence: str, seed: int) -> Path:
+def unit_path(out: Path, name: str, sequence: str, seed: int, null_offset_px: float = 0.0) -> Path:
     from experiments.ambiguity import config_key
     model = "-two-class" if name in TWO_CLASS_MODEL else ""
     keypoints = f"-oracle{ORACLE_KEYPOINTS[name]:g}px" if name in ORACLE_KEYPOINTS else ""
     keypoints += f"-swapped{SWAPPED_KEYPOINTS[name]:g}" if name in SWAPPED_KEYPOINTS else ""
     keypoints += "-mediapipe" if name in DETECTOR_KEYPOINTS else ""
+    keypoints += f"-null{null_offset_px:g}px" if null_offset_px else ""
     return out / "units" / f"{sequence}-s{seed}-{config_key(config_of(name))}{model}{keypoints}.json"
 
 
@@ -175,15 +176,17 @@ def failure_marks(row: dict) -> dict:
             "lost": None if about_neck is None else bool(about_neck > LOST_MM)}
 
 
-def run_unit(out: Path, name: str, sequence: str, seed: int) -> dict:
+def run_unit(out: Path, name: str, sequence: str, seed: int, null_offset_px: float = 0.0) -> dict:
     """Measure one (configuration, sequence, seed), reusing its file when the same code measured it
-    (:func:`experiments.ambiguity.cached_result`); the row carries its :func:`failure_marks`,
+    (:func:`experiments.ambiguity.cached_result`), the keypoints moved ``null_offset_px`` to the
+    right (a null perturbation, :func:`experiments.keypoints.offset_keypoints`; its own file name);
+    the row carries its :func:`failure_marks`,
     judged again on every call (this module is not part of the code key: a kept file is marked
     under the thresholds as they are now)."""
     from experiments.ambiguity import cached_result, code_key, measure
     from experiments.units import EXTENSIONS
 
-    path = unit_path(out, name, sequence, seed)
+    path = unit_path(out, name, sequence, seed, null_offset_px)
     code = code_key()
     row = cached_result(path, code, None)
     if row is not None:
@@ -191,7 +194,7 @@ def run_unit(out: Path, name: str, sequence: str, seed: int) -> dict:
     config = config_of(name)
     row = measure(sequence, config, out, seed, without=EXTENSIONS if name in TWO_CLASS_MODEL else (),
                   oracle_sigma_px=ORACLE_KEYPOINTS.get(name), swap_share=SWAPPED_KEYPOINTS.get(name),
-                  detector=name in DETECTOR_KEYPOINTS)
+                  detector=name in DETECTOR_KEYPOINTS, null_offset_px=null_offset_px)
     row |= failure_marks(row)
     write_json(path, {"config": config.to_dict(), "name": name, "seed": seed, "code": code, "result": row})
     return row
@@ -343,6 +346,10 @@ def main(argv=None) -> int:
                    help="comma-separated seeds never used for tuning: tracked too, tabled apart")
     p.add_argument("--sequences", default=",".join(SEQUENCE_NAMES))
     p.add_argument("--out", type=Path, default=RESULTS_DIR / "tracking")
+    p.add_argument("--null-offset-px", type=float, default=0.0,
+                   help="move every keypoint this far to the right (pixels; e.g. 0.01): a null perturbation "
+                        "whose units, compared with experiments.tracking_diff, show how far tracks move from "
+                        "nothing (docs/research-log.md, 2026-11-30)")
     p.add_argument("--report", action="store_true",
                    help="draw the figure and write the table into experiments/REPORT.md")
     args = p.parse_args(argv)
@@ -355,6 +362,10 @@ def main(argv=None) -> int:
         unseen = [int(s) for s in args.unseen_seeds.split(",") if s.strip()]
     except ValueError:
         seeds = unseen = []
+    if not (math.isfinite(args.null_offset_px) and abs(args.null_offset_px) < 1.0):
+        print(f"error: --null-offset-px must be finite and under 1 pixel (a null perturbation), "
+              f"got {args.null_offset_px}", file=sys.stderr)
+        return 2
     if unknown or bad_sequences or not names or not seeds or not sequences:
         print(f"error: unknown configuration(s) {unknown} or sequence(s) {bad_sequences}, or no seeds; "
               f"configurations: {'; '.join(CONFIGS)}", file=sys.stderr)
@@ -376,7 +387,8 @@ def main(argv=None) -> int:
         if (seed, sequence) in left_out:
             continue
         try:
-            measured[name, seed, sequence] = run_unit(args.out, name, sequence, seed)
+            measured[name, seed, sequence] = run_unit(args.out, name, sequence, seed,
+                                                      null_offset_px=args.null_offset_px)
         except UnpreparableSequence as error:
             left_out[seed, sequence] = str(error)
             print(f"left out, cannot be prepared: {sequence} seed {seed}: {error}", file=sys.stderr)
@@ -390,11 +402,13 @@ def main(argv=None) -> int:
         return 1
     summaries = {n: summarise(r) for n, r in rows.items()}
     write_json(args.out / "summary.json", {
-        "seeds": seeds, "sequences": sequences, "summaries": summaries,
+        "seeds": seeds, "sequences": sequences, "null_offset_px": args.null_offset_px, "summaries": summaries,
         "per_sequence": {n: {f"{q}-s{s}": measured[n, s, q]["mpjpe_mm"] for s, q in order if s in seeds}
                          for n in names},
         "left_out": [{"sequence": q, "seed": s, "reason": why} for (s, q), why in left_out.items()]})
     heading = f"seeds {', '.join(map(str, seeds))}; {len(sequences)} sequences, full length, 160x120, true calibration"
+    if args.null_offset_px:
+        heading += f"; keypoints moved {args.null_offset_px:g} px to the right (a null perturbation)"
     if left_out:
         heading += "; left out, cannot be prepared: " + ", ".join(f"{q} s{s}" for s, q in left_out)
     print(heading + "\n")

@@ -280,7 +280,7 @@ def test_a_sequence_that_cannot_be_prepared_is_left_out_of_every_configuration(t
 
     calls = []
 
-    def run_unit(out, name, sequence, seed):
+    def run_unit(out, name, sequence, seed, null_offset_px=0.0):
         calls.append((name, sequence, seed))
         if (sequence, seed) == ("gestures-2", 1):
             raise UnpreparableSequence("gestures-2-s1: the calibrated model covers only 7 foreground pixels")
@@ -317,3 +317,43 @@ def test_a_first_frame_without_the_person_cannot_be_prepared_and_says_which(tmp_
     with pytest.raises(UnpreparableSequence, match=f"{folder.name}: the calibrated model covers only 0"):
         prepare_data(spec, str(tmp_path))
     assert not (folder / "prepared.npz").exists()
+
+
+def test_the_null_offset_moves_every_present_keypoint_and_keeps_the_rest():
+    from experiments.keypoints import offset_keypoints
+    from mocap.io.keypoints import Keypoints
+
+    uv = np.arange(20, dtype=float).reshape(10, 2)
+    confidence = np.linspace(0.1, 1.0, 10)
+    confidence[3] = 0.0                                              # absent: stays absent
+    world = np.ones((10, 3))
+    moved = offset_keypoints([Keypoints(uv, confidence, world), None], 0.01)
+    assert moved[1] is None
+    expected = uv + [0.01, 0.0]
+    expected[3] = np.nan
+    np.testing.assert_array_equal(moved[0].uv, expected)
+    np.testing.assert_array_equal(moved[0].confidence, confidence)
+    np.testing.assert_array_equal(moved[0].world[np.arange(10) != 3], world[np.arange(10) != 3])
+
+
+def test_a_null_run_writes_units_of_its_own_and_says_so(tmp_path, monkeypatch, capsys):
+    import json
+
+    from experiments.tracking import main, unit_path
+
+    seen = []
+
+    def run_unit(out, name, sequence, seed, null_offset_px=0.0):
+        seen.append(null_offset_px)
+        return row(sequence, [50.0, 60.0])
+
+    monkeypatch.setattr("experiments.tracking.run_unit", run_unit)
+    assert unit_path(tmp_path, "default", "turning", 0, 0.01).name.endswith("-null0.01px.json")
+    assert unit_path(tmp_path, "default", "turning", 0) != unit_path(tmp_path, "default", "turning", 0, 0.01)
+    argv = ["--configs", "default", "--seeds", "0", "--sequences", "turning", "--out", str(tmp_path)]
+    assert main(argv + ["--null-offset-px", "0.01"]) == 0
+    assert seen == [0.01]
+    assert "keypoints moved 0.01 px to the right (a null perturbation)" in capsys.readouterr().out
+    assert json.loads((tmp_path / "summary.json").read_text())["null_offset_px"] == 0.01
+    assert main(argv + ["--null-offset-px", "3"]) == 2                 # not a null perturbation
+    assert "under 1 pixel" in capsys.readouterr().err
