@@ -196,7 +196,8 @@ def run_unit(out: Path, name: str, sequence: str, seed: int, null_offset_px: flo
                   oracle_sigma_px=ORACLE_KEYPOINTS.get(name), swap_share=SWAPPED_KEYPOINTS.get(name),
                   detector=name in DETECTOR_KEYPOINTS, null_offset_px=null_offset_px)
     row |= failure_marks(row)
-    write_json(path, {"config": config.to_dict(), "name": name, "seed": seed, "code": code, "result": row})
+    write_json(path, {"config": config.to_dict(), "name": name, "seed": seed, "code": code,
+                      "null_offset_px": null_offset_px, "result": row})
     return row
 
 

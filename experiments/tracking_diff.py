@@ -22,7 +22,10 @@ many changed, the turned-round and lost counts (:func:`experiments.tracking.fail
 and the mean evaluations a frame, base → new; and the paired comparison (:func:`paired_table`:
 the medians over units, how many units got better or worse, and the Wilcoxon signed-rank test
 of the units' differences), so that a change is judged on its units, not on two medians alone.
-Nothing is recomputed: the units hold it all.
+With ``--null NULL`` (a folder of :mod:`experiments.tracking` ``--null-offset-px`` runs: every
+keypoint moved a sub-pixel distance, which moves every unit), the same paired table of BASE
+against the null follows: a change is real only where it stands out of that noise
+(docs/research-log.md, 2026-11-30). Nothing is recomputed: the units hold it all.
 """
 from __future__ import annotations
 
@@ -62,9 +65,12 @@ class Unit:
 UnitKey = tuple[str, str, int]
 
 
-def read_units(folder: str | Path) -> tuple[dict[UnitKey, Unit], int]:
+def read_units(folder: str | Path, null: bool = False) -> tuple[dict[UnitKey, Unit], int]:
     """The units of an :mod:`experiments.tracking` results folder, by (configuration name,
-    sequence, seed); the newest file of each, and how many older files were passed over.
+    sequence, seed); the newest file of each, and how many older files were passed over. Only
+    the null's units (``--null-offset-px``: their record's ``null_offset_px`` not 0) where
+    ``null``, else only the others, so that a null run in the same folder is never compared as
+    the base.
 
     Raises
     ------
@@ -77,6 +83,8 @@ def read_units(folder: str | Path) -> tuple[dict[UnitKey, Unit], int]:
     out, passed_over = {}, 0
     for path in sorted(units_dir.glob("*.json"), key=lambda p: (p.stat().st_mtime_ns, p.name)):
         record = json.loads(path.read_text())
+        if (bool(record.get("null_offset_px", 0.0)) or "-null" in path.stem) != null:
+            continue
         row = record["result"]
         marks = failure_marks(row)
         key = (record["name"], row["sequence"], int(record["seed"]))
@@ -133,7 +141,8 @@ def paired_table(base: dict[UnitKey, Unit], new: dict[UnitKey, Unit], keys: list
     the neck (mm), base → new; how many units' MPJPE fell or rose by more than
     :data:`PAIRED_MARGIN_MM`; and the two-sided Wilcoxon signed-rank test of the units' paired
     differences (:func:`scipy.stats.wilcoxon`; exact for fewer than 50 units without ties), for
-    the MPJPE and for the error about the neck ("–" where every difference is 0)."""
+    the MPJPE and for the error about the neck ("–" where every difference is 0); and the median
+    and 90th percentile of the units' absolute MPJPE differences (mm), to set beside the null's."""
     from scipy.stats import wilcoxon
 
     def p_value(differences: np.ndarray) -> str:
@@ -141,8 +150,9 @@ def paired_table(base: dict[UnitKey, Unit], new: dict[UnitKey, Unit], keys: list
         return "–" if not np.any(kept != 0) else f"{wilcoxon(kept).pvalue:.3f}"
 
     lines = ["| configuration | seeds | units | median MPJPE mm | median about the neck mm | "
-             f"better / worse by > {PAIRED_MARGIN_MM:g} mm | Wilcoxon p: MPJPE, about the neck |",
-             "|---|---|---|---|---|---|---|"]
+             f"better / worse by > {PAIRED_MARGIN_MM:g} mm | Wilcoxon p: MPJPE, about the neck | "
+             "MPJPE change, median / p90 of its size, mm |",
+             "|---|---|---|---|---|---|---|---|"]
     for name, label, picked in _groups(new, keys, unseen):
         field = lambda units, f: np.array([getattr(units[k], f) for k in picked], dtype=np.float64)
         mpjpe = field(new, "mpjpe_mm") - field(base, "mpjpe_mm")
@@ -152,7 +162,8 @@ def paired_table(base: dict[UnitKey, Unit], new: dict[UnitKey, Unit], keys: list
                      f"{np.nanmedian(field(base, 'about_neck_mm')):.1f} → "
                      f"{np.nanmedian(field(new, 'about_neck_mm')):.1f} | "
                      f"{int(np.sum(mpjpe < -PAIRED_MARGIN_MM))} / {int(np.sum(mpjpe > PAIRED_MARGIN_MM))} | "
-                     f"{p_value(mpjpe)}, {p_value(neck)} |")
+                     f"{p_value(mpjpe)}, {p_value(neck)} | "
+                     f"{np.median(np.abs(mpjpe)):.1f} / {np.percentile(np.abs(mpjpe), 90):.1f} |")
     return "\n".join(lines)
 
 
@@ -175,6 +186,9 @@ def main(argv=None) -> int:
     p.add_argument("base", type=Path, help="the results folder compared against (its units/)")
     p.add_argument("new", type=Path, help="the results folder of the change")
     p.add_argument("--unseen-seeds", default="", help="comma-separated seeds never used for tuning: summed apart")
+    p.add_argument("--null", type=Path, default=None,
+                   help="a results folder of the null (experiments.tracking --null-offset-px): its paired "
+                        "table against BASE is printed under the change's, the noise to judge it by")
     args = p.parse_args(argv)
     try:
         unseen = {int(s) for s in args.unseen_seeds.split(",") if s.strip()}
@@ -191,6 +205,19 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return 2
     print(diff_table(base, new, unseen))
+    if args.null is not None:
+        try:
+            null, _ = read_units(args.null, null=True)
+        except ValueError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
+        keys = sorted(set(base) & set(null), key=lambda k: (k[0], k[2] in unseen, k[2], k[1]))
+        if not keys:
+            print(f"error: no null unit in {args.null} matches {args.base} (run experiments.tracking "
+                  "--null-offset-px with the same configurations, sequences and seeds)", file=sys.stderr)
+            return 2
+        print(f"\nThe null ({args.base} → {args.null}: nothing changed but the keypoints' sub-pixel offset):\n")
+        print(paired_table(base, null, keys, unseen))
     return 0
 
 

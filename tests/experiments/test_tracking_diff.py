@@ -7,12 +7,13 @@ import pytest
 from experiments import tracking_diff
 
 
-def _unit(folder, name, sequence, seed, mpjpe, heading, about_neck=50.0, evaluations=1000.0, key="k"):
+def _unit(folder, name, sequence, seed, mpjpe, heading, about_neck=50.0, evaluations=1000.0, key="k", null=0.0):
     row = {"sequence": sequence, "mpjpe_mm": mpjpe, "median_frame_root_relative_mm": about_neck,
            "frame_heading_error_deg": list(heading), "evaluations_per_frame": evaluations}
-    path = folder / "units" / f"{sequence}-s{seed}-{key}.json"
+    path = folder / "units" / f"{sequence}-s{seed}-{key}{f'-null{null:g}px' if null else ''}.json"
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps({"config": {}, "name": name, "seed": seed, "code": "c", "result": row}))
+    path.write_text(json.dumps({"config": {}, "name": name, "seed": seed, "code": "c", "null_offset_px": null,
+                                "result": row}))
     return path
 
 
@@ -62,9 +63,11 @@ def test_the_paired_comparison_counts_units_and_tests_their_differences(tmp_path
     assert tracking_diff.main([str(base), str(new), "--unseen-seeds", "97"]) == 0
     out = capsys.readouterr().out
     # tuned on: medians 102.5 -> 92.25 (differences -10 .. -10.5), none worse; about the neck unchanged
-    assert f"| mediapipe-keypoints | tuned on | 6 | 102.5 → 92.2 | 82.5 → 82.5 | 6 / 0 | {2 / 2 ** 6:.3f}, – |" in out
+    assert (f"| mediapipe-keypoints | tuned on | 6 | 102.5 → 92.2 | 82.5 → 82.5 | 6 / 0 | {2 / 2 ** 6:.3f}, – | "
+            "10.2 / 10.5 |") in out                                    # |differences| 10.0 .. 10.5 mm
     # never used: differences +1, -3, -4, -5, -6, -7 mm: two better by more than 5 mm, none worse
-    assert f"| mediapipe-keypoints | never used | 6 | 125.0 → 120.5 | 50.0 → 50.0 | 2 / 0 | {4 / 2 ** 6:.3f}, – |" in out
+    assert (f"| mediapipe-keypoints | never used | 6 | 125.0 → 120.5 | 50.0 → 50.0 | 2 / 0 | {4 / 2 ** 6:.3f}, – | "
+            "4.5 / 6.5 |") in out                                      # |differences| 1, 3, 4, 5, 6, 7 mm
 
 
 def test_units_are_matched_across_configuration_keys_and_the_newest_of_a_folder_is_taken(tmp_path, capsys):
@@ -84,3 +87,27 @@ def test_units_are_matched_across_configuration_keys_and_the_newest_of_a_folder_
     assert "| mediapipe-keypoints | turning | 0 | 120.0 → 90.0 |" in captured.out
     assert "1 older unit file(s) of the same configuration, sequence and seed passed over" in captured.err
     assert "not in the base one" not in captured.out
+
+
+def test_the_null_is_tabled_beside_the_change_and_never_taken_for_the_base(tmp_path, capsys):
+    """Null units (experiments.tracking --null-offset-px) in the base folder are not read as the
+    base; with --null their paired table against the base follows the change's."""
+    base, new = tmp_path / "base", tmp_path / "new"
+    facing = [10.0] * 10
+    for i, sequence in enumerate(("gestures-1", "gestures-2", "turning")):
+        _unit(base, "mediapipe-keypoints", sequence, 97, 100.0, facing)
+        _unit(new, "mediapipe-keypoints", sequence, 97, 90.0, facing)
+        _unit(base, "mediapipe-keypoints", sequence, 97, 100.0 + (i + 1) * (-1) ** i * 4.0, facing, null=0.01)
+    base_units, _ = tracking_diff.read_units(base)
+    null_units, _ = tracking_diff.read_units(base, null=True)
+    assert {u.mpjpe_mm for u in base_units.values()} == {100.0}
+    assert sorted(u.mpjpe_mm for u in null_units.values()) == [92.0, 104.0, 112.0]
+    assert tracking_diff.main([str(base), str(new), "--unseen-seeds", "97", "--null", str(base)]) == 0
+    out = capsys.readouterr().out
+    change, null = out.split("The null")
+    assert "| mediapipe-keypoints | never used | 3 | 100.0 → 90.0 | 50.0 → 50.0 | 3 / 0 | 0.250, – | 10.0 / 10.0 |" in change
+    # null differences +4, -8, +12: medians 100 -> 104, one better and one worse by > 5 mm; exact
+    # two-sided signed-rank p: positive rank sum 4 of ranks 1-3, P(T+ <= 2) = 3/8, doubled 0.75
+    assert "| mediapipe-keypoints | never used | 3 | 100.0 → 104.0 | 50.0 → 50.0 | 1 / 1 | 0.750, – | 8.0 / 11.2 |" in null
+    assert tracking_diff.main([str(base), str(new), "--null", str(new)]) == 2        # no null units there
+    assert "no null unit" in capsys.readouterr().err
