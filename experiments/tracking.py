@@ -367,6 +367,9 @@ def main(argv=None) -> int:
         print(f"error: --null-offset-px must be finite and under 1 pixel (a null perturbation), "
               f"got {args.null_offset_px}", file=sys.stderr)
         return 2
+    if args.null_offset_px and args.report:
+        print("error: a null run (--null-offset-px) is not written into the report", file=sys.stderr)
+        return 2
     if unknown or bad_sequences or not names or not seeds or not sequences:
         print(f"error: unknown configuration(s) {unknown} or sequence(s) {bad_sequences}, or no seeds; "
               f"configurations: {'; '.join(CONFIGS)}", file=sys.stderr)

@@ -357,3 +357,6 @@ def test_a_null_run_writes_units_of_its_own_and_says_so(tmp_path, monkeypatch, c
     assert json.loads((tmp_path / "summary.json").read_text())["null_offset_px"] == 0.01
     assert main(argv + ["--null-offset-px", "3"]) == 2                 # not a null perturbation
     assert "under 1 pixel" in capsys.readouterr().err
+    assert main(argv + ["--null-offset-px", "0.01", "--report"]) == 2  # never the report's figures
+    assert "not written into the report" in capsys.readouterr().err
+    assert seen == [0.01]
