@@ -14,8 +14,8 @@ Units are matched by configuration name, sequence and seed, not by file name: a 
 the configuration's key, which a change adding a :class:`~mocap.track.TrackerConfig` field
 changes. Where a folder holds several units of one (configuration, sequence, seed), written under
 other settings of that configuration, the newest file is taken and the others are counted. The new
-folder's units that the base one lacks are counted, not compared. Printed (Markdown): every matched unit whose MPJPE, heading error or evaluations
-differ, base → new (MPJPE and the median error about the neck in mm, the share of frames
+folder's units that the base one lacks are counted, not compared. Printed (Markdown): every
+matched unit whose MPJPE, heading error or evaluations differ, base → new (MPJPE and the median error about the neck in mm, the share of frames
 turned round, lost, evaluations a frame); then, per configuration and seed set (the seeds tuned
 on, and ``--unseen-seeds`` apart), how many units are the same to the bit of these figures, how
 many changed, the turned-round and lost counts (:func:`experiments.tracking.failure_marks`)
