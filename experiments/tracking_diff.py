@@ -23,14 +23,23 @@ and the mean evaluations a frame, base → new; and the paired comparison (:func
 the medians over units, how many units got better or worse, and the Wilcoxon signed-rank test
 of the units' differences), so that a change is judged on its units, not on two medians alone.
 With ``--null NULL`` (a folder of :mod:`experiments.tracking` ``--null-offset-px`` runs: every
-keypoint moved a sub-pixel distance, which moves every unit), the same paired table of BASE
-against the null follows: a change is real only where it stands out of that noise
-(docs/research-log.md, 2026-11-30). Nothing is recomputed: the units hold it all.
+keypoint moved a sub-pixel distance, which moves every unit; may be given again), the same paired
+table of BASE against each null follows.
+
+Last, every draw: a unit's plain run and its null runs are draws of one noisy figure (a 0.01 px
+offset moves a unit by 10 mm at the median, docs/research-log.md 2026-11-30). The base's draws
+are BASE's units of every offset and the ``--null`` folders' null units; the change's, NEW's units
+of every offset (run ``--null-offset-px`` into NEW too). :func:`draws_table` compares them with
+:func:`stratified_rank_sum`, whose ``cluster_p`` (each seed's units one cluster) is the p value to
+judge a change by: the units of one seed moved together under the null, and the units-independent
+p of the paired table is then too small. Nothing is recomputed: the units hold it all.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import math
+import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -77,25 +86,56 @@ def read_units(folder: str | Path, null: bool = False) -> tuple[dict[UnitKey, Un
     ValueError
         When ``folder`` holds no ``units`` folder.
     """
+    out, passed_over = {}, 0
+    for offset, key, unit in _read(folder):
+        if bool(offset) != null:
+            continue
+        passed_over += key in out
+        out[key] = unit
+    return out, passed_over
+
+
+def read_draws(folder: str | Path) -> dict[UnitKey, dict[float, Unit]]:
+    """Every draw of each unit of an :mod:`experiments.tracking` results folder, by
+    (configuration name, sequence, seed), then by the keypoints' null offset in pixels (0.0: the
+    plain run; the others ``--null-offset-px`` runs); the newest file of each.
+
+    Raises
+    ------
+    ValueError
+        When ``folder`` holds no ``units`` folder.
+    """
+    out: dict[UnitKey, dict[float, Unit]] = {}
+    for offset, key, unit in _read(folder):
+        out.setdefault(key, {})[offset] = unit
+    return out
+
+
+#: The offset in a null unit's file name (``experiments.tracking.unit_path``), pixels.
+_NULL_NAME = re.compile(r"-null(-?[0-9.e+-]+?)px$")
+
+
+def _read(folder: str | Path):
+    """``(null offset in pixels, key, Unit)`` of each unit file of ``folder``, oldest first (0:
+    not a null run; a file whose record lacks the offset has it read from its name)."""
     units_dir = Path(folder) / "units"
     if not units_dir.is_dir():
         raise ValueError(f"{folder} is not an experiments.tracking results folder (no units/ in it)")
-    out, passed_over = {}, 0
     for path in sorted(units_dir.glob("*.json"), key=lambda p: (p.stat().st_mtime_ns, p.name)):
         record = json.loads(path.read_text())
-        if (bool(record.get("null_offset_px", 0.0)) or "-null" in path.stem) != null:
-            continue
+        offset = float(record.get("null_offset_px", 0.0))
+        named = _NULL_NAME.search(path.stem)
+        if not offset and named:
+            offset = float(named.group(1))
         row = record["result"]
         marks = failure_marks(row)
         key = (record["name"], row["sequence"], int(record["seed"]))
-        passed_over += key in out
-        out[key] = Unit(record["name"], row["sequence"], int(record["seed"]), float(row["mpjpe_mm"]),
-                        float(row.get("median_frame_root_relative_mm", np.nan)),
-                        float(marks["turned_round_rate"]) if marks["turned_round_rate"] is not None else np.nan,
-                        bool(marks["turned_round"]), bool(marks["lost"]),
-                        float(row.get("evaluations_per_frame", np.nan)),
-                        tuple(float(h) for h in row.get("frame_heading_error_deg", ())))
-    return out, passed_over
+        yield offset, key, Unit(record["name"], row["sequence"], int(record["seed"]), float(row["mpjpe_mm"]),
+                                float(row.get("median_frame_root_relative_mm", np.nan)),
+                                float(marks["turned_round_rate"]) if marks["turned_round_rate"] is not None else np.nan,
+                                bool(marks["turned_round"]), bool(marks["lost"]),
+                                float(row.get("evaluations_per_frame", np.nan)),
+                                tuple(float(h) for h in row.get("frame_heading_error_deg", ())))
 
 
 def diff_table(base: dict[UnitKey, Unit], new: dict[UnitKey, Unit], unseen: set[int]) -> str:
@@ -167,6 +207,134 @@ def paired_table(base: dict[UnitKey, Unit], new: dict[UnitKey, Unit], keys: list
     return "\n".join(lines)
 
 
+@dataclass(frozen=True)
+class RankTest:
+    """The stratified rank-sum comparison of two sets of draws over units (:func:`stratified_rank_sum`)."""
+
+    units: int              # strata (units) with at least one draw on each side
+    below_share: float      # over every (new draw, base draw) pair of a unit: the share the new one is lower (ties 1/2)
+    z: float                # the standardised sum of the units' Mann-Whitney counts (0: no information)
+    p: float                # two-sided, normal approximation, units independent (1.0: every unit's draws tied)
+    clusters: int = 0       # clusters given (0: none)
+    cluster_p: float = math.nan   # two-sided, the clusters' signs flipped (NaN without clusters)
+
+
+#: Clusters up to this many are sign-flipped exhaustively in :func:`stratified_rank_sum`; more, at random.
+EXACT_CLUSTERS = 16
+#: Random sign patterns drawn where there are more clusters (a fixed generator: the same p each call).
+CLUSTER_FLIPS = 1 << 16
+
+
+def stratified_rank_sum(pairs: list[tuple[np.ndarray, np.ndarray]], clusters: list | None = None) -> RankTest:
+    """Whether ``new`` draws lie below ``base`` draws within units more often than chance (the
+    stratified Wilcoxon rank-sum test of van Elteren, 1960, unweighted).
+
+    Each unit is a stratum: under the null hypothesis its draws, new and base, are exchangeable
+    (as :mod:`experiments.tracking`'s ``--null-offset-px`` runs are with the base's), so the
+    test needs no assumption on how a unit's draws are spread, skewed or shared out between
+    units. A unit's count U is the number of (new, base) pairs whose new draw is the lower (ties
+    1/2); its mean under the null is ``m n / 2`` and its variance, with ties,
+    ``m n / 12 ((N + 1) - sum(t^3 - t) / (N (N - 1)))`` (``m``, ``n`` draws, ``N = m + n``,
+    ``t`` the sizes of its tied groups). The sum over units is compared with its mean in
+    standard deviations (``p``: units independent). Units where either side has no draw are left
+    out.
+
+    Units that share something may move together from one draw to the next (the six sequences
+    of one seed did under the keypoints' null, docs/research-log.md 2026-11-30). With
+    ``clusters`` (one label a unit, for example its seed), ``cluster_p`` treats each cluster's
+    sum of ``U - m n / 2`` as one observation, symmetric about 0 under the null, and flips their
+    signs: exhaustively up to :data:`EXACT_CLUSTERS` clusters, else :data:`CLUSTER_FLIPS` random
+    patterns. It needs no independence within a cluster; with few clusters it cannot be small
+    (five clusters: at least 2 / 32).
+
+    Parameters
+    ----------
+    pairs : list of (new, base)
+        Each unit's draws of a figure (for example MPJPE, mm), shapes (m,) and (n,), float.
+    clusters : list, optional
+        A hashable label per unit of ``pairs``.
+
+    Returns
+    -------
+    RankTest
+    """
+    from scipy.stats import norm, rankdata
+
+    if clusters is not None and len(clusters) != len(pairs):
+        raise ValueError(f"one cluster label a unit: {len(clusters)} labels for {len(pairs)} units")
+    count = mean = variance = pairs_total = 0.0
+    units = 0
+    centred: dict = {}
+    for i, (new, base) in enumerate(pairs):
+        new, base = np.asarray(new, dtype=np.float64), np.asarray(base, dtype=np.float64)
+        m, n = len(new), len(base)
+        if m == 0 or n == 0:
+            continue
+        units += 1
+        both = np.concatenate([new, base])
+        total = m + n
+        # U of the new draws being lower = m n + m (m + 1) / 2 - (their rank sum), ranks ascending, ties averaged
+        u = m * n + m * (m + 1) / 2 - rankdata(both)[:m].sum()
+        count += u
+        mean += m * n / 2
+        _, tied = np.unique(both, return_counts=True)
+        ties = float(np.sum(tied ** 3 - tied)) / (total * (total - 1))
+        variance += m * n / 12 * ((total + 1) - ties)
+        pairs_total += m * n
+        if clusters is not None:
+            centred[clusters[i]] = centred.get(clusters[i], 0.0) + u - m * n / 2
+    if units == 0:
+        raise ValueError("no unit has draws on both sides")
+    cluster_p = math.nan if clusters is None else _sign_flip_p(np.array(list(centred.values())))
+    z = 0.0 if variance <= 0 else (count - mean) / math.sqrt(variance)
+    p = 1.0 if variance <= 0 else float(2 * norm.sf(abs(z)))
+    return RankTest(units, count / pairs_total, z, p, len(centred), cluster_p)
+
+
+def _sign_flip_p(sums: np.ndarray) -> float:
+    """Two-sided p of ``|sum(sums)|`` among the sums of ``sums`` with their signs flipped (every
+    pattern, or :data:`CLUSTER_FLIPS` random ones past :data:`EXACT_CLUSTERS`); 1.0 when all are 0."""
+    observed = abs(sums.sum())
+    if observed == 0:
+        return 1.0
+    if len(sums) <= EXACT_CLUSTERS:
+        patterns = (np.arange(1 << len(sums))[:, None] >> np.arange(len(sums))) & 1
+    else:
+        patterns = np.random.default_rng(0).integers(0, 2, (CLUSTER_FLIPS, len(sums)))
+    flipped = np.abs((1 - 2 * patterns) @ sums)
+    return float(np.mean(flipped >= observed * (1 - 1e-12)))
+
+
+def draws_table(base: dict[UnitKey, list[Unit]], new: dict[UnitKey, list[Unit]], unseen: set[int]) -> str:
+    """The Markdown of the comparison over every draw of the units in both (see the module), per
+    configuration and seed set: the units, the draws a unit on each side (median), the median over
+    units of each side's mean MPJPE over its draws (mm), the median spread of the base's draws
+    of a unit (their standard deviation, mm; over units with at least two), the units turned
+    round or lost counted per draw (each unit adds the share of its draws that are: the count
+    one draw is expected to give), and :func:`stratified_rank_sum` of the MPJPE: the share of
+    (new, base) draw pairs of a unit where the new one is lower, and its two-sided p with the
+    units independent and with each seed's units a cluster (the one to judge by)."""
+    keys = sorted(set(base) & set(new), key=lambda k: (k[0], k[2] in unseen, k[2], k[1]))
+    lines = ["| configuration | seeds | units | draws a unit, base / new | median MPJPE over units (mean of its draws) mm | "
+             "spread of a unit's base draws, median SD mm | turned round or lost, per draw | "
+             "new draw below a base draw | stratified rank-sum p: units, seeds as clusters |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    first = {k: new[k][0] for k in keys}
+    for name, label, picked in _groups(first, keys, unseen):
+        mpjpe = lambda draws: np.array([u.mpjpe_mm for u in draws])
+        failed = lambda draws: float(np.mean([u.turned_round or u.lost for u in draws]))
+        spreads = [np.std(mpjpe(base[k]), ddof=1) for k in picked if len(base[k]) > 1]
+        test = stratified_rank_sum([(mpjpe(new[k]), mpjpe(base[k])) for k in picked], clusters=[k[2] for k in picked])
+        spread = f"{np.median(spreads):.1f}" if spreads else "–"
+        lines.append(f"| {name} | {label} | {len(picked)} | "
+                     f"{np.median([len(base[k]) for k in picked]):g} / {np.median([len(new[k]) for k in picked]):g} | "
+                     f"{np.median([mpjpe(base[k]).mean() for k in picked]):.1f} → "
+                     f"{np.median([mpjpe(new[k]).mean() for k in picked]):.1f} | {spread} | "
+                     f"{sum(failed(base[k]) for k in picked):.1f} → {sum(failed(new[k]) for k in picked):.1f} | "
+                     f"{100 * test.below_share:.1f} % | {test.p:.3f}, {test.cluster_p:.3f} |")
+    return "\n".join(lines)
+
+
 def _groups(units: dict[UnitKey, Unit], keys: list[UnitKey], unseen: set[int]):
     """``(configuration, seed set, keys)`` for each configuration of ``keys`` and each of its seed
     sets ("tuned on": seeds not in ``unseen``; "never used") that holds units."""
@@ -186,9 +354,10 @@ def main(argv=None) -> int:
     p.add_argument("base", type=Path, help="the results folder compared against (its units/)")
     p.add_argument("new", type=Path, help="the results folder of the change")
     p.add_argument("--unseen-seeds", default="", help="comma-separated seeds never used for tuning: summed apart")
-    p.add_argument("--null", type=Path, default=None,
-                   help="a results folder of the null (experiments.tracking --null-offset-px): its paired "
-                        "table against BASE is printed under the change's, the noise to judge it by")
+    p.add_argument("--null", type=Path, action="append", default=[],
+                   help="a results folder of the null (experiments.tracking --null-offset-px; may be given "
+                        "again): its paired table against BASE is printed under the change's, and its units "
+                        "join BASE's draws")
     args = p.parse_args(argv)
     try:
         unseen = {int(s) for s in args.unseen_seeds.split(",") if s.strip()}
@@ -205,19 +374,31 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return 2
     print(diff_table(base, new, unseen))
-    if args.null is not None:
+    # the base's draws: its folder's plain and null units, and the null units of each --null
+    # folder (a folder given twice counts once)
+    base_draws = {(args.base.resolve(), key, offset): u for key, draws in read_draws(args.base).items()
+                  for offset, u in draws.items()}
+    for folder in args.null:
         try:
-            null, _ = read_units(args.null, null=True)
+            null, _ = read_units(folder, null=True)
         except ValueError as e:
             print(f"error: {e}", file=sys.stderr)
             return 2
         keys = sorted(set(base) & set(null), key=lambda k: (k[0], k[2] in unseen, k[2], k[1]))
         if not keys:
-            print(f"error: no null unit in {args.null} matches {args.base} (run experiments.tracking "
+            print(f"error: no null unit in {folder} matches {args.base} (run experiments.tracking "
                   "--null-offset-px with the same configurations, sequences and seeds)", file=sys.stderr)
             return 2
-        print(f"\nThe null ({args.base} → {args.null}: nothing changed but the keypoints' sub-pixel offset):\n")
+        print(f"\nThe null ({args.base} → {folder}: nothing changed but the keypoints' sub-pixel offset):\n")
         print(paired_table(base, null, keys, unseen))
+        base_draws.update({(folder.resolve(), key, offset): u for key, draws in read_draws(folder).items()
+                           for offset, u in draws.items() if offset})
+    grouped: dict[UnitKey, list[Unit]] = {}
+    for (_, key, _), unit in base_draws.items():
+        grouped.setdefault(key, []).append(unit)
+    print(f"\nEvery draw (the units' plain runs and their nulls; {args.base}"
+          f"{''.join(f', {f}' for f in args.null)} against {args.new}):\n")
+    print(draws_table(grouped, {k: list(d.values()) for k, d in read_draws(args.new).items()}, unseen))
     return 0
 
 

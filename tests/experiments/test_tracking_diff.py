@@ -2,6 +2,7 @@
 counted per configuration and seed set (made-up units with hand-counted answers)."""
 import json
 
+import numpy as np
 import pytest
 
 from experiments import tracking_diff
@@ -111,3 +112,148 @@ def test_the_null_is_tabled_beside_the_change_and_never_taken_for_the_base(tmp_p
     assert "| mediapipe-keypoints | never used | 3 | 100.0 → 104.0 | 50.0 → 50.0 | 1 / 1 | 0.750, – | 8.0 / 11.2 |" in null
     assert tracking_diff.main([str(base), str(new), "--null", str(new)]) == 2        # no null units there
     assert "no null unit" in capsys.readouterr().err
+
+
+def test_the_stratified_rank_sum_is_mann_whitney_on_one_unit():
+    """One unit without ties: the count and p are scipy's Mann-Whitney U (asymptotic, no continuity
+    correction), which the stratified test reduces to."""
+    from scipy.stats import mannwhitneyu
+
+    new, base = np.array([3.0, 7.5, 1.0, 9.0]), np.array([4.0, 8.0, 2.0, 10.0, 11.0, 6.0])
+    test = tracking_diff.stratified_rank_sum([(new, base)])
+    reference = mannwhitneyu(base, new, alternative="two-sided", method="asymptotic", use_continuity=False)
+    assert test.units == 1
+    assert test.below_share == pytest.approx(reference.statistic / (len(new) * len(base)))   # base's U: pairs base > new
+    assert test.p == pytest.approx(reference.pvalue)
+
+
+def test_the_stratified_rank_sum_has_the_moments_of_every_relabelling():
+    """With ties and unequal draws, its standardised count equals the one computed from the exact
+    distribution over every relabelling of each unit's draws (enumerated: the null hypothesis)."""
+    import itertools
+
+    units = [(np.array([1.0, 2.0]), np.array([2.0, 3.0, 3.0])), (np.array([5.0]), np.array([5.0, 7.0])),
+             (np.array([4.0, 4.0, 0.5]), np.array([4.0]))]
+
+    def count(new, base):
+        return sum((a < b) + 0.5 * (a == b) for a in new for b in base)
+
+    per_unit = []
+    for new, base in units:
+        values = np.concatenate([new, base])
+        counts = []
+        for chosen in itertools.combinations(range(len(values)), len(new)):
+            rest = [i for i in range(len(values)) if i not in chosen]
+            counts.append(count(values[list(chosen)], values[rest]))
+        per_unit.append(np.array(counts))
+    mean = sum(c.mean() for c in per_unit)
+    variance = sum(c.var() for c in per_unit)                 # units relabelled independently
+    observed = sum(count(new, base) for new, base in units)
+    test = tracking_diff.stratified_rank_sum(units)
+    assert test.z == pytest.approx((observed - mean) / np.sqrt(variance))
+    assert test.below_share == pytest.approx(observed / sum(len(n) * len(b) for n, b in units))
+    with pytest.raises(ValueError, match="no unit"):
+        tracking_diff.stratified_rank_sum([(np.array([1.0]), np.array([]))])
+    assert tracking_diff.stratified_rank_sum([(np.array([2.0]), np.array([2.0, 2.0]))]).p == 1.0   # all tied
+
+
+def test_the_stratified_rank_sum_keeps_its_size_where_the_mean_of_draws_does_not():
+    """Skewed, unit-specific draws (a lognormal spread, and now and then a unit lost), three base
+    draws and two new ones of the same distribution: the test rejects at 5 % about 5 % of the time;
+    a 10 mm shift is found. The signed-rank test of one new draw against the mean of the base's
+    draws is not valid there (the mean of a skewed draw lies above its median)."""
+    from scipy.stats import wilcoxon
+
+    rng = np.random.default_rng(7)
+
+    def draws(location, count, shift=0.0):
+        spread = 12.0 * rng.lognormal(0.0, 1.0, count)
+        lost = 300.0 * (rng.random(count) < 0.05)
+        return location + spread + lost - shift
+
+    rejected = rejected_naive = found = 0
+    trials = 200
+    for _ in range(trials):
+        locations = rng.uniform(40.0, 200.0, 96)
+        units = [(draws(loc, 2), draws(loc, 3)) for loc in locations]
+        rejected += tracking_diff.stratified_rank_sum(units).p < 0.05
+        rejected_naive += wilcoxon([new[0] - base.mean() for new, base in units]).pvalue < 0.05
+        shifted = [(draws(loc, 2, shift=10.0), draws(loc, 3)) for loc in locations]
+        test = tracking_diff.stratified_rank_sum(shifted)
+        found += test.p < 0.05 and test.below_share > 0.5
+    assert 0.02 <= rejected / trials <= 0.09
+    assert rejected_naive / trials > 0.25
+    assert found / trials > 0.9
+
+
+def test_every_draw_of_base_its_nulls_and_the_change_is_compared(tmp_path, capsys):
+    """Two units, each with three base draws (the plain run and a null in BASE, a null of the other
+    sign in a --null folder) and two of the change, every change draw below every base draw: per
+    unit U = 6 of mean 3 and variance 2 * 3 / 12 * 6 = 3; z = 6 / sqrt(6); p = 2 (1 - Phi(2.449))."""
+    from scipy.stats import norm
+
+    base, null, new = tmp_path / "base", tmp_path / "null", tmp_path / "new"
+    facing = [10.0] * 10
+    for sequence, shift in (("gestures-1", 0.0), ("turning", 50.0)):
+        _unit(base, "mediapipe-keypoints", sequence, 97, 100.0 + shift, facing)
+        _unit(base, "mediapipe-keypoints", sequence, 97, 104.0 + shift, facing, null=0.01)
+        _unit(null, "mediapipe-keypoints", sequence, 97, 96.0 + shift, facing, null=-0.01)
+        _unit(null, "mediapipe-keypoints", sequence, 97, 500.0, facing)         # a plain unit there: not a draw
+        _unit(new, "mediapipe-keypoints", sequence, 97, 90.0 + shift, facing)
+        _unit(new, "mediapipe-keypoints", sequence, 97, 92.0 + shift, facing, null=0.01)
+    draws = tracking_diff.read_draws(base)
+    assert sorted(draws[("mediapipe-keypoints", "turning", 97)]) == [0.0, 0.01]
+    assert tracking_diff.main([str(base), str(new), "--unseen-seeds", "97", "--null", str(null),
+                               "--null", str(base)]) == 0
+    out = capsys.readouterr().out.split("Every draw")[1]
+    p = 2 * norm.sf(6 / np.sqrt(6))
+    # medians over the two units of their draws' means: (100, 150) -> 125; (91, 141) -> 116; SD of 96, 100, 104 = 4
+    # one seed: one cluster, whose sign flipped is as far from 0 (p 1)
+    assert (f"| mediapipe-keypoints | never used | 2 | 3 / 2 | 125.0 → 116.0 | 4.0 | 0.0 → 0.0 | 100.0 % | "
+            f"{p:.3f}, 1.000 |") in out
+
+
+def test_with_one_unit_a_cluster_and_one_draw_a_side_the_clusters_sign_flip_is_the_sign_test():
+    """Each cluster's centred count is then +1/2, -1/2 or 0 (a tie): flipping signs exhaustively
+    is the exact two-sided sign test of the untied units (scipy's binomial test); past
+    EXACT_CLUSTERS, the random patterns come near it."""
+    from scipy.stats import binomtest
+
+    rng = np.random.default_rng(3)
+    for count in (9, 14, 30):
+        new = rng.normal(0.0, 1.0, count) - 0.4
+        base = rng.normal(0.0, 1.0, count)
+        base[0] = new[0]                                                    # one tie: no information
+        test = tracking_diff.stratified_rank_sum([(np.array([a]), np.array([b])) for a, b in zip(new, base)],
+                                                 clusters=list(range(count)))
+        reference = binomtest(int(np.sum(new < base)), count - 1).pvalue
+        assert test.clusters == count
+        if count <= tracking_diff.EXACT_CLUSTERS:
+            assert test.cluster_p == pytest.approx(reference)
+        else:
+            assert test.cluster_p == pytest.approx(reference, abs=0.01)
+    with pytest.raises(ValueError, match="one cluster label a unit"):
+        tracking_diff.stratified_rank_sum([(np.array([1.0]), np.array([2.0]))], clusters=[0, 1])
+
+
+def test_clusters_keep_the_size_where_a_seeds_units_move_together():
+    """Twelve seeds of six units; each draw of a seed moves all its units alike (a shared draw
+    effect, as the keypoints' null did): the units-independent p rejects far too often, the
+    clusters' sign flip keeps about its 5 %."""
+    rng = np.random.default_rng(11)
+    rejected = rejected_clustered = 0
+    trials = 200
+    for _ in range(trials):
+        pairs, labels = [], []
+        shared_new, shared_base = rng.normal(0.0, 8.0, (12, 2)), rng.normal(0.0, 8.0, (12, 3))
+        for seed in range(12):
+            for _ in range(6):
+                location = rng.uniform(40.0, 200.0)
+                pairs.append((location + shared_new[seed] + rng.normal(0.0, 3.0, 2),
+                              location + shared_base[seed] + rng.normal(0.0, 3.0, 3)))
+                labels.append(seed)
+        test = tracking_diff.stratified_rank_sum(pairs, clusters=labels)
+        rejected += test.p < 0.05
+        rejected_clustered += test.cluster_p < 0.05
+    assert rejected / trials > 0.3
+    assert rejected_clustered / trials <= 0.09
