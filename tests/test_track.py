@@ -37,6 +37,37 @@ def test_split_policies(total, split, expect):
     assert split_budget(total, split) == expect
 
 
+@pytest.mark.parametrize("total, split, expect", [
+    (100, "auto", (100, 0)), (AUTO_SPLIT_THRESHOLD - 1, "auto", (199, 0)), (200, "auto", (160, 40)),
+    (500, "auto", (400, 100)), (501, "auto", (401, 100)), (400, "1:3", (100, 300)), (500, "250:250", (250, 250)),
+])
+def test_with_keypoints_auto_gives_the_region_step_its_share(total, split, expect):
+    """With keypoints, ``auto`` gives KEYPOINT_REGION_SHARE (0.8) of budgets from the threshold to
+    the region step (hand-computed); below it and for explicit proportions, as without."""
+    assert split_budget(total, split, keypoints=True) == expect
+
+
+def test_a_registration_with_keypoints_spends_the_auto_split_it_is_given():
+    """The region step of a keypoint registration is cut off at 400 of 500 evaluations, the edge
+    step at 100 (without keypoints: 250 each), from a start far enough that neither converges."""
+    from mocap.cost import KeypointCost
+
+    truth = neutral_pose()
+    r = render(truth, MODEL, CAMERA)
+    distance = np.minimum(ndimage.distance_transform_edt(~r.edges), 20.0).astype(np.float32)
+    region, edge = RegionCost(r.labels, MODEL, CAMERA), EdgeCost(distance, MODEL, CAMERA)
+    uv = CAMERA.project(MODEL.joint_positions(truth))
+    keypoints = KeypointCost(uv, np.ones(len(uv)), MODEL, CAMERA)
+    start = truth.copy()
+    start[P["r_shoulder_flex"]] += 0.6
+    start[P["l_elbow_flex"]] += 0.5
+    cfg = TrackerConfig(evaluations=500, ftol=1e-12)           # no convergence stop: each step uses its budget
+    with_keypoints = register(region, edge, start, cfg, keypoint_cost=keypoints)
+    without = register(region, edge, start, cfg)
+    assert (with_keypoints.region.evaluations, with_keypoints.edge.evaluations) == (400, 100)
+    assert (without.region.evaluations, without.edge.evaluations) == (250, 250)
+
+
 @pytest.mark.parametrize("bad", ["", "1", "1:2:3", "a:b", "-1:2", "0:0", "inf:1"])
 def test_bad_split_rejected(bad):
     with pytest.raises(ValueError, match="split"):

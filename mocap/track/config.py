@@ -21,6 +21,12 @@ from mocap.track.smooth import SmootherConfig
 
 #: Total budget below which the ``auto`` policy gives every evaluation to the region step.
 AUTO_SPLIT_THRESHOLD = 200
+#: Share of a budget of at least :data:`AUTO_SPLIT_THRESHOLD` that the ``auto`` policy gives the
+#: region step of a registration with keypoints (without: half, the paper's). The region step
+#: carries the keypoint distance too; from the last frame's pose it converges in about 500
+#: evaluations, and the edge step after it stops within about 50-130, so half each left the region
+#: step cut off at 250 on every frame (docs/research-log.md, 2026-11-30).
+KEYPOINT_REGION_SHARE = 0.8
 #: Where the edge step's simplex starts: the region step's final simplex (paper) or a fresh one.
 EDGE_STARTS = ("region_simplex", "fresh")
 #: Size of a fresh edge-step simplex (``edge_start="fresh"``, the paper's Fig. 8) relative to the
@@ -73,7 +79,9 @@ class TrackerConfig(JsonConfig):
         Cost evaluations per frame of the leading hypothesis's two-step registration, both
         steps together (the paper's "iterations"); at least 1.
     split : str
-        ``"auto"`` (paper's policy) or ``"R:E"``, e.g. ``"250:250"`` (scaled to ``evaluations``).
+        ``"auto"`` (paper's policy; with keypoints the region step takes
+        :data:`KEYPOINT_REGION_SHARE` of budgets from :data:`AUTO_SPLIT_THRESHOLD`: see
+        :func:`split_budget`) or ``"R:E"``, e.g. ``"250:250"`` (scaled to ``evaluations``).
     edge_start : str
         ``"region_simplex"`` (paper) or ``"fresh"`` (a new simplex of :data:`FRESH_STEP_SCALE`
         times the initial steps around the region step's best pose; the paper's Fig. 8).
@@ -298,7 +306,7 @@ def gradient_budget(edge_evaluations: int) -> int:
     return n if n >= MIN_GRADIENT_EVALUATIONS else 0
 
 
-def split_budget(total: int, split: str) -> tuple[int, int]:
+def split_budget(total: int, split: str, keypoints: bool = False) -> tuple[int, int]:
     """Split a per-frame evaluation budget between the region and the edge step.
 
     Parameters
@@ -307,8 +315,11 @@ def split_budget(total: int, split: str) -> tuple[int, int]:
         Evaluations per frame.
     split : str
         ``"auto"``: all to the region step below :data:`AUTO_SPLIT_THRESHOLD`, else half each
-        (the paper's policy, section 5). ``"R:E"``: in that proportion (``"1:0"`` all region,
-        ``"0:1"`` all edge); ``R + E`` need not equal ``total``.
+        (the paper's policy, section 5), or :data:`KEYPOINT_REGION_SHARE` to the region step with
+        ``keypoints``. ``"R:E"``: in that proportion (``"1:0"`` all region, ``"0:1"`` all edge);
+        ``R + E`` need not equal ``total``.
+    keypoints : bool
+        The registration adds a keypoint distance to both steps (the paper had none).
 
     Returns
     -------
@@ -318,6 +329,9 @@ def split_budget(total: int, split: str) -> tuple[int, int]:
     if split == "auto":
         if total < AUTO_SPLIT_THRESHOLD:
             return total, 0
+        if keypoints:
+            region = int(round(total * KEYPOINT_REGION_SHARE))
+            return region, total - region
         return total - total // 2, total // 2
     parts = split.split(":") if isinstance(split, str) else []
     try:

@@ -117,7 +117,7 @@ def register(region_cost: RegionCost, edge_cost: EdgeCost, start_pose, config: T
     q0 = clamp_to_limits(check_pose(start_pose, name="start pose"), limits)
     lower, upper = limits[:, 0], limits[:, 1]
     total = config.evaluations if evaluations is None else int(evaluations)
-    n_region, n_edge = split_budget(total, config.split)
+    n_region, n_edge = split_budget(total, config.split, keypoints=keypoint_cost is not None)
     n_gradient = gradient_budget(n_edge) if config.gradient_step and keypoint_cost is None else 0
     n_edge -= n_gradient
     steps = config.steps() * step_scale
