@@ -31,8 +31,9 @@ offset moves a unit by 10 mm at the median, docs/research-log.md 2026-11-30). Th
 are BASE's units of every offset and the ``--null`` folders' null units; the change's, NEW's units
 of every offset (run ``--null-offset-px`` into NEW too). :func:`draws_table` compares them with
 :func:`stratified_rank_sum`, whose ``cluster_p`` (each seed's units one cluster) is the p value to
-judge a change by: the units of one seed moved together under the null, and the units-independent
-p of the paired table is then too small. Nothing is recomputed: the units hold it all.
+judge a change by: the units of one seed may move together (they seemed to under the null), and
+the units-independent p of the paired table is then too small. Nothing is recomputed: the units
+hold it all.
 """
 from __future__ import annotations
 
@@ -239,8 +240,9 @@ def stratified_rank_sum(pairs: list[tuple[np.ndarray, np.ndarray]], clusters: li
     standard deviations (``p``: units independent). Units where either side has no draw are left
     out.
 
-    Units that share something may move together from one draw to the next (the six sequences
-    of one seed did under the keypoints' null, docs/research-log.md 2026-11-30). With
+    Units that share something may move together from one draw to the next (under the
+    keypoints' null a draw's changes clustered by seed, Kruskal-Wallis p 0.08, and subsets of a
+    few seeds gave units-independent p down to 0.001: docs/research-log.md 2026-11-30). With
     ``clusters`` (one label a unit, for example its seed), ``cluster_p`` treats each cluster's
     sum of ``U - m n / 2`` as one observation, symmetric about 0 under the null, and flips their
     signs: exhaustively up to :data:`EXACT_CLUSTERS` clusters, else :data:`CLUSTER_FLIPS` random
