@@ -40,7 +40,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -112,22 +111,15 @@ def read_draws(folder: str | Path) -> dict[UnitKey, dict[float, Unit]]:
     return out
 
 
-#: The offset in a null unit's file name (``experiments.tracking.unit_path``), pixels.
-_NULL_NAME = re.compile(r"-null(-?[0-9.e+-]+?)px$")
-
-
 def _read(folder: str | Path):
-    """``(null offset in pixels, key, Unit)`` of each unit file of ``folder``, oldest first (0:
-    not a null run; a file whose record lacks the offset has it read from its name)."""
+    """``(null offset in pixels, key, Unit)`` of each unit file of ``folder``, oldest first (the
+    record's ``null_offset_px``; 0, or a record from before it was written: not a null run)."""
     units_dir = Path(folder) / "units"
     if not units_dir.is_dir():
         raise ValueError(f"{folder} is not an experiments.tracking results folder (no units/ in it)")
     for path in sorted(units_dir.glob("*.json"), key=lambda p: (p.stat().st_mtime_ns, p.name)):
         record = json.loads(path.read_text())
         offset = float(record.get("null_offset_px", 0.0))
-        named = _NULL_NAME.search(path.stem)
-        if not offset and named:
-            offset = float(named.group(1))
         row = record["result"]
         marks = failure_marks(row)
         key = (record["name"], row["sequence"], int(record["seed"]))
